@@ -1,0 +1,89 @@
+// The LCM edge: conversion between the generated message types and plain structs, checked
+// decoding (a message of the wrong type or with inconsistent sizes is an error naming the channel),
+// the URL policy (never leaves the host: udpm URLs must carry ttl=0) and reading a tape file.
+// Nothing here does mathematics; libraries below it never see LCM.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "fralab/ack_t.hpp"
+#include "fralab/command_block_t.hpp"
+#include "fralab/excitation_status_t.hpp"
+#include "fralab/frd_t.hpp"
+#include "fralab/tape_block_t.hpp"
+#include "fralab/tf_t.hpp"
+#include "fralab/plant/json_util.h"
+
+namespace fralab {
+
+inline constexpr const char* kCmdChannel = "FRALAB_CMD";
+inline constexpr const char* kTapeChannel = "FRALAB_TAPE";
+inline constexpr const char* kStatusChannel = "FRALAB_STATUS";
+inline constexpr const char* kAckChannel = "FRALAB_ACK";
+inline constexpr const char* kFrdChannel = "FRALAB_FRD";
+inline constexpr const char* kTfChannel = "FRALAB_TF";
+
+/// Plain mirror of tape_block_t / command_block_t. samples are channel-major.
+struct Block {
+  std::string run_id;
+  int64_t seq = 0;
+  int64_t start_sample = 0;
+  double sample_rate_hz = 0.0;
+  std::vector<std::string> channels;
+  int n_samples = 0;
+  std::vector<double> samples;
+  bool final_block = false;
+
+  double at(int channel, int k) const { return samples[size_t(channel) * n_samples + k]; }
+  double& at(int channel, int k) { return samples[size_t(channel) * n_samples + k]; }
+  int channel_index(const std::string& name) const;
+};
+
+tape_block_t to_tape_msg(const Block& b);
+command_block_t to_command_msg(const Block& b);
+/// Throws InputError when sizes disagree (n_values != n_channels * n_samples, ...).
+Block from_msg(const tape_block_t& m);
+Block from_msg(const command_block_t& m);
+
+/// Decodes a message of type Msg from a raw buffer; InputError naming the channel and the expected
+/// type when the bytes are not that type (fingerprint mismatch, truncated).
+template <class Msg>
+Msg decode_checked(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  Msg m;
+  int n = m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
+  if (n < 0 || static_cast<uint32_t>(n) != rbuf->data_size) {
+    throw InputError("channel " + channel + ": message of " + std::to_string(rbuf->data_size) +
+                     " bytes is not a fralab." + Msg::getTypeName() +
+                     " (wrong type or corrupt): check what publishes on " + channel);
+  }
+  return m;
+}
+
+/// The LCM URL: `flag` when given, else $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0.
+/// A udpm URL without ttl=0 is refused (fralab traffic never leaves the host).
+std::string resolve_lcm_url(const std::string& flag);
+
+/// A fresh private URL for one lab run: a multicast group/port derived from `salt`, ttl=0.
+std::string private_lcm_url(uint64_t salt);
+
+/// One event of a tape file.
+struct TapeEvent {
+  int64_t eventnum;
+  int64_t timestamp;
+  std::string channel;
+  const void* data;
+  int32_t datalen;
+};
+
+/// Reads every event of an LCM log file in order, calling `fn`. Throws InputError when the file
+/// cannot be opened or ends inside an event (truncated tape), naming the file and byte offset.
+/// Returns the number of events read.
+int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn);
+
+}  // namespace fralab

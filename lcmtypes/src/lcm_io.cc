@@ -1,0 +1,102 @@
+#include "fralab/lcm_io.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+namespace fralab {
+
+int Block::channel_index(const std::string& name) const {
+  for (size_t i = 0; i < channels.size(); ++i) {
+    if (channels[i] == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+template <class Msg>
+static Msg to_msg(const Block& b) {
+  Msg m;
+  m.run_id = b.run_id;
+  m.seq = b.seq;
+  m.start_sample = b.start_sample;
+  m.sample_rate_hz = b.sample_rate_hz;
+  m.n_channels = static_cast<int32_t>(b.channels.size());
+  m.channel_names = b.channels;
+  m.n_samples = b.n_samples;
+  m.n_values = static_cast<int32_t>(b.samples.size());
+  m.samples = b.samples;
+  m.final_block = b.final_block;
+  return m;
+}
+
+template <class Msg>
+static Block from(const Msg& m, const char* type) {
+  if (m.n_channels < 0 || m.n_samples < 0 ||
+      int64_t(m.n_values) != int64_t(m.n_channels) * m.n_samples) {
+    throw InputError(std::string("fralab.") + type + " seq " + std::to_string(m.seq) +
+                     ": n_values " + std::to_string(m.n_values) + " != n_channels " +
+                     std::to_string(m.n_channels) + " * n_samples " + std::to_string(m.n_samples));
+  }
+  if (!(m.sample_rate_hz > 0.0)) {
+    throw InputError(std::string("fralab.") + type + " seq " + std::to_string(m.seq) +
+                     ": sample_rate_hz must be > 0");
+  }
+  Block b;
+  b.run_id = m.run_id;
+  b.seq = m.seq;
+  b.start_sample = m.start_sample;
+  b.sample_rate_hz = m.sample_rate_hz;
+  b.channels = m.channel_names;
+  b.n_samples = m.n_samples;
+  b.samples = m.samples;
+  b.final_block = m.final_block;
+  return b;
+}
+
+tape_block_t to_tape_msg(const Block& b) { return to_msg<tape_block_t>(b); }
+command_block_t to_command_msg(const Block& b) { return to_msg<command_block_t>(b); }
+Block from_msg(const tape_block_t& m) { return from(m, "tape_block_t"); }
+Block from_msg(const command_block_t& m) { return from(m, "command_block_t"); }
+
+std::string resolve_lcm_url(const std::string& flag) {
+  std::string url = flag;
+  if (url.empty()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    url = env && *env ? env : "udpm://239.255.76.67:7667?ttl=0";
+  }
+  if (url.rfind("udpm://", 0) == 0 && url.find("ttl=0") == std::string::npos) {
+    throw InputError("LCM URL \"" + url + "\" has no ttl=0: fralab traffic must stay on this host; append ?ttl=0");
+  }
+  return url;
+}
+
+std::string private_lcm_url(uint64_t salt) {
+  // Group 239.255.x.y (administratively scoped), port 7700-8699, ttl=0.
+  unsigned x = 1 + (salt % 250), y = 1 + ((salt / 250) % 250);
+  unsigned port = 7700 + ((salt / 62500) % 1000);
+  return "udpm://239.255." + std::to_string(x) + "." + std::to_string(y) + ":" +
+         std::to_string(port) + "?ttl=0";
+}
+
+int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {
+  if (!std::filesystem::exists(path)) throw InputError(path + ": no such tape file");
+  const auto size = static_cast<long>(std::filesystem::file_size(path));
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw InputError(path + ": cannot open as an LCM log");
+  int64_t n = 0;
+  long last_good = 0;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    TapeEvent te{ev->eventnum, ev->timestamp, ev->channel, ev->data, ev->datalen};
+    fn(te);
+    ++n;
+    last_good = std::ftell(log.getFilePtr());
+  }
+  if (last_good != size && !(n == 0 && size == 0)) {
+    throw InputError(path + ": truncated or corrupt tape: " + std::to_string(n) +
+                     " events read, then unreadable bytes from offset " + std::to_string(last_good) +
+                     " of " + std::to_string(size));
+  }
+  return n;
+}
+
+}  // namespace fralab

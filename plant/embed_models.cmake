@@ -1,0 +1,11 @@
+# Writes OUT: a C++ table of every models/*.json as (file name, contents).
+file(GLOB files ${DIR}/*.json)
+list(SORT files)
+set(body "#include \"fralab/plant/embedded_models.h\"\nnamespace fralab {\nconst std::vector<EmbeddedModel>& embedded_models() {\n  static const std::vector<EmbeddedModel> m = {\n")
+foreach(f ${files})
+  get_filename_component(n ${f} NAME)
+  file(READ ${f} content)
+  string(APPEND body "    {\"${n}\", R\"fralabjson(${content})fralabjson\"},\n")
+endforeach()
+string(APPEND body "  };\n  return m;\n}\n}  // namespace fralab\n")
+file(WRITE ${OUT} "${body}")

@@ -1,0 +1,96 @@
+#include "fralab/plant/json_util.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace fralab {
+
+void json_fail(const JsonWhere& where, const std::string& message) {
+  throw InputError(where.str() + ": " + message);
+}
+
+Json json_load_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open for reading (check the path)");
+  try {
+    return Json::parse(in, nullptr, true, false);
+  } catch (const Json::parse_error& e) {
+    throw InputError(file + ": malformed JSON: " + e.what());
+  }
+}
+
+void json_save_file(const std::string& file, const Json& j) {
+  std::ofstream out(file);
+  if (!out) throw InputError(file + ": cannot open for writing (does the folder exist?)");
+  out << j.dump(2) << "\n";
+  if (!out) throw InputError(file + ": write failed");
+}
+
+void json_require_object(const Json& obj, const JsonWhere& where) {
+  if (!obj.is_object()) json_fail(where, "expected a JSON object, found " + std::string(obj.type_name()));
+}
+
+const Json& json_member(const Json& obj, const JsonWhere& where, const std::string& key) {
+  json_require_object(obj, where);
+  auto it = obj.find(key);
+  if (it == obj.end()) json_fail(where, "missing required key \"" + key + "\"");
+  return *it;
+}
+
+double json_number(const Json& v, const JsonWhere& where) {
+  if (!v.is_number()) {
+    json_fail(where, "expected a number, found " + std::string(v.type_name()) + " " + v.dump());
+  }
+  double x = v.get<double>();
+  if (!std::isfinite(x)) json_fail(where, "expected a finite number, found " + v.dump());
+  return x;
+}
+
+double json_number_member(const Json& obj, const JsonWhere& where, const std::string& key) {
+  return json_number(json_member(obj, where, key), where / key);
+}
+
+double json_number_member(const Json& obj, const JsonWhere& where, const std::string& key,
+                          double fallback) {
+  json_require_object(obj, where);
+  auto it = obj.find(key);
+  if (it == obj.end()) return fallback;
+  return json_number(*it, where / key);
+}
+
+std::string json_string_member(const Json& obj, const JsonWhere& where, const std::string& key) {
+  const Json& v = json_member(obj, where, key);
+  if (!v.is_string()) json_fail(where / key, "expected a string, found " + v.dump());
+  return v.get<std::string>();
+}
+
+const Json& json_array_member(const Json& obj, const JsonWhere& where, const std::string& key,
+                              bool optional) {
+  static const Json kEmpty = Json::array();
+  json_require_object(obj, where);
+  auto it = obj.find(key);
+  if (it == obj.end()) {
+    if (optional) return kEmpty;
+    json_fail(where, "missing required key \"" + key + "\"");
+  }
+  if (!it->is_array()) json_fail(where / key, "expected an array, found " + it->dump());
+  return *it;
+}
+
+Json json_unknown_members(const Json& obj, const JsonWhere& where,
+                          std::initializer_list<const char*> known,
+                          std::vector<std::string>* warnings) {
+  Json extra = Json::object();
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || it.key() == k;
+    if (!ok) {
+      extra[it.key()] = it.value();
+      if (warnings) warnings->push_back((where / it.key()).str() + ": unknown key, kept and ignored");
+    }
+  }
+  return extra;
+}
+
+}  // namespace fralab

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs fralab's build and run dependencies from Debian, idempotently: packages already present
+# are not fetched again, and apt-get update runs only when something is missing.
+set -euo pipefail
+PKGS=(build-essential cmake pkg-config git
+      liblcm-dev liblcm-bin liblcm-java default-jdk-headless libjchart2d-java
+      libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
+      nlohmann-json3-dev libcli11-dev gnuplot-nox iproute2 util-linux)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  echo "setup: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,94 @@
+#include "fralab/plant/tf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace fralab;
+
+namespace {
+constexpr double kDeg = 180.0 / std::numbers::pi;
+Json J(const char* s) { return Json::parse(s); }
+}  // namespace
+
+TEST(Tf, RealPoleIsALagOfMinus45DegreesAtItsCorner) {
+  Tf tf = tf_from_json(J(R"({"gain": 2.0, "poles": [{"real": -2.83}]})"), {"t", ""});
+  Complex g = tf.at(2.83);
+  EXPECT_NEAR(std::abs(g), 2.0 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(std::arg(g) * kDeg, -45.0, 1e-9);
+  EXPECT_NEAR(std::abs(tf.at(0.0)), 2.0, 1e-15);  // gain is the DC gain
+}
+
+TEST(Tf, RightHalfPlaneZeroLagsAndKeepsDcGainSign) {
+  // [S/192 - 1] written {"real": 192}: factor 1 - s/192, DC gain +1, phase -45 deg at 192 rad/s.
+  Tf tf = tf_from_json(J(R"({"gain": 1.0, "zeros": [{"real": 192}]})"), {"t", ""});
+  EXPECT_NEAR(tf.at(0.0).real(), 1.0, 1e-15);
+  EXPECT_NEAR(std::arg(tf.at(192.0)) * kDeg, -45.0, 1e-9);
+}
+
+TEST(Tf, PairFactorAtItsNaturalFrequencyIsTwoZetaJ) {
+  Tf tf = tf_from_json(J(R"({"gain": 1.0, "zeros": [{"wn": 50.1, "zeta": 0.013}]})"), {"t", ""});
+  Complex g = tf.at(50.1);
+  EXPECT_NEAR(g.real(), 0.0, 1e-12);
+  EXPECT_NEAR(g.imag(), 2 * 0.013, 1e-12);
+}
+
+TEST(Tf, DelayIsExactMinusOmegaTau) {
+  Tf tf = tf_from_json(J(R"({"gain": 1.0, "delay_s": 0.011})"), {"t", ""});
+  for (double w : {1.0, 100.0, 628.0}) {
+    EXPECT_NEAR(std::abs(tf.at(w)), 1.0, 1e-14);
+    EXPECT_NEAR(std::remainder(std::arg(tf.at(w)) + w * 0.011, 2 * std::numbers::pi), 0.0, 1e-12);
+  }
+}
+
+TEST(Tf, HighFrequencyGainOfBiproperTf) {
+  // (1 + s/10) / (1 + s/100): lim = 10.
+  Tf tf = tf_from_json(J(R"({"gain": 1.0, "zeros": [{"real": -10}], "poles": [{"real": -100}]})"), {"t", ""});
+  EXPECT_NEAR(tf.high_frequency_gain(), 10.0, 1e-12);
+  EXPECT_NEAR(std::abs(tf.at(1e7)), 10.0, 1e-3);
+}
+
+TEST(Tf, UnstablePoleIsRejectedNamingFileAndPath) {
+  try {
+    tf_from_json(J(R"({"gain": 1.0, "poles": [{"real": -1}, {"real": 2.83}]})"), {"m.json", "/paths/3/tf"});
+    FAIL() << "no throw";
+  } catch (const InputError& e) {
+    std::string msg = e.what();
+    EXPECT_NE(msg.find("m.json: /paths/3/tf/poles/1"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("unstable pole"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("{\"real\": -2.83"), std::string::npos) << msg;
+  }
+}
+
+TEST(Tf, NegativeDampingPoleIsRejected) {
+  EXPECT_THROW(tf_from_json(J(R"({"gain": 1.0, "poles": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}),
+               InputError);
+  // ... but allowed for zeros (a right-half-plane pair).
+  EXPECT_NO_THROW(tf_from_json(J(R"({"gain": 1.0, "zeros": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}));
+}
+
+TEST(Tf, MalformedRootsAndMissingGainNameTheProblem) {
+  auto msg = [](const char* s) {
+    try {
+      tf_from_json(Json::parse(s), {"f.json", "/tf"});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(msg(R"({"poles": []})").find("missing required key \"gain\""), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "zeros": [{"real": 0}]})").find("s = 0"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"wn": -3, "zeta": 0.5}]})").find("wn must be > 0"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": "1"})").find("expected a number"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "delay_s": -0.01})").find("delay must be >= 0"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"real": -1, "wn": 2}]})").find("either"), std::string::npos);
+}
+
+TEST(Tf, JsonRoundTripKeepsEveryField) {
+  const char* src = R"({"gain": 0.0308, "zeros": [{"real": -10.8}, {"wn": 50.1, "zeta": 0.013}],
+                        "poles": [{"real": -2.83}, {"wn": 49.6, "zeta": 0.021}], "delay_s": 0.011})";
+  Tf a = tf_from_json(J(src), {"t", ""});
+  Tf b = tf_from_json(tf_to_json(a), {"t", ""});
+  for (double w : {0.3, 3.0, 30.0, 300.0}) EXPECT_EQ(a.at(w), b.at(w));
+}

@@ -1,0 +1,29 @@
+// Shared generators and checks for fralab's tests: known-answer signals, an independent
+// least-squares sinusoid fit (deliberately not the analyser's code), and model fixtures.
+#pragma once
+
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "fralab/plant/model.h"
+
+namespace fralab::testing {
+
+/// Path of a file in the source tree (models/..., tests/data/...).
+std::string source_path(const std::string& rel);
+
+/// Least-squares fit of x[k] ~ c + a sin(w t_k) + b cos(w t_k), t_k = (start + k) h, over the
+/// samples [start, start + n); returns the phasor a + j b (so x ~ Im(phasor e^{j w t}) ... i.e.
+/// amplitude |p|, phase arg(p) relative to sin(w t)).
+std::complex<double> sine_phasor(const std::vector<double>& x, double w, double h, size_t start,
+                                 size_t n);
+
+/// A one-input, one-output model with the given tfs, for tests. Output "y", input "u".
+Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor = nullptr,
+                 double noise_rms = 0.0);
+
+/// Phase difference in degrees wrapped to (-180, 180].
+double wrap_deg(double d);
+
+}  // namespace fralab::testing
