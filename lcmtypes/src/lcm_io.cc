@@ -6,13 +6,6 @@
 
 namespace fralab {
 
-int Block::channel_index(const std::string& name) const {
-  for (size_t i = 0; i < channels.size(); ++i) {
-    if (channels[i] == name) return static_cast<int>(i);
-  }
-  return -1;
-}
-
 template <class Msg>
 static Msg to_msg(const Block& b) {
   Msg m;
@@ -58,6 +51,48 @@ command_block_t to_command_msg(const Block& b) { return to_msg<command_block_t>(
 Block from_msg(const tape_block_t& m) { return from(m, "tape_block_t"); }
 Block from_msg(const command_block_t& m) { return from(m, "command_block_t"); }
 
+excitation_status_t to_status_msg(const StatusEvent& e) {
+  excitation_status_t m;
+  m.run_id = e.run_id;
+  m.seq = e.seq;
+  m.sample = e.sample;
+  m.sample_rate_hz = e.sample_rate_hz;
+  m.excitation = e.excitation;
+  m.state = e.state;
+  m.step = e.step;
+  m.n_steps = e.n_steps;
+  m.frequency_hz = e.frequency_hz;
+  m.ref_phase_rad = e.ref_phase_rad;
+  m.n_cycles = e.n_cycles;
+  m.n_samples = e.n_samples;
+  m.n_inputs = static_cast<int32_t>(e.inputs.size());
+  m.inputs = e.inputs;
+  m.amplitudes = e.amplitudes;
+  m.amplitudes.resize(e.inputs.size(), 0.0);
+  m.message = e.message;
+  return m;
+}
+
+StatusEvent from_msg(const excitation_status_t& m) {
+  StatusEvent e;
+  e.run_id = m.run_id;
+  e.seq = m.seq;
+  e.sample = m.sample;
+  e.sample_rate_hz = m.sample_rate_hz;
+  e.excitation = m.excitation;
+  e.state = m.state;
+  e.step = m.step;
+  e.n_steps = m.n_steps;
+  e.frequency_hz = m.frequency_hz;
+  e.ref_phase_rad = m.ref_phase_rad;
+  e.n_cycles = m.n_cycles;
+  e.n_samples = m.n_samples;
+  e.inputs = m.inputs;
+  e.amplitudes = m.amplitudes;
+  e.message = m.message;
+  return e;
+}
+
 std::string resolve_lcm_url(const std::string& flag) {
   std::string url = flag;
   if (url.empty()) {
@@ -75,7 +110,7 @@ std::string private_lcm_url(uint64_t salt) {
   unsigned x = 1 + (salt % 250), y = 1 + ((salt / 250) % 250);
   unsigned port = 7700 + ((salt / 62500) % 1000);
   return "udpm://239.255." + std::to_string(x) + "." + std::to_string(y) + ":" +
-         std::to_string(port) + "?ttl=0";
+         std::to_string(port) + "?ttl=0&recv_buf_size=2097152";
 }
 
 int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {

@@ -3,6 +3,7 @@
 // with the commands echoed (u_<input>), every actuator position, every output and the reference
 // channels. Lockstep: it never runs ahead and never drops a block.
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <iostream>
 
 #include "fralab/lcm_io.h"
@@ -18,15 +19,16 @@ struct Plant {
   lcm::LCM* lcm;
   std::vector<std::string> input_names;
   int64_t next_seq = 0;
-  std::string run_id;
+  std::string run_id;  // "" until given or fixed by the first command
   bool done = false;
+  bool started = false;
   std::string error;
 
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     if (done || !error.empty()) return;
     try {
       Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
-      if (next_seq == 0 && run_id.empty()) run_id = cmd.run_id;
+      if (run_id.empty()) run_id = cmd.run_id;
       if (cmd.run_id != run_id) return;  // another run on the same URL: not ours
       if (cmd.seq != next_seq) {
         throw InputError("command block gap: expected seq " + std::to_string(next_seq) + ", got " +
@@ -69,6 +71,7 @@ struct Plant {
         for (size_t c = 0; c < y.size(); ++c) tape.at(ni + int(c), k) = y[c];
         for (size_t e = 0; e < echo.size(); ++e) tape.at(ni + int(y.size() + e), k) = cmd.at(echo[e], k);
       }
+      started = true;
       tape_block_t msg = to_tape_msg(tape);
       lcm->publish(kTapeChannel, &msg);
       ++next_seq;
@@ -92,6 +95,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", opt.seed, "noise seed")->capture_default_str();
   app.add_flag("--no-noise", no_noise, "turn every noise source off");
   app.add_flag("--keep-running", keep_running, "do not exit after the final block");
+  std::string run_id;
+  app.add_option("--run-id", run_id, "only this run (default: the first command's)");
   CLI11_PARSE(app, argc, argv);
   opt.noise = !no_noise;
   try {
@@ -99,12 +104,21 @@ int main(int argc, char** argv) {
     for (const auto& w : model.warnings) std::cerr << "fralab-plant: warning: " << w << "\n";
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    Plant plant{Simulator(model, opt), &lcm, {}, 0, "", false, ""};
+    Plant plant{Simulator(model, opt), &lcm, {}, 0, run_id, false, false, ""};
     for (const auto& in : model.inputs) plant.input_names.push_back(in.name);
     lcm::Subscription* sub = lcm.subscribe(kCmdChannel, &Plant::on_command, &plant);
     sub->setQueueCapacity(100000);
+    auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (keep_running || !plant.done) {
-      lcm.handleTimeout(200);
+      if (!plant.started && std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+        ack_t a;  // ready: the acquisition waits for this before the first command
+        a.run_id = run_id;
+        a.consumer = "plant";
+        a.seq = -1;
+        lcm.publish(kAckChannel, &a);
+        last_ready = std::chrono::steady_clock::now();
+      }
+      lcm.handleTimeout(100);
       if (!plant.error.empty()) throw InputError(plant.error);
     }
     return 0;

@@ -19,6 +19,7 @@
 #include "fralab/tape_block_t.hpp"
 #include "fralab/tf_t.hpp"
 #include "fralab/plant/json_util.h"
+#include "fralab/plant/tape.h"
 
 namespace fralab {
 
@@ -29,27 +30,13 @@ inline constexpr const char* kAckChannel = "FRALAB_ACK";
 inline constexpr const char* kFrdChannel = "FRALAB_FRD";
 inline constexpr const char* kTfChannel = "FRALAB_TF";
 
-/// Plain mirror of tape_block_t / command_block_t. samples are channel-major.
-struct Block {
-  std::string run_id;
-  int64_t seq = 0;
-  int64_t start_sample = 0;
-  double sample_rate_hz = 0.0;
-  std::vector<std::string> channels;
-  int n_samples = 0;
-  std::vector<double> samples;
-  bool final_block = false;
-
-  double at(int channel, int k) const { return samples[size_t(channel) * n_samples + k]; }
-  double& at(int channel, int k) { return samples[size_t(channel) * n_samples + k]; }
-  int channel_index(const std::string& name) const;
-};
-
 tape_block_t to_tape_msg(const Block& b);
 command_block_t to_command_msg(const Block& b);
 /// Throws InputError when sizes disagree (n_values != n_channels * n_samples, ...).
 Block from_msg(const tape_block_t& m);
 Block from_msg(const command_block_t& m);
+excitation_status_t to_status_msg(const StatusEvent& e);
+StatusEvent from_msg(const excitation_status_t& m);
 
 /// Decodes a message of type Msg from a raw buffer; InputError naming the channel and the expected
 /// type when the bytes are not that type (fingerprint mismatch, truncated).
@@ -69,7 +56,8 @@ Msg decode_checked(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
 /// A udpm URL without ttl=0 is refused (fralab traffic never leaves the host).
 std::string resolve_lcm_url(const std::string& flag);
 
-/// A fresh private URL for one lab run: a multicast group/port derived from `salt`, ttl=0.
+/// A fresh private URL for one lab run: a multicast group/port derived from `salt`, ttl=0, and a
+/// 2 MB receive buffer request (granted up to net.core.rmem_max).
 std::string private_lcm_url(uint64_t salt);
 
 /// One event of a tape file.

@@ -1,0 +1,183 @@
+#include "lab.h"
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <thread>
+#include <unistd.h>
+
+#include "fralab/acquire/model_info.h"
+#include "fralab/acquire/supervisor.h"
+#include "fralab/analyze/frd.h"
+#include "fralab/lcm_io.h"
+#include "fralab/plant/embedded_models.h"
+
+namespace fralab {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> pairs_for_input(const std::string& x, const std::vector<std::string>& outs) {
+  std::vector<std::string> p;
+  for (const auto& o : outs) p.push_back(x + ":" + o);
+  p.push_back("u_" + x + ":" + x);
+  for (const auto& o : outs) p.push_back("u_" + x + ":" + o);
+  return p;
+}
+
+namespace {
+
+// Reads the tape back: every command and tape block of the run, without gaps, and the final
+// "done" status. Returns the number of tape blocks, or -1 while incomplete (logger still writing).
+int64_t check_tape(const std::string& path, const std::string& run_id, std::string* problem) {
+  std::map<std::string, std::vector<int64_t>> seqs;
+  bool done = false, final_tape = false;
+  try {
+    read_tape_file(path, [&](const TapeEvent& ev) {
+      lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+      if (ev.channel == kTapeChannel) {
+        auto m = decode_checked<tape_block_t>(&rb, ev.channel);
+        if (m.run_id == run_id) {
+          seqs["tape"].push_back(m.seq);
+          final_tape |= m.final_block;
+        }
+      } else if (ev.channel == kCmdChannel) {
+        auto m = decode_checked<command_block_t>(&rb, ev.channel);
+        if (m.run_id == run_id) seqs["command"].push_back(m.seq);
+      } else if (ev.channel == kStatusChannel) {
+        auto m = decode_checked<excitation_status_t>(&rb, ev.channel);
+        done |= (m.run_id == run_id && m.state == "done");
+      }
+    });
+  } catch (const InputError& e) {
+    *problem = e.what();
+    return -1;  // possibly a partly written last event: try again
+  }
+  if (!final_tape || !done) {
+    *problem = "the tape does not yet hold the final block and the done status";
+    return -1;
+  }
+  for (auto& [kind, v] : seqs) {
+    std::sort(v.begin(), v.end());
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (v[i] != int64_t(i)) {
+        *problem = "the tape lost " + kind + " block seq " + std::to_string(i);
+        return -2;
+      }
+    }
+  }
+  return int64_t(seqs["tape"].size());
+}
+
+}  // namespace
+
+MeasureResult run_measure(const MeasureOptions& o) {
+  if (o.out.empty()) throw InputError("--out DIR is required");
+  Model model = load_model_or_embedded(o.engine);
+  std::vector<int> excite = select_inputs(model, o.inputs);
+  parse_band(o.band);
+  fs::create_directories(o.out + "/frd");
+  fs::create_directories(o.out + "/logs");
+  const std::string engine_file = o.out + "/engine.json";
+  save_model(engine_file, model);  // the exact model measured, beside its tape
+
+  MeasureResult r;
+  const uint64_t salt = uint64_t(getpid()) * 1000003u ^
+                        uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
+  const std::string url = o.lcm_url.empty() ? private_lcm_url(salt) : resolve_lcm_url(o.lcm_url);
+  r.run_id = "run-" + std::to_string(salt % 1000000007u);
+  const std::string tape = o.out + "/tape.lcmlog";
+  fs::remove(tape);
+  auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
+
+  Supervisor sup;
+  sup.start({"logger", {"lcm-logger", "--lcm-url=" + url, "-q", "-f", "--flush-interval=50", "-v", "-c", "FRALAB_ACK", tape}, log("logger")});
+  for (int i = 0; i < 100 && !fs::exists(tape); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  if (!fs::exists(tape)) sup.wait_for({"logger"}, 0.1);  // surfaces its error
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+
+  std::vector<std::string> plant_args = {module_path("fralab-plant"), "--model", engine_file, "--lcm-url", url,
+                                         "--seed", std::to_string(o.seed), "--run-id", r.run_id,
+                                         "--sample-rate", std::to_string(o.sample_rate_hz)};
+  if (o.no_noise) plant_args.push_back("--no-noise");
+  sup.start({"plant", plant_args, log("plant")});
+
+  std::vector<std::string> outs;
+  for (const auto& out : model.outputs) outs.push_back(out.name);
+  std::vector<std::string> consumers = {"plant"}, waits = {"plant"};
+  for (int i : excite) {
+    const std::string x = model.inputs[i].name;
+    auto pairs = pairs_for_input(x, outs);
+    r.pairs.insert(r.pairs.end(), pairs.begin(), pairs.end());
+    // One process per position-relative pair, one for the command-relative ones.
+    std::vector<std::vector<std::string>> groups;
+    for (size_t k = 0; k <= outs.size(); ++k) groups.push_back({pairs[k]});
+    groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
+    for (const auto& g : groups) {
+      std::string name = "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
+      std::vector<std::string> args = {module_path("fralab-analyze"), "--lcm-url", url, "--run-id", r.run_id,
+                                       "--name", name, "--out", o.out};
+      for (const auto& p : g) {
+        args.push_back("--pair");
+        args.push_back(p);
+      }
+      sup.start({name, args, log(name)});
+      consumers.push_back(name);
+      waits.push_back(name);
+    }
+  }
+  std::string consumers_csv;
+  for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
+  std::string inputs_csv;
+  for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
+  std::vector<std::string> acq = {module_path("fralab-acquire"), "--engine", engine_file, "--lcm-url", url,
+                                  "--run-id", r.run_id, "--input", inputs_csv, "--band", o.band,
+                                  "--points-per-decade", std::to_string(o.points_per_decade),
+                                  "--speed", std::to_string(o.speed), "--consumers", consumers_csv,
+                                  "--sample-rate", std::to_string(o.sample_rate_hz),
+                                  "--min-cycles", std::to_string(o.min_cycles),
+                                  "--min-integrate-s", std::to_string(o.min_integrate_s),
+                                  "--summary", o.out + "/acquire.json"};
+  if (o.amplitude_pct >= 0) {
+    acq.push_back("--amplitude-pct");
+    acq.push_back(std::to_string(o.amplitude_pct));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  sup.start({"acquire", acq, log("acquire")});
+  waits.push_back("acquire");
+  sup.wait_for(waits, o.timeout_s);
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // The logger: stop it only once the tape holds the whole run (lcm-logger 1.3.1 drops its queue on
+  // SIGINT), and fail loudly if anything was lost.
+  // lcm-logger 1.3.1 flushes only when a message arrives: a small heartbeat on FRALAB_FLUSH keeps
+  // it writing while the tape is checked (the heartbeats are recorded too; readers ignore them).
+  std::string problem;
+  int64_t n = -1;
+  {
+    lcm::LCM lcm(url);
+    ack_t beat;
+    beat.run_id = r.run_id;
+    beat.consumer = "launcher";
+    for (int i = 0; i < 200 && n < 0; ++i) {
+      beat.seq = i;
+      lcm.publish("FRALAB_FLUSH", &beat);
+      std::this_thread::sleep_for(std::chrono::milliseconds(60));
+      n = check_tape(tape, r.run_id, &problem);
+      if (n == -2) break;
+    }
+  }
+  sup.stop("logger", SIGINT, 5.0);
+  if (n < 0) throw InputError(tape + ": " + problem);
+  r.tape_blocks = n;
+  Json acq_summary = json_load_file(o.out + "/acquire.json");
+  r.engine_time_s = acq_summary.value("engine_time_s", 0.0);
+  Json summary{{"run_id", r.run_id}, {"engine", model.name}, {"lcm_url", url}, {"inputs", inputs_csv},
+               {"pairs", r.pairs}, {"engine_time_s", r.engine_time_s}, {"wall_time_s", r.wall_time_s},
+               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)}, {"tape_blocks", n}};
+  json_save_file(o.out + "/run.json", summary);
+  return r;
+}
+
+}  // namespace fralab

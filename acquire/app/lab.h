@@ -1,0 +1,43 @@
+// The lab launcher behind `fralab run` and `fralab measure`: starts lcm-logger, the plant, one
+// analyser per channel pair and the acquisition as separate processes on a private LCM URL,
+// supervises them, verifies the tape holds every block, and stops them cleanly.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fralab {
+
+struct MeasureOptions {
+  std::string engine = "j85_95";
+  std::string inputs;  // "" = every input
+  std::string band = "0.04:100";
+  int points_per_decade = 10;
+  double amplitude_pct = -1;  // < 0: each input's default
+  uint64_t seed = 1;
+  std::string out;
+  double speed = 0;
+  bool no_noise = false;
+  double sample_rate_hz = 1000;
+  int min_cycles = 8;
+  double min_integrate_s = 4.0;
+  std::string lcm_url;  // "" = a fresh private URL
+  double timeout_s = 3600;
+};
+
+struct MeasureResult {
+  std::vector<std::string> pairs;
+  double engine_time_s = 0;
+  double wall_time_s = 0;
+  int64_t tape_blocks = 0;
+  std::string run_id;
+};
+
+/// The pairs measured for an input X of a model with outputs O: X:O for every output, u_X:X, and
+/// u_X:O for every output.
+std::vector<std::string> pairs_for_input(const std::string& input, const std::vector<std::string>& outputs);
+
+MeasureResult run_measure(const MeasureOptions& opt);
+
+}  // namespace fralab

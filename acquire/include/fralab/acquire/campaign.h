@@ -1,0 +1,90 @@
+// The excitation campaign: what the oscillator does, sample by sample, with no I/O.
+//
+// Stepped sine (the default, Appendix A's Fourier analysis at discrete frequencies): frequencies
+// log-spaced over [f_lo, f_hi] Hz, points_per_decade per decade (both ends included). Per step:
+//   settle    max(settle_cycles / f, settle_time_constants * slowest_time_constant_s) seconds,
+//   integrate N whole cycles, N = max(min_cycles, ceil(min_integrate_s * f)),
+// and f is nudged so that N cycles are exactly an integer number of samples L (f = N fs / L), so
+// the Fourier filter's window holds whole cycles exactly. min_cycles = 8 gives 8 blocks of one or
+// more cycles for the noise estimate; min_integrate_s keeps high-frequency points from being too
+// short; the low frequencies still dominate: 0.04-100 Hz at 10 points per decade is ~19 min of
+// engine time per actuator at the defaults (the report: 0.5 h per actuator).
+//
+// Inputs are excited one after the other, each through the whole list of steps. The command of the
+// excited input is dc + A sin(phi(n)); phi is continuous across steps (no jumps in the command);
+// phi(n) = phi_step + 2 pi f (n - n_step) / fs within a step.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fralab/plant/tape.h"
+
+namespace fralab {
+
+struct SteppedSineOptions {
+  double f_lo_hz = 0.04;
+  double f_hi_hz = 100.0;
+  int points_per_decade = 10;
+  int min_cycles = 8;
+  double min_integrate_s = 4.0;
+  double settle_cycles = 1.0;
+  double settle_time_constants = 5.0;
+  double slowest_time_constant_s = 0.0;  // from the model (largest 1/|pole|)
+  double sample_rate_hz = 1000.0;
+  /// Throws InputError naming the bad option (band order, f_hi above fs/4, ...).
+  void validate() const;
+};
+
+struct SineStep {
+  int index = 0;
+  double f_hz = 0.0;  // exact: n_cycles * fs / integrate_samples
+  int n_cycles = 0;
+  int64_t settle_samples = 0;
+  int64_t integrate_samples = 0;
+};
+
+std::vector<SineStep> plan_stepped_sine(const SteppedSineOptions& opt);
+
+struct CampaignInput {
+  std::string name;
+  double dc = 0.0;
+  double amplitude = 0.0;  // peak, input units, when excited
+};
+
+/// The whole run: every excited input through every step, then "done". Sample-exact.
+class SteppedSineCampaign {
+ public:
+  /// `inputs`: every plant input (dc values); `excite`: indices into `inputs`, in test order.
+  SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                      std::vector<SineStep> steps, double sample_rate_hz, std::string run_id);
+
+  int64_t total_samples() const { return total_; }
+  double sample_rate_hz() const { return fs_; }
+  /// Status events in sample order: settle and integrate per step and input, then done.
+  const std::vector<StatusEvent>& events() const { return events_; }
+  /// Fills commands for samples [start, start + n): cmd[i][k] absolute command of input i,
+  /// ref_phase[k] (radians, continuous within a step) and ref_freq_hz[k] (0 when idle).
+  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+            std::vector<double>& ref_freq) const;
+  const std::vector<CampaignInput>& inputs() const { return inputs_; }
+
+ private:
+  struct Segment {
+    int input;
+    SineStep step;
+    int64_t start;  // settle start
+    double phi0;    // phase at start
+  };
+  std::vector<CampaignInput> inputs_;
+  std::vector<Segment> segs_;
+  std::vector<StatusEvent> events_;
+  double fs_;
+  int64_t total_ = 0;
+};
+
+/// Engine time of a plan for one input, seconds.
+double plan_duration_s(const std::vector<SineStep>& steps, double sample_rate_hz);
+
+}  // namespace fralab

@@ -1,0 +1,29 @@
+// What the acquisition needs to know of the engine model: which inputs to excite, at what
+// amplitude, and how slow the plant is (for settle times). Pure functions, no I/O.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fralab/acquire/campaign.h"
+#include "fralab/plant/model.h"
+
+namespace fralab {
+
+/// "LO:HI" in Hz -> (LO, HI); InputError naming the text otherwise.
+std::pair<double, double> parse_band(const std::string& band);
+
+/// Largest time constant of any tf in the model, seconds: 1/|r| for a real pole r, 1/(zeta wn)
+/// for a pair (its envelope).
+double slowest_time_constant_s(const Model& m);
+
+/// Indices of the inputs named in a comma-separated list ("" = every input, in model order).
+/// InputError naming an unknown input and listing the known ones.
+std::vector<int> select_inputs(const Model& m, const std::string& csv);
+
+/// Every input with its DC and test amplitude: amplitude_pct of full scale when >= 0, else the
+/// input's test_amplitude_pct, else 2 %.
+std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct);
+
+}  // namespace fralab

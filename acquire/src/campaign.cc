@@ -1,0 +1,134 @@
+#include "fralab/acquire/campaign.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "fralab/plant/json_util.h"
+
+namespace fralab {
+
+void SteppedSineOptions::validate() const {
+  auto bad = [](const std::string& m) { throw InputError(m); };
+  if (!(sample_rate_hz > 0)) bad("sample rate must be > 0 Hz");
+  if (!(f_lo_hz > 0) || !(f_hi_hz >= f_lo_hz)) {
+    bad("band " + std::to_string(f_lo_hz) + ":" + std::to_string(f_hi_hz) + " Hz must satisfy 0 < LO <= HI");
+  }
+  if (f_hi_hz > sample_rate_hz / 4) {
+    bad("band top " + std::to_string(f_hi_hz) + " Hz is above fs/4 = " + std::to_string(sample_rate_hz / 4) +
+        " Hz: lower --band or raise the sample rate");
+  }
+  if (points_per_decade < 1) bad("points per decade must be >= 1");
+  if (min_cycles < 2) bad("min_cycles must be >= 2 (the noise estimate needs two blocks)");
+  if (min_integrate_s < 0 || settle_cycles < 0 || settle_time_constants < 0 || slowest_time_constant_s < 0) {
+    bad("settle and integration times must be >= 0");
+  }
+}
+
+std::vector<SineStep> plan_stepped_sine(const SteppedSineOptions& o) {
+  o.validate();
+  const double decades = std::log10(o.f_hi_hz / o.f_lo_hz);
+  const int n = std::max(1, int(std::round(decades * o.points_per_decade)) + 1);
+  std::vector<SineStep> steps;
+  for (int i = 0; i < n; ++i) {
+    double f = n == 1 ? o.f_lo_hz : o.f_lo_hz * std::pow(10.0, decades * i / (n - 1));
+    SineStep s;
+    s.index = i;
+    s.n_cycles = std::max(o.min_cycles, int(std::ceil(o.min_integrate_s * f)));
+    s.integrate_samples = std::llround(s.n_cycles * o.sample_rate_hz / f);
+    s.f_hz = s.n_cycles * o.sample_rate_hz / double(s.integrate_samples);
+    double settle_s = std::max(o.settle_cycles / f, o.settle_time_constants * o.slowest_time_constant_s);
+    s.settle_samples = std::llround(settle_s * o.sample_rate_hz);
+    steps.push_back(s);
+  }
+  return steps;
+}
+
+double plan_duration_s(const std::vector<SineStep>& steps, double fs) {
+  int64_t n = 0;
+  for (const auto& s : steps) n += s.settle_samples + s.integrate_samples;
+  return n / fs;
+}
+
+SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                                         std::vector<SineStep> steps, double fs, std::string run_id)
+    : inputs_(std::move(inputs)), fs_(fs) {
+  if (steps.empty()) throw InputError("campaign: no frequency steps");
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  std::vector<std::string> names;
+  for (const auto& in : inputs_) names.push_back(in.name);
+  int64_t n = 0;
+  double phi = 0.0;
+  int64_t seq = 0;
+  const int n_steps = int(steps.size() * excite.size());
+  int global = 0;
+  for (int i : excite) {
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    std::vector<double> amps(inputs_.size(), 0.0);
+    amps[i] = inputs_[i].amplitude;
+    for (const SineStep& s : steps) {
+      segs_.push_back({i, s, n, phi});
+      const double dphi = 2 * std::numbers::pi * s.f_hz / fs;
+      StatusEvent e;
+      e.run_id = run_id;
+      e.sample_rate_hz = fs;
+      e.step = global;
+      e.n_steps = n_steps;
+      e.frequency_hz = s.f_hz;
+      e.n_cycles = s.n_cycles;
+      e.inputs = names;
+      e.amplitudes = amps;
+      e.seq = seq++;
+      e.state = "settle";
+      e.sample = n;
+      e.ref_phase_rad = phi;
+      e.n_samples = s.settle_samples;
+      events_.push_back(e);
+      e.seq = seq++;
+      e.state = "integrate";
+      e.sample = n + s.settle_samples;
+      e.ref_phase_rad = std::fmod(phi + dphi * double(s.settle_samples), 2 * std::numbers::pi);
+      e.n_samples = s.integrate_samples;
+      events_.push_back(e);
+      n += s.settle_samples + s.integrate_samples;
+      phi = std::fmod(phi + dphi * double(s.settle_samples + s.integrate_samples), 2 * std::numbers::pi);
+      ++global;
+    }
+  }
+  total_ = n;
+  StatusEvent done;
+  done.run_id = run_id;
+  done.seq = seq++;
+  done.sample_rate_hz = fs;
+  done.state = "done";
+  done.sample = n;
+  done.n_steps = n_steps;
+  done.step = n_steps;
+  done.inputs = names;
+  done.amplitudes.assign(names.size(), 0.0);
+  events_.push_back(done);
+}
+
+void SteppedSineCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+                               std::vector<double>& ref_phase, std::vector<double>& ref_freq) const {
+  cmd.assign(inputs_.size(), std::vector<double>(n));
+  ref_phase.assign(n, 0.0);
+  ref_freq.assign(n, 0.0);
+  for (size_t i = 0; i < inputs_.size(); ++i) std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
+  // Segment of the first sample, then walk.
+  auto it = std::upper_bound(segs_.begin(), segs_.end(), start,
+                             [](int64_t v, const Segment& s) { return v < s.start; });
+  size_t si = it == segs_.begin() ? 0 : size_t(it - segs_.begin() - 1);
+  for (int k = 0; k < n; ++k) {
+    const int64_t m = start + k;
+    if (m >= total_ || segs_.empty()) continue;
+    while (si + 1 < segs_.size() && segs_[si + 1].start <= m) ++si;
+    const Segment& s = segs_[si];
+    const double phi = s.phi0 + 2 * std::numbers::pi * s.step.f_hz * double(m - s.start) / fs_;
+    ref_phase[k] = phi;
+    ref_freq[k] = s.step.f_hz;
+    cmd[s.input][k] = inputs_[s.input].dc + inputs_[s.input].amplitude * std::sin(phi);
+  }
+}
+
+}  // namespace fralab

@@ -1,0 +1,68 @@
+#include "fralab/acquire/model_info.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace fralab {
+
+std::pair<double, double> parse_band(const std::string& band) {
+  auto c = band.find(':');
+  try {
+    if (c == std::string::npos) throw std::invalid_argument("no colon");
+    size_t p1 = 0, p2 = 0;
+    double lo = std::stod(band.substr(0, c), &p1), hi = std::stod(band.substr(c + 1), &p2);
+    if (p1 != c || p2 != band.size() - c - 1) throw std::invalid_argument("trailing");
+    return {lo, hi};
+  } catch (const std::exception&) {
+    throw InputError("--band \"" + band + "\" must be LO_HZ:HI_HZ, e.g. 0.04:100");
+  }
+}
+
+double slowest_time_constant_s(const Model& m) {
+  double t = 0.0;
+  auto scan = [&](const Tf& tf) {
+    for (const Root& p : tf.poles) t = std::max(t, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
+  };
+  for (const auto& in : m.inputs) if (in.actuator) scan(*in.actuator);
+  for (const auto& out : m.outputs) if (out.sensor) scan(*out.sensor);
+  for (const auto& p : m.paths) scan(p.tf);
+  return t;
+}
+
+std::vector<int> select_inputs(const Model& m, const std::string& csv) {
+  std::vector<int> out;
+  if (csv.empty()) {
+    for (size_t i = 0; i < m.inputs.size(); ++i) out.push_back(int(i));
+    return out;
+  }
+  size_t a = 0;
+  while (a <= csv.size()) {
+    size_t b = csv.find(',', a);
+    if (b == std::string::npos) b = csv.size();
+    std::string name = csv.substr(a, b - a);
+    if (!name.empty()) {
+      int i = m.input_index(name);
+      if (i < 0) {
+        std::string known;
+        for (const auto& in : m.inputs) known += (known.empty() ? "" : ", ") + in.name;
+        throw InputError("--input " + name + ": the model has no such input (inputs: " + known + ")");
+      }
+      if (std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
+    }
+    a = b + 1;
+  }
+  if (out.empty()) throw InputError("--input names no input");
+  return out;
+}
+
+std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct) {
+  std::vector<CampaignInput> v;
+  for (const auto& in : m.inputs) {
+    double pct = amplitude_pct >= 0 ? amplitude_pct : (in.test_amplitude_pct > 0 ? in.test_amplitude_pct : 2.0);
+    if (!(pct > 0) || pct > 50) throw InputError("amplitude " + std::to_string(pct) + " % of full scale must be in (0, 50]");
+    v.push_back({in.name, m.dc(in.name), pct / 100.0 * in.full_scale});
+  }
+  return v;
+}
+
+}  // namespace fralab

@@ -1,0 +1,134 @@
+#include "fralab/acquire/supervisor.h"
+
+#include <chrono>
+#include <cstring>
+#include <csignal>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+#include "fralab/plant/json_util.h"
+
+extern char** environ;
+
+namespace fralab {
+
+Supervisor::~Supervisor() {
+  for (auto& [n, p] : procs_) {
+    if (!p.exited && p.pid > 0) kill(p.pid, SIGTERM);
+  }
+  for (auto& [n, p] : procs_) {
+    if (!p.exited && p.pid > 0) waitpid(p.pid, nullptr, 0);
+  }
+}
+
+void Supervisor::start(const ProcessSpec& spec) {
+  if (procs_.count(spec.name)) throw InputError("process name \"" + spec.name + "\" used twice");
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  if (!spec.log_file.empty()) {
+    posix_spawn_file_actions_addopen(&fa, 1, spec.log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  }
+  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> argv;
+  for (const auto& a : spec.argv) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid;
+  int rc = posix_spawnp(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) {
+    throw InputError("cannot start " + spec.name + " (" + spec.argv[0] + "): " + std::strerror(rc));
+  }
+  procs_[spec.name] = Proc{spec, pid, false, 0};
+}
+
+void Supervisor::reap(bool block) {
+  for (auto& [n, p] : procs_) {
+    if (p.exited) continue;
+    int st = 0;
+    pid_t r = waitpid(p.pid, &st, block ? 0 : WNOHANG);
+    if (r == p.pid) {
+      p.exited = true;
+      p.status = st;
+    }
+  }
+}
+
+std::string Supervisor::reason(const Proc& p) const {
+  std::string why = WIFEXITED(p.status) ? "exited with status " + std::to_string(WEXITSTATUS(p.status))
+                                        : "was killed by signal " + std::to_string(WTERMSIG(p.status));
+  std::string last;
+  std::ifstream in(p.spec.log_file);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) last = line;
+  }
+  return p.spec.name + " " + why + (last.empty() ? "" : ": " + last) +
+         (p.spec.log_file.empty() ? "" : " (log: " + p.spec.log_file + ")");
+}
+
+void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    reap(false);
+    for (auto& [n, p] : procs_) {
+      if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0)) throw InputError(reason(p));
+    }
+    bool all = true;
+    for (const auto& n : names) {
+      auto it = procs_.find(n);
+      if (it == procs_.end()) throw InputError("no process named " + n);
+      all = all && it->second.exited;
+    }
+    if (all) return;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) {
+      std::string who;
+      for (const auto& n : names) if (!procs_[n].exited) who += (who.empty() ? "" : ", ") + n;
+      throw InputError("timed out after " + std::to_string(int(timeout_s)) + " s waiting for " + who);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+void Supervisor::stop(const std::string& name, int sig, double timeout_s) {
+  auto it = procs_.find(name);
+  if (it == procs_.end() || it->second.exited) return;
+  kill(it->second.pid, sig);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!it->second.exited) {
+    reap(false);
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) {
+      kill(it->second.pid, SIGKILL);
+      waitpid(it->second.pid, &it->second.status, 0);
+      it->second.exited = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+}
+
+bool Supervisor::running(const std::string& name) const {
+  auto it = procs_.find(name);
+  return it != procs_.end() && !it->second.exited;
+}
+
+std::vector<std::string> Supervisor::names() const {
+  std::vector<std::string> v;
+  for (const auto& [n, p] : procs_) v.push_back(n);
+  return v;
+}
+
+std::string module_path(const std::string& name) {
+  std::error_code ec;
+  auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    auto p = self.parent_path() / name;
+    if (std::filesystem::exists(p)) return p.string();
+  }
+  return name;
+}
+
+}  // namespace fralab

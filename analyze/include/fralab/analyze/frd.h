@@ -1,0 +1,53 @@
+// Frequency-response data, `fralab-frd/1` (contracts 4): the pair "E1:E2" (response E2/E1) and
+// its points. w in rad/s, mag the amplitude ratio |E2/E1| (not dB), phase_deg the phase of E2
+// relative to E1 in degrees, sigma the standard deviation of the complex ratio, coherence in
+// [0, 1]. fralab adds f_hz, h2_rel/h3_rel (harmonic distortion of E2), n_cycles, step, input, valid
+// and note; readers ignore what they do not know.
+#pragma once
+
+#include <complex>
+#include <string>
+#include <vector>
+
+#include "fralab/plant/json_util.h"
+
+namespace fralab {
+
+inline constexpr const char* kFrdFormat = "fralab-frd/1";
+
+struct FrdPoint {
+  double w = 0.0;
+  double mag = 0.0;
+  double phase_deg = 0.0;
+  double sigma = -1.0;      // < 0: unknown
+  double coherence = -1.0;  // < 0: unknown
+  double h2_rel = 0.0;
+  double h3_rel = 0.0;
+  int n_cycles = 0;
+  int step = -1;
+  std::string input;  // the excited input
+  double amplitude = 0.0;  // excitation amplitude of that input (peak, input units)
+  bool valid = true;
+  std::string note;
+
+  std::complex<double> value() const;  // mag * e^{j phase}
+};
+
+struct Frd {
+  std::string pair;  // "E1:E2"
+  std::vector<FrdPoint> points;
+  std::string source;
+};
+
+/// Splits "E1:E2"; InputError naming the text otherwise.
+std::pair<std::string, std::string> split_pair(const std::string& pair);
+/// "E1_E2", the file stem of a pair.
+std::string pair_file_stem(const std::string& pair);
+
+Json frd_to_json(const Frd& frd);
+/// Reads fralab-frd/1; errors name the file and JSON path. Invalid points are kept (valid=false).
+Frd frd_from_json(const Json& j, const std::string& source);
+Frd load_frd(const std::string& file);
+void save_frd(const std::string& file, const Frd& frd);
+
+}  // namespace fralab

@@ -1,0 +1,85 @@
+// The two-channel servoanalyser for one pair E1:E2, fed with the tape's records in any order.
+//
+// Input: tape blocks (any subset of channels; E1 and E2 must be among them) and excitation status
+// events. Each "integrate" status defines a window [sample, sample + n_samples) of whole reference
+// cycles; when both channels cover it, the window gives one point:
+//   ratio R = P2 / P1 (fourier_filter.h), w = 2 pi f, mag = |R|, phase_deg = arg R in degrees;
+//   sigma: the window is cut into K = min(8, n_cycles) blocks after removing each channel's window
+//          mean; with block phasors p1_b, p2_b and residuals e_b = p2_b - R p1_b,
+//          sigma = sqrt(sum |e_b|^2 / (K (K - 1))) / |P1| (the standard deviation of R);
+//   coherence = |sum conj(p1_b) p2_b|^2 / (sum |p1_b|^2 sum |p2_b|^2);
+//   h2_rel, h3_rel: E2's 2nd and 3rd harmonic amplitudes over its fundamental.
+// Arithmetic depends only on the samples and the status, never on arrival order or timing, so
+// live, replayed and offline analyses give identical numbers. A window with a missing sample
+// (lost or never-arrived block) yields a point with valid = false and a note naming the gap.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fralab/analyze/frd.h"
+#include "fralab/plant/tape.h"
+
+namespace fralab {
+
+struct AnalyzerOptions {
+  int max_blocks = 8;  // K for sigma/coherence, >= 2
+  /// A window still missing samples when data this many samples beyond its end has arrived is
+  /// declared invalid (allows reordering up to that distance).
+  int64_t reorder_slack_samples = 5000;
+  /// Only analyse steps exciting this input. "" (default): a step is analysed unless E1 or E2 is
+  /// an input channel (or its command u_<input>) that the step does not excite; a pair of two
+  /// outputs is analysed at every step. Status events list every plant input, amplitude 0 when
+  /// not excited.
+  std::string input;
+  void validate() const;
+};
+
+class PairAnalyzer {
+ public:
+  PairAnalyzer(const std::string& pair, const AnalyzerOptions& options = {});
+
+  void on_status(const StatusEvent& status);
+  void on_block(const Block& block);
+  /// Points completed since the last call, in completion order.
+  std::vector<FrdPoint> take_new_points();
+  /// Every point so far (ascending w), as a fralab-frd/1 document.
+  Frd frd() const;
+  /// True once a "done" status arrived and every window before it has been resolved.
+  bool done() const { return done_seen_ && pending_.empty(); }
+  /// Resolves every pending window now (end of a tape): missing samples make invalid points.
+  void flush();
+  const std::string& pair() const { return pair_; }
+  std::string e1() const { return e1_; }
+  std::string e2() const { return e2_; }
+  int64_t blocks_seen() const { return blocks_seen_; }
+
+ private:
+  struct Window {
+    StatusEvent st;
+  };
+  void try_complete(bool force);
+  FrdPoint compute(const Window& w);
+  bool covers(int64_t a, int64_t b) const;
+  std::string describe_gaps(int64_t a, int64_t b) const;
+  bool wants(const StatusEvent& st) const;
+  void trim();
+
+  std::string pair_, e1_, e2_;
+  AnalyzerOptions opt_;
+  std::map<int64_t, Window> pending_;  // by start sample
+  std::vector<FrdPoint> points_, fresh_;
+  // sample store from base_
+  int64_t base_ = 0;
+  std::vector<double> x1_, x2_;
+  std::vector<char> have_;
+  int64_t max_seen_ = -1;
+  int64_t blocks_seen_ = 0;
+  std::map<int64_t, std::pair<int64_t, int64_t>> seqs_;  // seq -> [start, end)
+  bool done_seen_ = false;
+  int64_t done_sample_ = 0;
+};
+
+}  // namespace fralab

@@ -1,0 +1,87 @@
+#include "fralab/analyze/frd.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace fralab {
+
+std::complex<double> FrdPoint::value() const {
+  return std::polar(mag, phase_deg * std::numbers::pi / 180.0);
+}
+
+std::pair<std::string, std::string> split_pair(const std::string& pair) {
+  auto c = pair.find(':');
+  if (c == std::string::npos || c == 0 || c + 1 == pair.size() || pair.find(':', c + 1) != std::string::npos) {
+    throw InputError("pair \"" + pair + "\" must be written E1:E2 (the response E2/E1), e.g. Wf:P3");
+  }
+  return {pair.substr(0, c), pair.substr(c + 1)};
+}
+
+std::string pair_file_stem(const std::string& pair) {
+  auto [a, b] = split_pair(pair);
+  return a + "_" + b;
+}
+
+Json frd_to_json(const Frd& frd) {
+  Json j{{"format", kFrdFormat}, {"pair", frd.pair}, {"points", Json::array()}};
+  for (const FrdPoint& p : frd.points) {
+    Json jp{{"w", p.w}, {"f_hz", p.w / (2 * std::numbers::pi)}, {"mag", p.mag}, {"phase_deg", p.phase_deg}};
+    if (p.sigma >= 0) jp["sigma"] = p.sigma;
+    if (p.coherence >= 0) jp["coherence"] = p.coherence;
+    jp["h2_rel"] = p.h2_rel;
+    jp["h3_rel"] = p.h3_rel;
+    jp["n_cycles"] = p.n_cycles;
+    jp["step"] = p.step;
+    if (!p.input.empty()) jp["input"] = p.input;
+    if (p.amplitude > 0) jp["amplitude"] = p.amplitude;
+    jp["valid"] = p.valid;
+    if (!p.note.empty()) jp["note"] = p.note;
+    j["points"].push_back(jp);
+  }
+  return j;
+}
+
+Frd frd_from_json(const Json& j, const std::string& source) {
+  JsonWhere root{source, ""};
+  json_require_object(j, root);
+  const std::string fmt = json_string_member(j, root, "format");
+  if (fmt != kFrdFormat) json_fail(root / "format", "expected \"" + std::string(kFrdFormat) + "\", found \"" + fmt + "\"");
+  Frd f;
+  f.source = source;
+  f.pair = json_string_member(j, root, "pair");
+  split_pair(f.pair);
+  const Json& pts = json_array_member(j, root, "points");
+  for (size_t i = 0; i < pts.size(); ++i) {
+    JsonWhere w = root / "points" / i;
+    const Json& jp = pts[i];
+    FrdPoint p;
+    p.w = json_number_member(jp, w, "w");
+    if (!(p.w > 0)) json_fail(w / "w", "w must be > 0 rad/s");
+    p.mag = json_number_member(jp, w, "mag");
+    if (p.mag < 0) json_fail(w / "mag", "mag is an amplitude ratio (not dB) and must be >= 0");
+    p.phase_deg = json_number_member(jp, w, "phase_deg");
+    p.sigma = json_number_member(jp, w, "sigma", -1.0);
+    p.coherence = json_number_member(jp, w, "coherence", -1.0);
+    p.h2_rel = json_number_member(jp, w, "h2_rel", 0.0);
+    p.h3_rel = json_number_member(jp, w, "h3_rel", 0.0);
+    p.n_cycles = static_cast<int>(json_number_member(jp, w, "n_cycles", 0.0));
+    p.step = static_cast<int>(json_number_member(jp, w, "step", -1.0));
+    p.amplitude = json_number_member(jp, w, "amplitude", 0.0);
+    if (jp.contains("input") && jp["input"].is_string()) p.input = jp["input"];
+    if (jp.contains("valid")) {
+      if (!jp["valid"].is_boolean()) json_fail(w / "valid", "expected true or false");
+      p.valid = jp["valid"];
+    }
+    if (jp.contains("note") && jp["note"].is_string()) p.note = jp["note"];
+    f.points.push_back(p);
+  }
+  std::stable_sort(f.points.begin(), f.points.end(),
+                   [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  return f;
+}
+
+Frd load_frd(const std::string& file) { return frd_from_json(json_load_file(file), file); }
+void save_frd(const std::string& file, const Frd& frd) { json_save_file(file, frd_to_json(frd)); }
+
+}  // namespace fralab

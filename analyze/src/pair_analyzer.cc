@@ -1,0 +1,247 @@
+#include "fralab/analyze/pair_analyzer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "fralab/analyze/fourier_filter.h"
+
+namespace fralab {
+
+void AnalyzerOptions::validate() const {
+  if (max_blocks < 2) throw InputError("analyzer: max_blocks must be >= 2 (sigma needs two blocks)");
+  if (reorder_slack_samples < 0) throw InputError("analyzer: reorder_slack_samples must be >= 0");
+}
+
+PairAnalyzer::PairAnalyzer(const std::string& pair, const AnalyzerOptions& options)
+    : pair_(pair), opt_(options) {
+  opt_.validate();
+  std::tie(e1_, e2_) = split_pair(pair);
+}
+
+bool PairAnalyzer::wants(const StatusEvent& st) const {
+  // st.inputs lists every plant input; amplitudes > 0 mark the excited ones.
+  auto excited = [&](const std::string& in) {
+    for (size_t i = 0; i < st.inputs.size(); ++i) {
+      if (st.inputs[i] == in) return i < st.amplitudes.size() && st.amplitudes[i] > 0.0;
+    }
+    return false;
+  };
+  auto is_input = [&](const std::string& in) {
+    return std::find(st.inputs.begin(), st.inputs.end(), in) != st.inputs.end();
+  };
+  if (!opt_.input.empty()) return excited(opt_.input);
+  for (const std::string& ch : {e1_, e2_}) {
+    const std::string base = ch.rfind("u_", 0) == 0 ? ch.substr(2) : ch;
+    if (is_input(base) && !excited(base)) return false;
+  }
+  return true;
+}
+
+static std::pair<std::string, double> first_excited(const StatusEvent& st) {
+  for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
+    if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
+  }
+  return {"", 0.0};
+}
+
+void PairAnalyzer::on_status(const StatusEvent& st) {
+  if (st.state == "integrate") {
+    if (!wants(st)) return;
+    if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) || !(st.sample_rate_hz > 0)) {
+      FrdPoint p;
+      p.step = st.step;
+      p.valid = false;
+      p.note = "integrate status with no window (n_samples " + std::to_string(st.n_samples) + ")";
+      fresh_.push_back(p);
+      points_.push_back(p);
+      return;
+    }
+    pending_[st.sample] = Window{st};
+  } else if (st.state == "done" || st.state == "abort") {
+    done_seen_ = true;
+    done_sample_ = st.sample;
+  }
+  try_complete(false);
+}
+
+void PairAnalyzer::on_block(const Block& b) {
+  const int c1 = b.channel_index(e1_), c2 = b.channel_index(e2_);
+  if (c1 < 0 || c2 < 0) {
+    throw InputError("tape block seq " + std::to_string(b.seq) + " has no channel " +
+                     (c1 < 0 ? e1_ : e2_) + " (pair " + pair_ + ")");
+  }
+  if (seqs_.count(b.seq)) return;  // duplicate delivery: the first copy counts
+  ++blocks_seen_;
+  seqs_[b.seq] = {b.start_sample, b.start_sample + b.n_samples};
+  if (x1_.empty() && have_.empty()) base_ = std::min<int64_t>(b.start_sample, 0);
+  const int64_t end = b.start_sample + b.n_samples;
+  if (end - base_ > int64_t(x1_.size())) {
+    x1_.resize(end - base_, 0.0);
+    x2_.resize(end - base_, 0.0);
+    have_.resize(end - base_, 0);
+  }
+  for (int k = 0; k < b.n_samples; ++k) {
+    const int64_t n = b.start_sample + k - base_;
+    if (n < 0) continue;  // already discarded
+    x1_[n] = b.at(c1, k);
+    x2_[n] = b.at(c2, k);
+    have_[n] = 1;
+  }
+  max_seen_ = std::max(max_seen_, end);
+  try_complete(false);
+}
+
+bool PairAnalyzer::covers(int64_t a, int64_t b) const {
+  if (a < base_ || b - base_ > int64_t(have_.size())) return false;
+  for (int64_t n = a; n < b; ++n) {
+    if (!have_[n - base_]) return false;
+  }
+  return true;
+}
+
+std::string PairAnalyzer::describe_gaps(int64_t a, int64_t b) const {
+  std::string out;
+  int64_t n = a;
+  while (n < b) {
+    bool h = n >= base_ && n - base_ < int64_t(have_.size()) && have_[n - base_];
+    if (h) {
+      ++n;
+      continue;
+    }
+    int64_t s = n;
+    while (n < b && !(n >= base_ && n - base_ < int64_t(have_.size()) && have_[n - base_])) ++n;
+    out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(s) + "-" + std::to_string(n - 1);
+  }
+  // Name the sequence numbers that are absent between the lowest and highest seen.
+  if (!seqs_.empty()) {
+    std::string missing;
+    int64_t prev = seqs_.begin()->first;
+    for (auto it = std::next(seqs_.begin()); it != seqs_.end(); ++it) {
+      for (int64_t q = prev + 1; q < it->first; ++q) missing += (missing.empty() ? "" : ",") + std::to_string(q);
+      prev = it->first;
+    }
+    if (!missing.empty()) out += " (tape block seq " + missing + " missing)";
+  }
+  return out;
+}
+
+void PairAnalyzer::try_complete(bool force) {
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    const StatusEvent& st = it->second.st;
+    const int64_t a = st.sample, b = st.sample + st.n_samples;
+    bool ready = covers(a, b);
+    bool expired = force || (max_seen_ >= b + opt_.reorder_slack_samples) ||
+                   (done_seen_ && max_seen_ >= done_sample_ && !ready);
+    if (!ready && !expired) {
+      ++it;
+      continue;
+    }
+    FrdPoint p;
+    if (ready) {
+      p = compute(it->second);
+    } else {
+      p.w = 2 * std::numbers::pi * st.frequency_hz;
+      p.step = st.step;
+      p.n_cycles = st.n_cycles;
+      p.valid = false;
+      p.note = "incomplete window: " + describe_gaps(a, b);
+      p.input = first_excited(st).first;
+    }
+    points_.push_back(p);
+    fresh_.push_back(p);
+    it = pending_.erase(it);
+  }
+  trim();
+}
+
+void PairAnalyzer::flush() { try_complete(true); }
+
+void PairAnalyzer::trim() {
+  // Keep samples from the earliest pending window (or the newest data if none is pending).
+  int64_t keep = pending_.empty() ? max_seen_ - opt_.reorder_slack_samples : pending_.begin()->first;
+  keep = std::min(keep, max_seen_);
+  if (keep - base_ > 1 << 20) {  // trim in large chunks
+    const int64_t drop = keep - base_;
+    x1_.erase(x1_.begin(), x1_.begin() + drop);
+    x2_.erase(x2_.begin(), x2_.begin() + drop);
+    have_.erase(have_.begin(), have_.begin() + drop);
+    base_ = keep;
+  }
+}
+
+FrdPoint PairAnalyzer::compute(const Window& win) {
+  const StatusEvent& st = win.st;
+  const size_t L = size_t(st.n_samples);
+  const double* a = x1_.data() + (st.sample - base_);
+  const double* b = x2_.data() + (st.sample - base_);
+  const double dphi = 2 * std::numbers::pi * st.frequency_hz / st.sample_rate_hz;
+  Reference ref = make_reference(L, st.ref_phase_rad, dphi, 1);
+  // Window means (exactly DC + noise mean: the window holds whole cycles), removed for the blocks.
+  double m1 = 0, m2 = 0;
+  for (size_t k = 0; k < L; ++k) {
+    m1 += a[k];
+    m2 += b[k];
+  }
+  m1 /= double(L);
+  m2 /= double(L);
+  std::vector<double> d1(L), d2(L);
+  for (size_t k = 0; k < L; ++k) {
+    d1[k] = a[k] - m1;
+    d2[k] = b[k] - m2;
+  }
+  const Complex p1 = fourier_phasor(d1.data(), ref, 0, L), p2 = fourier_phasor(d2.data(), ref, 0, L);
+  FrdPoint p;
+  p.w = 2 * std::numbers::pi * st.frequency_hz;
+  p.step = st.step;
+  p.n_cycles = st.n_cycles;
+  std::tie(p.input, p.amplitude) = first_excited(st);
+  if (std::abs(p1) == 0.0 || !std::isfinite(std::abs(p1)) || !std::isfinite(std::abs(p2))) {
+    p.valid = false;
+    p.note = std::abs(p1) == 0.0 ? "channel " + e1_ + " has no component at the test frequency"
+                                 : "non-finite samples in the window";
+    return p;
+  }
+  const Complex r = p2 / p1;
+  p.mag = std::abs(r);
+  p.phase_deg = std::arg(r) * 180.0 / std::numbers::pi;
+  const int K = std::max(2, std::min(opt_.max_blocks, st.n_cycles));
+  std::vector<Complex> b1(K), b2(K);
+  for (int k = 0; k < K; ++k) {
+    size_t s = L * k / K, e = L * (k + 1) / K;
+    b1[k] = fourier_phasor(d1.data(), ref, s, e);
+    b2[k] = fourier_phasor(d2.data(), ref, s, e);
+  }
+  double se = 0, s11 = 0, s22 = 0;
+  Complex s12 = 0;
+  for (int k = 0; k < K; ++k) {
+    se += std::norm(b2[k] - r * b1[k]);
+    s11 += std::norm(b1[k]);
+    s22 += std::norm(b2[k]);
+    s12 += std::conj(b1[k]) * b2[k];
+  }
+  p.sigma = std::sqrt(se / (double(K) * (K - 1))) / std::abs(p1);
+  p.coherence = (s11 > 0 && s22 > 0) ? std::norm(s12) / (s11 * s22) : 0.0;
+  for (int h : {2, 3}) {
+    Reference rh = make_reference(L, st.ref_phase_rad, dphi, h);
+    double rel = std::abs(fourier_phasor(d2.data(), rh, 0, L)) / std::max(std::abs(p2), 1e-300);
+    (h == 2 ? p.h2_rel : p.h3_rel) = rel;
+  }
+  return p;
+}
+
+std::vector<FrdPoint> PairAnalyzer::take_new_points() {
+  std::vector<FrdPoint> out;
+  out.swap(fresh_);
+  return out;
+}
+
+Frd PairAnalyzer::frd() const {
+  Frd f;
+  f.pair = pair_;
+  f.points = points_;
+  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });
+  return f;
+}
+
+}  // namespace fralab

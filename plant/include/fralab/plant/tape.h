@@ -1,0 +1,55 @@
+// The tape's records as plain structs, free of LCM: a block of sample-clocked multi-channel samples
+// and an excitation status (contracts 3). The LCM adapters (lcmtypes/include/fralab/lcm_io.h)
+// convert them to and from fralab.tape_block_t / command_block_t / excitation_status_t; the
+// libraries (acquire, analyze) only ever see these.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fralab {
+
+/// samples are channel-major: samples[c * n_samples + k] is channel c at sample start_sample + k.
+struct Block {
+  std::string run_id;
+  int64_t seq = 0;
+  int64_t start_sample = 0;
+  double sample_rate_hz = 0.0;
+  std::vector<std::string> channels;
+  int n_samples = 0;
+  std::vector<double> samples;
+  bool final_block = false;
+
+  double at(int channel, int k) const { return samples[size_t(channel) * n_samples + k]; }
+  double& at(int channel, int k) { return samples[size_t(channel) * n_samples + k]; }
+  int channel_index(const std::string& name) const {
+    for (size_t i = 0; i < channels.size(); ++i) {
+      if (channels[i] == name) return static_cast<int>(i);
+    }
+    return -1;
+  }
+};
+
+/// One state change of the test signal. From `sample` on (stepped sine), the reference phase is
+/// ref_phase_rad + 2 pi frequency_hz (n - sample) / sample_rate_hz, and the excited inputs carry
+/// dc + amplitude * sin(reference phase).
+struct StatusEvent {
+  std::string run_id;
+  int64_t seq = 0;
+  int64_t sample = 0;
+  double sample_rate_hz = 0.0;
+  std::string excitation = "stepped_sine";
+  std::string state;  // "start", "settle", "integrate", "done", "abort"
+  int step = 0;
+  int n_steps = 0;
+  double frequency_hz = 0.0;
+  double ref_phase_rad = 0.0;
+  int n_cycles = 0;
+  int64_t n_samples = 0;
+  std::vector<std::string> inputs;
+  std::vector<double> amplitudes;  // per input (all plant inputs), peak; 0 = not excited
+  std::string message;
+};
+
+}  // namespace fralab
