@@ -39,16 +39,6 @@ struct Acq {
       error = e.what();
     }
   }
-  void on_tape(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
-    try {
-      tape_block_t t = decode_checked<tape_block_t>(rbuf, ch);
-      if (t.run_id != run_id) return;
-      int64_t& s = acked["plant"];
-      s = std::max(s, t.seq);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
   int64_t min_ack(const std::vector<std::string>& who, std::string* laggard) const {
     int64_t m = INT64_MAX;
     for (const auto& c : who) {
@@ -79,7 +69,7 @@ std::vector<std::string> split_csv(const std::string& s) {
 
 int main(int argc, char** argv) {
   CLI::App app{"fralab-acquire: excitation campaign over LCM"};
-  std::string engine = "j85_95", inputs_csv, band = "0.04:100", url, run_id = "run", consumers_csv = "plant",
+  std::string engine = "j85_95", inputs_csv, band = "0.04:100", url, ctl_url, run_id = "run", consumers_csv = "plant",
               summary;
   SteppedSineOptions so;
   double amplitude_pct = -1, speed = 0, ready_timeout = 30, stall_timeout = 60;
@@ -98,6 +88,7 @@ int main(int argc, char** argv) {
   app.add_option("--consumers", consumers_csv, "who must acknowledge (plant is implicit via its tape)")->capture_default_str();
   app.add_option("--run-id", run_id)->capture_default_str();
   app.add_option("--lcm-url", url);
+  app.add_option("--control-url", ctl_url, "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--ready-timeout", ready_timeout, "seconds to wait for consumers to be ready")->capture_default_str();
   app.add_option("--summary", summary, "write a JSON summary here");
   CLI11_PARSE(app, argc, argv);
@@ -120,8 +111,9 @@ int main(int argc, char** argv) {
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
     Acq acq;
     acq.run_id = run_id;
-    lcm.subscribe(kAckChannel, &Acq::on_ack, &acq)->setQueueCapacity(100000);
-    lcm.subscribe(kTapeChannel, &Acq::on_tape, &acq)->setQueueCapacity(100000);
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url));
+    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    ctl.subscribe(kAckChannel, &Acq::on_ack, &acq)->setQueueCapacity(100000);
     std::vector<std::string> consumers = split_csv(consumers_csv);
     if (std::find(consumers.begin(), consumers.end(), "plant") == consumers.end()) consumers.push_back("plant");
 
@@ -129,7 +121,7 @@ int main(int argc, char** argv) {
     const auto t_ready = Clock::now();
     std::string lag;
     while (acq.min_ack(consumers, &lag) < -1) {
-      lcm.handleTimeout(50);
+      handle_either(lcm, ctl, 50);
       if (!acq.error.empty()) throw InputError(acq.error);
       if (std::chrono::duration<double>(Clock::now() - t_ready).count() > ready_timeout) {
         throw InputError("consumer \"" + lag + "\" never said ready within " + std::to_string(ready_timeout) +
@@ -156,7 +148,7 @@ int main(int argc, char** argv) {
     for (int64_t b = 0; b < nblocks; ++b) {
       auto stall = Clock::now();
       while (acq.min_ack(consumers, &lag) < b - window) {
-        lcm.handleTimeout(20);
+        handle_either(lcm, ctl, 20);
         if (!acq.error.empty()) throw InputError(acq.error);
         if (std::chrono::duration<double>(Clock::now() - stall).count() > stall_timeout) {
           throw InputError("consumer \"" + lag + "\" stopped acknowledging at block " +
@@ -167,7 +159,7 @@ int main(int argc, char** argv) {
       const int n = int(std::min<int64_t>(block, total - s0));
       if (speed > 0) {
         auto due = t0 + std::chrono::duration<double>(double(s0) / so.sample_rate_hz / speed);
-        while (Clock::now() < due) lcm.handleTimeout(1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
+        while (Clock::now() < due) handle_either(lcm, ctl, 1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
       }
       const bool last = b == nblocks - 1;
       while (ev < camp.events().size() && (camp.events()[ev].sample < s0 + n || last)) publish_status(camp.events()[ev++]);
@@ -192,7 +184,7 @@ int main(int argc, char** argv) {
     // Wait for everyone to take the last block.
     auto stall = Clock::now();
     while (acq.min_ack(consumers, &lag) < nblocks - 1) {
-      lcm.handleTimeout(20);
+      handle_either(lcm, ctl, 20);
       if (!acq.error.empty()) throw InputError(acq.error);
       if (std::chrono::duration<double>(Clock::now() - stall).count() > stall_timeout) {
         throw InputError("consumer \"" + lag + "\" did not acknowledge the final block " + std::to_string(nblocks - 1));

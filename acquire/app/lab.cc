@@ -92,7 +92,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
   auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
 
   Supervisor sup;
-  sup.start({"logger", {"lcm-logger", "--lcm-url=" + url, "-q", "-f", "--flush-interval=50", "-v", "-c", "FRALAB_ACK", tape}, log("logger")});
+  sup.start({"logger", {"lcm-logger", "--lcm-url=" + url, "-f", "--flush-interval=50", "-v", "-c", "FRALAB_ACK", tape}, log("logger")});
   for (int i = 0; i < 100 && !fs::exists(tape); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   if (!fs::exists(tape)) sup.wait_for({"logger"}, 0.1);  // surfaces its error
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -116,7 +116,8 @@ MeasureResult run_measure(const MeasureOptions& o) {
     groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
     for (const auto& g : groups) {
       std::string name = "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
-      std::vector<std::string> args = {module_path("fralab-analyze"), "--lcm-url", url, "--run-id", r.run_id,
+      // Analysers run at lower priority: they are flow-controlled, the logger and plant are not.
+      std::vector<std::string> args = {"nice", "-n", "5", module_path("fralab-analyze"), "--lcm-url", url, "--run-id", r.run_id,
                                        "--name", name, "--out", o.out};
       for (const auto& p : g) {
         args.push_back("--pair");

@@ -16,6 +16,7 @@ namespace {
 struct Live {
   TapeFeeder* feeder;
   lcm::LCM* lcm;
+  lcm::LCM* ctl;
   std::string name;
   bool started = false;
   int64_t frd_seq = 0;
@@ -42,7 +43,7 @@ struct Live {
     a.run_id = feeder->run_id();
     a.consumer = name;
     a.seq = seq;
-    lcm->publish(kAckChannel, &a);
+    ctl->publish(kAckChannel, &a);
   }
 };
 
@@ -56,10 +57,11 @@ void write_frds(const std::vector<Frd>& frds, const std::string& out) {
 int main(int argc, char** argv) {
   CLI::App app{"fralab-analyze: two-channel Fourier-filter servoanalyser"};
   std::vector<std::string> pairs;
-  std::string url, out, name, run_id, log, input;
+  std::string url, ctl_url, out, name, run_id, log, input;
   AnalyzerOptions opt;
   app.add_option("--pair", pairs, "pair E1:E2 (response E2/E1); repeatable")->required();
   app.add_option("--lcm-url", url, "LCM URL");
+  app.add_option("--control-url", ctl_url, "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--out", out, "write OUT/frd/<E1>_<E2>.json when done");
   app.add_option("--name", name, "consumer name for flow control (default: first pair)");
   app.add_option("--run-id", run_id, "only this run");
@@ -76,7 +78,9 @@ int main(int argc, char** argv) {
     TapeFeeder feeder(pairs, opt, run_id);
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    Live live{&feeder, &lcm, name.empty() ? pairs.front() : name, false, 0, ""};
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url));
+    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    Live live{&feeder, &lcm, &ctl, name.empty() ? pairs.front() : name, false, 0, ""};
     for (const char* ch : {kTapeChannel, kStatusChannel}) {
       lcm.subscribe(ch, &Live::on_msg, &live)->setQueueCapacity(100000);
     }

@@ -15,6 +15,7 @@ int64_t TapeFeeder::feed(const std::string& channel, const void* data, int size)
     if (run_id_.empty()) run_id_ = b.run_id;
     if (b.run_id != run_id_) return -1;
     for (auto& a : an_) a->on_block(b);
+    final_seen_ |= b.final_block;
     return b.seq;
   }
   if (channel == kStatusChannel) {
@@ -27,6 +28,7 @@ int64_t TapeFeeder::feed(const std::string& channel, const void* data, int size)
 }
 
 bool TapeFeeder::all_done() const {
+  if (!final_seen_) return false;
   for (const auto& a : an_) {
     if (!a->done()) return false;
   }

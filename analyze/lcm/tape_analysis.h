@@ -21,6 +21,7 @@ class TapeFeeder {
   /// Returns the tape seq for a tape block (else -1).
   int64_t feed(const std::string& channel, const void* data, int size);
   std::vector<std::unique_ptr<PairAnalyzer>>& analyzers() { return an_; }
+  /// The run's final tape block has arrived and every analyser has resolved its windows.
   bool all_done() const;
   void flush();
   const std::string& run_id() const { return run_id_; }
@@ -28,6 +29,7 @@ class TapeFeeder {
  private:
   std::vector<std::unique_ptr<PairAnalyzer>> an_;
   std::string run_id_;
+  bool final_seen_ = false;
 };
 
 /// Offline tape mode: every pair over the whole tape file, flushed at the end.

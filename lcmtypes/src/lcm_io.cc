@@ -1,6 +1,8 @@
 #include "fralab/lcm_io.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <sys/select.h>
 #include <cstdlib>
 #include <filesystem>
 
@@ -111,6 +113,32 @@ std::string private_lcm_url(uint64_t salt) {
   unsigned port = 7700 + ((salt / 62500) % 1000);
   return "udpm://239.255." + std::to_string(x) + "." + std::to_string(y) + ":" +
          std::to_string(port) + "?ttl=0&recv_buf_size=2097152";
+}
+
+std::string control_url_for(const std::string& url) {
+  // udpm://GROUP:PORT?opts -> udpm://GROUP:PORT+1?opts
+  auto colon = url.rfind(':');
+  auto q = url.find('?', colon == std::string::npos ? 0 : colon);
+  if (url.rfind("udpm://", 0) != 0 || colon == std::string::npos || colon < 7) return url;
+  std::string port = url.substr(colon + 1, (q == std::string::npos ? url.size() : q) - colon - 1);
+  try {
+    return url.substr(0, colon + 1) + std::to_string(std::stoi(port) + 1) +
+           (q == std::string::npos ? "" : url.substr(q));
+  } catch (const std::exception&) {
+    return url;
+  }
+}
+
+void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms) {
+  fd_set fds;
+  FD_ZERO(&fds);
+  const int fa = a.getFileno(), fb = b.getFileno();
+  FD_SET(fa, &fds);
+  FD_SET(fb, &fds);
+  timeval tv{timeout_ms / 1000, (timeout_ms % 1000) * 1000};
+  if (select(std::max(fa, fb) + 1, &fds, nullptr, nullptr, &tv) <= 0) return;
+  if (FD_ISSET(fa, &fds)) a.handle();
+  if (FD_ISSET(fb, &fds)) b.handle();
 }
 
 int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {

@@ -17,12 +17,21 @@ namespace {
 struct Plant {
   Simulator sim;
   lcm::LCM* lcm;
+  lcm::LCM* ctl;  // control URL: acknowledgements
   std::vector<std::string> input_names;
   int64_t next_seq = 0;
   std::string run_id;  // "" until given or fixed by the first command
   bool done = false;
   bool started = false;
   std::string error;
+
+  void ack(int64_t seq) {
+    ack_t a;
+    a.run_id = run_id;
+    a.consumer = "plant";
+    a.seq = seq;
+    ctl->publish(kAckChannel, &a);
+  }
 
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     if (done || !error.empty()) return;
@@ -74,6 +83,7 @@ struct Plant {
       started = true;
       tape_block_t msg = to_tape_msg(tape);
       lcm->publish(kTapeChannel, &msg);
+      ack(cmd.seq);
       ++next_seq;
       if (cmd.final_block) done = true;
     } catch (const std::exception& e) {
@@ -95,7 +105,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", opt.seed, "noise seed")->capture_default_str();
   app.add_flag("--no-noise", no_noise, "turn every noise source off");
   app.add_flag("--keep-running", keep_running, "do not exit after the final block");
-  std::string run_id;
+  std::string run_id, ctl_url;
+  app.add_option("--control-url", ctl_url, "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--run-id", run_id, "only this run (default: the first command's)");
   CLI11_PARSE(app, argc, argv);
   opt.noise = !no_noise;
@@ -104,18 +115,16 @@ int main(int argc, char** argv) {
     for (const auto& w : model.warnings) std::cerr << "fralab-plant: warning: " << w << "\n";
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    Plant plant{Simulator(model, opt), &lcm, {}, 0, run_id, false, false, ""};
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url));
+    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    Plant plant{Simulator(model, opt), &lcm, &ctl, {}, 0, run_id, false, false, ""};
     for (const auto& in : model.inputs) plant.input_names.push_back(in.name);
     lcm::Subscription* sub = lcm.subscribe(kCmdChannel, &Plant::on_command, &plant);
     sub->setQueueCapacity(100000);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (keep_running || !plant.done) {
       if (!plant.started && std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
-        ack_t a;  // ready: the acquisition waits for this before the first command
-        a.run_id = run_id;
-        a.consumer = "plant";
-        a.seq = -1;
-        lcm.publish(kAckChannel, &a);
+        plant.ack(-1);  // ready: the acquisition waits for this before the first command
         last_ready = std::chrono::steady_clock::now();
       }
       lcm.handleTimeout(100);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include <unsupported/Eigen/MatrixFunctions>
@@ -29,6 +30,17 @@ C phi2(C x) {
 }
 
 }  // namespace
+
+std::complex<double> foh_sampled_response(const Tf& tf, double w, double fs) {
+  const double h = 1.0 / fs, ws = 2 * std::numbers::pi * fs;
+  std::complex<double> sum = 0.0;
+  for (int m = -4000; m <= 4000; ++m) {
+    const double v = w + m * ws, x = v * h / 2;
+    const double f = x == 0.0 ? 1.0 : std::pow(std::sin(x) / x, 2);
+    sum += tf.at(v) * f;
+  }
+  return sum;
+}
 
 FohLti::FohLti(const Tf& tf, double h, std::optional<Form> force) : h_(h) {
   if (!(h > 0.0)) throw InputError("FohLti: sample period must be > 0 s");

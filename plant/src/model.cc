@@ -321,6 +321,21 @@ Complex Model::position_to_output(int o, int i, double w) const {
   return sensor_response(o, w) * path_response(o, i, w);
 }
 
+std::optional<Tf> Model::command_chain(const std::string& input, const std::string& ch) const {
+  const int i = input_index(input);
+  if (i < 0) return std::nullopt;
+  const Tf act = inputs[i].actuator ? *inputs[i].actuator : Tf{};
+  if (ch == "u_" + input) return Tf{};
+  if (ch == input) return act;
+  const int o = output_index(ch);
+  if (o < 0) return std::nullopt;
+  const ModelPath* p = path(ch, input);
+  if (!p) return std::nullopt;
+  Tf t = act * p->tf;
+  if (outputs[o].sensor) t = t * *outputs[o].sensor;
+  return t;
+}
+
 Complex Model::command_to_output(int o, int i, double w) const {
   return position_to_output(o, i, w) * actuator_response(i, w);
 }

@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "fralab/acquire/campaign.h"
 #include "fralab/plant/model.h"
+#include "fralab/plant/tape.h"
 
 namespace fralab::testing {
 
@@ -22,6 +24,15 @@ std::complex<double> sine_phasor(const std::vector<double>& x, double w, double 
 /// A one-input, one-output model with the given tfs, for tests. Output "y", input "u".
 Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor = nullptr,
                  double noise_rms = 0.0);
+
+/// A lab run without LCM: the campaign drives the plant (Simulator) exactly as fralab-acquire and
+/// fralab-plant do over LCM, producing the tape's records in order.
+struct TapeRun {
+  std::vector<StatusEvent> events;
+  std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
+};
+TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
+                      bool noise, uint64_t seed, int block = 100, double amplitude_pct = 2.0);
 
 /// Phase difference in degrees wrapped to (-180, 180].
 double wrap_deg(double d);

@@ -60,6 +60,14 @@ std::string resolve_lcm_url(const std::string& flag);
 /// 2 MB receive buffer request (granted up to net.core.rmem_max).
 std::string private_lcm_url(uint64_t salt);
 
+/// The control URL of a lab run: flow-control acknowledgements travel there, away from the tape
+/// URL, so lcm-logger (whose subscription queue holds 30 messages) hears only the tape traffic.
+/// Derived from the tape URL by adding 1 to its port ("" stays "").
+std::string control_url_for(const std::string& tape_url);
+
+/// Waits up to timeout_ms for traffic on either instance and dispatches what arrived.
+void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms);
+
 /// One event of a tape file.
 struct TapeEvent {
   int64_t eventnum;

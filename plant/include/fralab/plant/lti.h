@@ -28,6 +28,11 @@
 
 namespace fralab {
 
+/// The exact steady-state response of FohLti(tf, 1/fs) to a sampled sinusoid of w rad/s: the FOH
+/// image sum above (terms |m| <= 4000; the truncated tail is below 1e-7 relative for a proper tf).
+/// Equals tf.at(w) * sinc^2(w / (2 fs)) plus the aliased images. Delays included.
+std::complex<double> foh_sampled_response(const Tf& tf, double w, double fs);
+
 class FohLti {
  public:
   enum class Form { kModal, kCascade };

@@ -96,6 +96,9 @@ struct Model {
   Complex position_to_output(int output, int input, double w) const;
   /// Output channel / command: sensor * path * actuator.
   Complex command_to_output(int output, int input, double w) const;
+  /// The tf from the command of `input` to `channel` (an input's position, an output, or the
+  /// command u_<input> itself), linear parts only; nullopt for a zero path or another input.
+  std::optional<Tf> command_chain(const std::string& input, const std::string& channel) const;
 };
 
 /// Reads and validates a model file. Errors (malformed JSON, wrong format tag, missing keys,

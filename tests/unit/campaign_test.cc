@@ -1,0 +1,80 @@
+#include "fralab/acquire/campaign.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "fralab/acquire/model_info.h"
+#include "test_util.h"
+
+using namespace fralab;
+
+TEST(SteppedSine, StepsHoldWholeCyclesInWholeSamples) {
+  SteppedSineOptions o;
+  o.slowest_time_constant_s = 0.7;
+  auto steps = plan_stepped_sine(o);
+  ASSERT_EQ(steps.size(), 35u);  // 0.04-100 Hz, 10 per decade, both ends
+  EXPECT_NEAR(steps.front().f_hz, 0.04, 1e-3);
+  EXPECT_NEAR(steps.back().f_hz, 100.0, 0.2);
+  for (const auto& s : steps) {
+    EXPECT_GE(s.n_cycles, 8);
+    EXPECT_DOUBLE_EQ(s.f_hz, s.n_cycles * 1000.0 / double(s.integrate_samples));
+    EXPECT_GE(s.settle_samples, std::llround(5 * 0.7 * 1000) - 1);
+    EXPECT_GE(s.integrate_samples / 1000.0, 4.0 - 1e-3);
+  }
+  // The report counts 0.5 h of engine time per actuator; ours is of that order.
+  EXPECT_LT(plan_duration_s(steps, 1000.0), 1800.0);
+  EXPECT_GT(plan_duration_s(steps, 1000.0), 600.0);
+}
+
+TEST(SteppedSine, BadOptionsNameTheProblem) {
+  SteppedSineOptions o;
+  o.f_hi_hz = 300;
+  try {
+    plan_stepped_sine(o);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("above fs/4"), std::string::npos);
+  }
+  EXPECT_THROW(parse_band("100:0.04x"), InputError);
+  EXPECT_EQ(parse_band("0.04:100"), std::make_pair(0.04, 100.0));
+}
+
+TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
+  SteppedSineOptions o;
+  o.f_lo_hz = 1;
+  o.f_hi_hz = 10;
+  o.points_per_decade = 3;
+  SteppedSineCampaign c(campaign_inputs(m, 2.0), select_inputs(m, "Wf,A8"), plan_stepped_sine(o), 1000, "r");
+  std::vector<std::vector<double>> cmd;
+  std::vector<double> ph, fr;
+  c.fill(0, int(c.total_samples()), cmd, ph, fr);
+  const double amp = 0.02 * 3000;
+  // At every integrate status, the command equals dc + A sin(status phase + 2 pi f k / fs).
+  int integrates = 0;
+  for (const auto& e : c.events()) {
+    if (e.state != "integrate") continue;
+    ++integrates;
+    int in = e.amplitudes[0] > 0 ? 0 : 1;
+    for (int64_t k = 0; k < e.n_samples; k += 37) {
+      double phase = e.ref_phase_rad + 2 * std::numbers::pi * e.frequency_hz * k / 1000.0;
+      double a = in == 0 ? amp : 0.02 * 200;
+      ASSERT_NEAR(cmd[in][e.sample + k], m.dc(m.inputs[in].name) + a * std::sin(phase), 1e-9);
+    }
+  }
+  EXPECT_EQ(integrates, 8);  // 4 frequencies x 2 inputs
+  // No jumps in the command while Wf is tested: successive samples differ by at most A 2 pi f / fs.
+  size_t wf_end = 0;
+  for (const auto& e : c.events()) {
+    if (e.amplitudes.size() > 1 && e.amplitudes[1] > 0) {
+      wf_end = size_t(e.sample);
+      break;
+    }
+  }
+  ASSERT_GT(wf_end, 0u);
+  for (size_t k = 1; k < wf_end; ++k) ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * 10 / 1000 * 1.01);
+  EXPECT_EQ(c.events().back().state, "done");
+  EXPECT_EQ(c.events().back().sample, c.total_samples());
+}
