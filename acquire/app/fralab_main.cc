@@ -26,6 +26,50 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_flag("--no-noise", m.no_noise, "plant noise off");
 }
 
+// Channels, block sequence (gaps named), excitation states and events per LCM channel.
+Json tape_summary(const std::string& path) {
+  Json j{{"file", path}, {"events", Json::object()}, {"states", Json::object()}};
+  std::vector<int64_t> seqs;
+  std::vector<std::string> channels;
+  bool final_block = false;
+  int64_t samples = 0;
+  double fs = 0;
+  read_tape_file(path, [&](const TapeEvent& ev) {
+    j["events"][ev.channel] = j["events"].value(ev.channel, 0) + 1;
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    try {
+      if (ev.channel == kTapeChannel) {
+        Block b = from_msg(decode_checked<tape_block_t>(&rb, ev.channel));
+        seqs.push_back(b.seq);
+        if (channels.empty()) channels = b.channels;
+        final_block |= b.final_block;
+        samples += b.n_samples;
+        fs = b.sample_rate_hz;
+      } else if (ev.channel == kStatusChannel) {
+        StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
+        j["states"][e.state] = j["states"].value(e.state, 0) + 1;
+      }
+    } catch (const InputError& e) {
+      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
+    }
+  });
+  std::sort(seqs.begin(), seqs.end());
+  Json gaps = Json::array();
+  for (size_t i = 1; i < seqs.size(); ++i) {
+    for (int64_t q = seqs[i - 1] + 1; q < seqs[i]; ++q) gaps.push_back(q);
+  }
+  j["channels"] = channels;
+  j["tape_blocks"] = seqs.size();
+  j["first_seq"] = seqs.empty() ? -1 : seqs.front();
+  j["last_seq"] = seqs.empty() ? -1 : seqs.back();
+  j["missing_seqs"] = gaps;
+  j["final_block"] = final_block;
+  j["samples"] = samples;
+  j["sample_rate_hz"] = fs;
+  j["engine_time_s"] = fs > 0 ? samples / fs : 0.0;
+  return j;
+}
+
 void print_measure(const MeasureResult& r, const std::string& out) {
   std::printf("fralab: %zu pairs measured; engine time %.0f s (%.2f h), wall time %.1f s (%.0fx); tape %s/tape.lcmlog (%lld blocks); frd in %s/frd\n",
               r.pairs.size(), r.engine_time_s, r.engine_time_s / 3600, r.wall_time_s,
@@ -60,6 +104,10 @@ int main(int argc, char** argv) {
   analyze->add_option("--out", out, "writes OUT/frd/<E1>_<E2>.json")->required();
   analyze->add_option("--input", aopt.input, "only steps exciting this input");
 
+  std::string info_log;
+  auto* tape = app.add_subcommand("tape", "summarise a tape: channels, blocks, gaps, excitation states (JSON)");
+  tape->add_option("--log", info_log, "tape (LCM log)")->required();
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) {
@@ -68,6 +116,8 @@ int main(int argc, char** argv) {
     } else if (*measure) {
       MeasureResult r = run_measure(mo);
       print_measure(r, mo.out);
+    } else if (*tape) {
+      std::printf("%s\n", tape_summary(info_log).dump(2).c_str());
     } else if (*analyze) {
       auto frds = analyze_tape_file(log, pairs, aopt);
       std::filesystem::create_directories(out + "/frd");

@@ -1,0 +1,168 @@
+// Integration tests: the real processes (fralab, fralab-plant, fralab-acquire, fralab-analyze,
+// lcm-logger, lcm-logplayer) end to end. ctest runs this binary through scripts/isolated.sh (a
+// private network namespace when permitted); each lab run also uses its own multicast group/port
+// with ttl=0.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "fralab/analyze/frd.h"
+#include "fralab/lcm_io.h"
+#include "test_util.h"
+
+using namespace fralab;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kBin = FRALAB_BIN_DIR;
+
+struct Cmd {
+  int status;
+  std::string output;
+};
+
+Cmd sh(const std::string& cmd) {
+  std::string full = cmd + " 2>&1";
+  FILE* p = popen(full.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
+  int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+std::string tmpdir(const std::string& name) {
+  auto d = fs::temp_directory_path() / ("fralab_it_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d.string();
+}
+
+const std::string kSmall = " --input Wf --band 1:10 --points-per-decade 3 --min-integrate-s 2 ";
+
+// One measurement shared by several tests.
+const std::string& measured() {
+  static std::string dir = [] {
+    std::string d = tmpdir("measure");
+    Cmd c = sh(kBin + "/fralab measure --engine j85_95" + kSmall + "--seed 5 --out " + d);
+    EXPECT_EQ(c.status, 0) << c.output;
+    return d;
+  }();
+  return dir;
+}
+
+void expect_same_frd(const std::string& a, const std::string& b, double tol) {
+  Frd x = load_frd(a), y = load_frd(b);
+  ASSERT_EQ(x.points.size(), y.points.size()) << a << " vs " << b;
+  for (size_t i = 0; i < x.points.size(); ++i) {
+    EXPECT_NEAR(x.points[i].mag, y.points[i].mag, tol * std::abs(x.points[i].mag)) << a;
+    EXPECT_NEAR(x.points[i].phase_deg, y.points[i].phase_deg, tol * 180) << a;
+    EXPECT_EQ(x.points[i].valid, y.points[i].valid);
+  }
+}
+
+}  // namespace
+
+TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
+  const std::string& d = measured();
+  Cmd info = sh(kBin + "/fralab tape --log " + d + "/tape.lcmlog");
+  ASSERT_EQ(info.status, 0) << info.output;
+  Json j = Json::parse(info.output);
+  for (const char* ch : {"u_Wf", "u_A8", "u_BLD", "u_IGV", "Wf", "A8", "BLD", "IGV", "N", "P3", "DPP3", "P5", "T5",
+                         "ref_phase", "ref_freq_hz"}) {
+    EXPECT_NE(std::find(j["channels"].begin(), j["channels"].end(), ch), j["channels"].end()) << ch;
+  }
+  EXPECT_TRUE(j["missing_seqs"].empty());
+  EXPECT_TRUE(j["final_block"].get<bool>());
+  EXPECT_EQ(j["first_seq"], 0);
+  EXPECT_EQ(j["last_seq"].get<int64_t>() + 1, j["tape_blocks"].get<int64_t>());
+  EXPECT_EQ(j["states"]["integrate"], 4);
+  EXPECT_EQ(j["states"]["done"], 1);
+  EXPECT_EQ(j["events"]["FRALAB_CMD"], j["tape_blocks"]);
+  // Every pair of the input has its frd, every point valid.
+  for (const char* p : {"Wf_N", "Wf_P3", "Wf_DPP3", "Wf_P5", "Wf_T5", "u_Wf_Wf", "u_Wf_N", "u_Wf_T5"}) {
+    Frd f = load_frd(d + "/frd/" + p + ".json");
+    EXPECT_EQ(f.points.size(), 4u) << p;
+    for (const auto& pt : f.points) EXPECT_TRUE(pt.valid) << p << ": " << pt.note;
+  }
+  Json run = json_load_file(d + "/run.json");
+  EXPECT_GT(run["engine_time_s"].get<double>(), 50.0);
+}
+
+TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
+  const std::string& d = measured();
+  // Offline: the tape read directly.
+  std::string off = tmpdir("offline");
+  Cmd c = sh(kBin + "/fralab analyze --log " + d + "/tape.lcmlog --pair Wf:P3 --pair u_Wf:Wf --out " + off);
+  ASSERT_EQ(c.status, 0) << c.output;
+  expect_same_frd(d + "/frd/Wf_P3.json", off + "/frd/Wf_P3.json", 1e-12);
+  expect_same_frd(d + "/frd/u_Wf_Wf.json", off + "/frd/u_Wf_Wf.json", 1e-12);
+  // Replayed: lcm-logplayer into a live analyser on a fresh private URL.
+  std::string rep = tmpdir("replay");
+  std::string url = private_lcm_url(uint64_t(getpid()) * 7919u + 17u);
+  std::string cmd = "(" + kBin + "/fralab-analyze --pair Wf:P3 --pair u_Wf:Wf --lcm-url '" + url + "' --out " + rep +
+                    " & an=$!; sleep 0.5; lcm-logplayer -s 1 --lcm-url='" + url + "' " + d +
+                    "/tape.lcmlog; wait $an)";
+  c = sh(cmd);
+  ASSERT_EQ(c.status, 0) << c.output;
+  expect_same_frd(d + "/frd/Wf_P3.json", rep + "/frd/Wf_P3.json", 1e-12);
+  expect_same_frd(d + "/frd/u_Wf_Wf.json", rep + "/frd/u_Wf_Wf.json", 1e-12);
+}
+
+TEST(Lab, PacedAndUnpacedRunsGiveTheSameNumbers) {
+  const std::string& d = measured();
+  std::string paced = tmpdir("paced");
+  Cmd c = sh(kBin + "/fralab measure --engine j85_95" + kSmall + "--seed 5 --speed 100 --out " + paced);
+  ASSERT_EQ(c.status, 0) << c.output;
+  for (const char* p : {"Wf_P3", "Wf_N", "u_Wf_Wf"}) {
+    expect_same_frd(d + "/frd/" + std::string(p) + ".json", paced + "/frd/" + p + ".json", 0.0);
+  }
+  Json run = json_load_file(paced + "/run.json");
+  // Paced at 100x: wall time close to engine time / 100.
+  EXPECT_GT(run["wall_time_s"].get<double>(), 0.8 * run["engine_time_s"].get<double>() / 100);
+}
+
+TEST(Lab, BadEngineModelFailsWithTheReason) {
+  std::string d = tmpdir("bad");
+  std::ofstream(d + "/unstable.json") << R"({"format": "fralab-model/1", "inputs": [{"name": "Wf", "units": "lb/hr",
+    "full_scale": 3000}], "outputs": [{"name": "N", "units": "rpm"}],
+    "paths": [{"output": "N", "input": "Wf", "tf": {"gain": 1, "poles": [{"real": 2.0}]}}]})";
+  Cmd c = sh(kBin + "/fralab measure --engine " + d + "/unstable.json --out " + d + "/out");
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("unstable.json: /paths/0/tf/poles/0: unstable pole"), std::string::npos) << c.output;
+  c = sh(kBin + "/fralab measure --engine j85_95 --input XYZ --out " + d + "/out2");
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("--input XYZ: the model has no such input (inputs: Wf, A8, BLD, IGV)"), std::string::npos) << c.output;
+}
+
+TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
+  const std::string& d = measured();
+  std::string t = tmpdir("trunc");
+  const auto size = fs::file_size(d + "/tape.lcmlog");
+  fs::copy_file(d + "/tape.lcmlog", t + "/cut.lcmlog");
+  fs::resize_file(t + "/cut.lcmlog", size - 1000);
+  Cmd c = sh(kBin + "/fralab analyze --log " + t + "/cut.lcmlog --pair Wf:P3 --out " + t);
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("cut.lcmlog: truncated or corrupt tape"), std::string::npos) << c.output;
+  {
+    lcm::LogFile log(t + "/wrong.lcmlog", "w");
+    ack_t a;
+    a.consumer = "x";
+    std::vector<uint8_t> buf(a.getEncodedSize());
+    a.encode(buf.data(), 0, int(buf.size()));
+    lcm::LogEvent ev{0, 0, kTapeChannel, int32_t(buf.size()), buf.data()};
+    log.writeEvent(&ev);
+  }
+  c = sh(kBin + "/fralab analyze --log " + t + "/wrong.lcmlog --pair Wf:P3 --out " + t);
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("channel FRALAB_TAPE: message of"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("is not a fralab.tape_block_t"), std::string::npos) << c.output;
+}
