@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "fralab/acquire/model_info.h"
 #include "fralab/plant/simulator.h"
@@ -84,6 +85,46 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, co
     r.blocks.push_back(std::move(b));
   }
   return r;
+}
+
+std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade, double rel_noise,
+                                uint64_t seed) {
+  std::mt19937_64 g(seed);
+  std::normal_distribution<double> n(0.0, std::sqrt(0.5));
+  const int k = int(std::round(std::log10(f_hi / f_lo) * per_decade));
+  std::vector<FrdPoint> out;
+  for (int i = 0; i <= k; ++i) {
+    const double w = 2 * std::numbers::pi * f_lo * std::pow(10.0, double(i) / per_decade);
+    std::complex<double> v = tf.at(w);
+    const double s = rel_noise * std::abs(v);
+    if (rel_noise > 0) v += std::complex<double>(n(g), n(g)) * s;
+    FrdPoint p;
+    p.w = w;
+    p.mag = std::abs(v);
+    p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
+    if (rel_noise > 0) p.sigma = s;
+    out.push_back(p);
+  }
+  return out;
+}
+
+double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>& fit, double w_lo, double w_hi) {
+  double worst = 0;
+  for (const Root& t : truth) {
+    const double wt = t.pair ? t.wn : std::abs(t.real);
+    if (wt < w_lo || wt > w_hi) continue;
+    std::complex<double> lt = t.locations()[0];
+    if (lt.imag() < 0) lt = std::conj(lt);
+    double best = INFINITY;
+    for (const Root& f : fit) {
+      if (f.pair != t.pair) continue;
+      std::complex<double> lf = f.locations()[0];
+      if (lf.imag() < 0) lf = std::conj(lf);
+      best = std::min(best, std::abs(lf - lt) / std::abs(lt));
+    }
+    worst = std::max(worst, best);
+  }
+  return worst;
 }
 
 double wrap_deg(double d) {

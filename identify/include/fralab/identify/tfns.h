@@ -1,0 +1,100 @@
+// Transfer-function identification from frequency-response data: the TFNS program of the report's
+// Appendix B (Suzuki's method, a Sanathanan-Koerner iteration), made numerically sound, and carried
+// on to an output-error optimum.
+//
+// Model (contracts 1): G_a(s) = N(s)/D(s) e^{-s tau}, factored into real roots and pairs.
+//
+// 1. Frequency scaling (TFNS's scale factor): s' = s / ws, ws = sqrt(w_min w_max), centring the
+//    logarithms of the data's frequencies around zero.
+// 2. SK iteration at orders (n, m): minimise E_phi = sum_i phi_i |D(s_i) G_i - N(s_i)|^2 (B-5) with
+//    phi_i = W_i / |D^{(k-1)}(s_i)|^2 (B-8), until the equation error
+//    E_phi' = mean_i |1 - D^{(k)}(s_i) / D^{(k-1)}(s_i)| (B-9, D normalised to D(0) = 1) is <= c_phi.
+//    The polynomials are expanded in a basis orthonormal on the data (Arnoldi on the points +-j w_i
+//    with weights phi_i, so coefficients stay real); N is eliminated by QR and D is the smallest
+//    right singular vector (||d|| = 1): never normal equations in raw powers of s.
+// 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
+//    left half plane.
+// 4. Output-error refinement (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the
+//    factored parameters (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by
+//    construction) and, with delay auto, tau jointly.
+// 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
+//    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
+//    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <= c_n.
+//    At each n, numerator orders n down to n-3 are tried; the fewest parameters that pass win.
+// Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
+// on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
+// Units: w rad/s, tau seconds, phases radians inside, degrees in files.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fralab/analyze/frd.h"
+#include "fralab/plant/tf.h"
+
+namespace fralab {
+
+struct FitOptions {
+  int den_order_start = 1;   // TFNS "C" card: denominator starting order
+  int num_order_start = 0;   // numerator starting order (<= den)
+  int max_den_order = 10;
+  double c_phi = 0.01;       // equation error tolerance (B-9)
+  double c_n = 0.01;         // real error tolerance (used when the data carry no sigma)
+  int max_iterations = 100;  // SK iterations per order
+  enum class Delay { kNone, kAuto, kFixed } delay = Delay::kAuto;
+  double delay_s = 0.0;      // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
+  double max_delay_s = 0.05; // kAuto search range [0, max_delay_s]
+  bool refine = true;        // output-error refinement
+  bool use_sigma = true;     // weight by 1/sigma^2 when present
+  /// Throws InputError naming the bad option.
+  void validate() const;
+};
+
+struct RootInfo {
+  double real = 0, imag = 0;  // s-plane location (upper half plane for pairs), rad/s
+  double wn = 0, zeta = 0;    // frequency and damping (pairs); wn = |real| for real roots
+  bool pair = false;
+  double rel_sigma = -1;  // standard deviation of the location, relative to |root| (< 0: unknown)
+};
+
+/// A pole pair and zero pair (or real pole and RHP real zero) mirrored about the imaginary axis:
+/// the signature of a Pade approximation of a delay (Section III).
+struct PadeSet {
+  Root zero, pole;
+  double delay_s = 0;  // its low-frequency group delay
+};
+
+struct FitResult {
+  enum class Status { kConverged, kMaxOrderReached, kFailed } status = Status::kFailed;
+  std::string message;
+  Tf tf;
+  int num_order = 0, den_order = 0;
+  int iterations = 0;        // SK iterations at the final order
+  double e_phi = 0;          // final equation error
+  double e_n = 0;            // TFNS real error (normalised, weights W)
+  double chi2_per_dof = -1;  // with sigma
+  double rms_rel_error = 0;  // sqrt(mean |G - G_a|^2 / |G|^2)
+  double max_rel_error = 0;
+  int n_points = 0;
+  int unstable_reflected = 0;
+  std::vector<PadeSet> pade;
+  double pade_delay_s = 0;   // sum of the Pade sets' delays
+  std::vector<RootInfo> zero_info, pole_info;  // with rel_sigma from the fit's covariance
+  double gain_rel_sigma = -1;  // relative standard deviation of the DC gain
+  double delay_sigma_s = -1;   // standard deviation of a fitted delay
+  std::string status_str() const;
+};
+
+/// Identifies a tf from valid points of `data` (invalid points are skipped). Needs >= 3 points.
+FitResult fit_tf(const std::vector<FrdPoint>& data, const FitOptions& opt);
+
+/// Root table of a tf (locations, frequency and damping).
+std::vector<RootInfo> root_info(const std::vector<Root>& roots);
+
+/// Pade-like sets among a tf's roots: a zero mirrored onto a pole within `tol` relative distance.
+std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol = 0.15);
+
+/// JSON of a fit: the tf (contracts 1) plus "fit" figures, "roots", "pade".
+Json fit_to_json(const FitResult& r, const std::string& pair);
+
+}  // namespace fralab

@@ -1,0 +1,224 @@
+#include "fralab/identify/readers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <sstream>
+
+namespace fralab {
+namespace {
+
+std::string trim(const std::string& s) {
+  size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+double to_number(const std::string& text, const std::string& where) {
+  std::string t = trim(text);
+  try {
+    size_t p = 0;
+    double v = std::stod(t, &p);
+    if (p != t.size() || !std::isfinite(v)) throw std::invalid_argument("x");
+    return v;
+  } catch (const std::exception&) {
+    throw InputError(where + ": \"" + t + "\" is not a number");
+  }
+}
+
+std::string field(const std::string& line, size_t col1, size_t width) {  // 1-based column
+  if (line.size() < col1) return std::string(width, ' ');
+  std::string f = line.substr(col1 - 1, width);
+  f.resize(width, ' ');
+  return f;
+}
+
+FrdPoint from_polar(double w, double mag, double ph_rad) {
+  FrdPoint p;
+  p.w = w;
+  p.mag = mag;
+  p.phase_deg = ph_rad * 180 / std::numbers::pi;
+  return p;
+}
+
+}  // namespace
+
+Frd read_frd_csv(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open for reading");
+  std::string line;
+  std::vector<std::string> cols;
+  int ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (!trim(line).empty() && trim(line)[0] != '#') break;
+  }
+  {
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cols.push_back(trim(c));
+  }
+  auto idx = [&](const char* n) {
+    auto it = std::find(cols.begin(), cols.end(), n);
+    return it == cols.end() ? -1 : int(it - cols.begin());
+  };
+  const int iw = idx("w"), if_ = idx("f_hz"), im = idx("mag"), idb = idx("mag_db"), ip = idx("phase_deg"),
+            ire = idx("re"), iim = idx("im"), is = idx("sigma");
+  if (iw < 0 && if_ < 0) throw InputError(file + ":" + std::to_string(ln) + ": the header names no frequency column (w or f_hz)");
+  const bool rect = ire >= 0 && iim >= 0;
+  if (!rect && ((im < 0 && idb < 0) || ip < 0)) {
+    throw InputError(file + ":" + std::to_string(ln) + ": the header needs mag or mag_db with phase_deg, or re and im");
+  }
+  Frd f;
+  f.source = file;
+  f.pair = "E1:E2";
+  while (std::getline(in, line)) {
+    ++ln;
+    if (trim(line).empty() || trim(line)[0] == '#') continue;
+    std::vector<std::string> v;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) v.push_back(c);
+    const std::string where = file + ":" + std::to_string(ln);
+    if (v.size() < cols.size()) throw InputError(where + ": " + std::to_string(v.size()) + " fields, the header has " + std::to_string(cols.size()));
+    const double w = iw >= 0 ? to_number(v[iw], where) : 2 * std::numbers::pi * to_number(v[if_], where);
+    if (!(w > 0)) throw InputError(where + ": frequency must be > 0");
+    FrdPoint p;
+    if (rect) {
+      std::complex<double> g(to_number(v[ire], where), to_number(v[iim], where));
+      p = from_polar(w, std::abs(g), std::arg(g));
+    } else {
+      double mag = im >= 0 ? to_number(v[im], where) : std::pow(10.0, to_number(v[idb], where) / 20);
+      p = from_polar(w, mag, to_number(v[ip], where) * std::numbers::pi / 180);
+    }
+    if (is >= 0) p.sigma = to_number(v[is], where);
+    f.points.push_back(p);
+  }
+  if (f.points.empty()) throw InputError(file + ": no data rows");
+  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  return f;
+}
+
+FitInput read_tfns_deck(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open for reading");
+  FitInput r;
+  r.frd.source = file;
+  r.frd.pair = "E1:E2";
+  std::string line;
+  int ln = 0, group = 0;
+  double last_w = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    const std::string where = file + ":" + std::to_string(ln);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const char flag = line.empty() ? ' ' : line[0];
+    if (flag == '*') {
+      if (++group == 2) break;
+      continue;
+    }
+    if (group == 0) {
+      if (flag == 'C') {
+        r.has_control = true;
+        std::string nd = trim(field(line, 2, 9)), nn = trim(field(line, 11, 10));
+        if (!nd.empty()) r.options.den_order_start = int(to_number(nd, where + " (C card, columns 2-10)"));
+        if (!nn.empty()) r.options.num_order_start = int(to_number(nn, where + " (C card, columns 11-20)"));
+        std::string cs = trim(field(line, 21, 10)), ct = trim(field(line, 31, 10));
+        if (!cs.empty()) r.options.c_phi = to_number(cs, where + " (C card, columns 21-30)");
+        if (!ct.empty()) r.options.c_n = to_number(ct, where + " (C card, columns 31-40)");
+        r.options.max_den_order = std::max(r.options.max_den_order, r.options.den_order_start);
+      } else if (flag == 'P' || flag == 'Z') {
+        for (size_t c = 1; c + 2 <= line.size(); c += 4) {
+          std::string f = trim(field(line, c, 4));
+          if (f.empty()) break;
+          if ((f[0] != 'P' && f[0] != 'Z') || f.size() != 3) throw InputError(where + ": root deletion field \"" + f + "\" must be like P03 or Z02");
+          r.deletions.push_back(f);
+        }
+      } else if (flag != 'O' && !trim(line).empty()) {
+        throw InputError(where + ": unknown control card '" + std::string(1, flag) + "' (C, O, P, Z or *)");
+      }
+      continue;
+    }
+    if (trim(line).empty()) continue;
+    if (flag != ' ' && flag != 'B' && flag != 'P' && flag != 'R') {
+      throw InputError(where + ": data card type '" + std::string(1, flag) + "' must be blank, B, P or R");
+    }
+    std::string ff = field(line, 15, 15), f1 = field(line, 30, 15), f2 = field(line, 45, 15);
+    double w = 0;
+    if (ff[0] == 'H' || ff[0] == 'R') {
+      w = to_number(ff.substr(1), where + " (frequency, columns 15-29)");
+      if (ff[0] == 'H') w *= 2 * std::numbers::pi;
+    } else {
+      w = to_number(ff, where + " (frequency, columns 15-29)");
+    }
+    if (!(w > 0)) throw InputError(where + ": frequency must be > 0");
+    if (w <= last_w) throw InputError(where + ": cards must be in ascending frequency (" + std::to_string(w) + " rad/s after " + std::to_string(last_w) + ")");
+    last_w = w;
+    auto val = [&](const std::string& f, const char* cols, char* unit) {
+      *unit = (f[0] == 'D' || f[0] == 'M' || f[0] == 'R') ? f[0] : ' ';
+      return to_number(*unit == ' ' ? f : f.substr(1), where + " (" + cols + ")");
+    };
+    char u1, u2;
+    double a = val(f1, "columns 30-44", &u1), b = val(f2, "columns 45-59", &u2);
+    FrdPoint p;
+    if (flag == 'R') {
+      std::complex<double> g(a, b);
+      p = from_polar(w, std::abs(g), std::arg(g));
+    } else {
+      const bool db = flag == 'P' ? u1 == 'D' : u1 != 'M';
+      const bool deg = flag == 'P' ? u2 == 'D' : u2 != 'R';
+      p = from_polar(w, db ? std::pow(10.0, a / 20) : a, deg ? b * std::numbers::pi / 180 : b);
+    }
+    r.frd.points.push_back(p);
+  }
+  if (group < 2) throw InputError(file + ": the deck needs two groups each ended by a '*' card (control, then data)");
+  if (r.frd.points.empty()) throw InputError(file + ": no frequency-response cards");
+  return r;
+}
+
+FitInput read_fit_input(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open for reading");
+  std::string first;
+  while (std::getline(in, first) && trim(first).empty()) {}
+  std::string t = trim(first);
+  if (!t.empty() && t[0] == '{') {
+    FitInput r;
+    r.frd = load_frd(file);
+    return r;
+  }
+  if (t.find(',') != std::string::npos && (t.find("w") != std::string::npos || t.find("f_hz") != std::string::npos)) {
+    FitInput r;
+    r.frd = read_frd_csv(file);
+    return r;
+  }
+  return read_tfns_deck(file);
+}
+
+Tf delete_roots(const Tf& tf, const std::vector<std::string>& which) {
+  Tf out = tf;
+  std::vector<int> zdel, pdel;
+  for (const auto& w : which) {
+    int k = 0;
+    try {
+      k = std::stoi(w.substr(1));
+    } catch (const std::exception&) {
+      throw InputError("root deletion \"" + w + "\" must be like P03 or Z02");
+    }
+    auto& list = w[0] == 'P' ? pdel : zdel;
+    const size_t n = w[0] == 'P' ? tf.poles.size() : tf.zeros.size();
+    if ((w[0] != 'P' && w[0] != 'Z') || k < 1 || size_t(k) > n) {
+      throw InputError("root deletion \"" + w + "\": the fit has " + std::to_string(n) + (w[0] == 'P' ? " poles" : " zeros"));
+    }
+    list.push_back(k - 1);
+  }
+  auto erase = [](std::vector<Root>& v, std::vector<int> idx) {
+    std::sort(idx.rbegin(), idx.rend());
+    idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
+    for (int i : idx) v.erase(v.begin() + i);
+  };
+  erase(out.zeros, zdel);
+  erase(out.poles, pdel);
+  return out;
+}
+
+}  // namespace fralab

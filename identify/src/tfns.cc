@@ -1,0 +1,719 @@
+#include "fralab/identify/tfns.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/NonLinearOptimization>
+
+namespace fralab {
+namespace {
+
+using C = std::complex<double>;
+using MatR = Eigen::MatrixXd;
+using VecR = Eigen::VectorXd;
+using MatC = Eigen::MatrixXcd;
+
+struct Data {
+  std::vector<double> w;   // rad/s
+  std::vector<C> g;        // measured ratio
+  std::vector<double> W;   // weights
+  std::vector<double> sigma;
+  bool has_sigma = false;
+};
+
+// An orthonormal polynomial basis on the weighted points (Arnoldi); see tfns.h.
+struct Basis {
+  MatC Qw;   // weighted values, P x (order + 1): columns orthonormal
+  MatR H;    // (order + 1) x order, real
+  double nu0 = 1;
+  int order = 0;
+};
+
+Basis arnoldi(const std::vector<C>& z, const std::vector<double>& sw, int order) {
+  const int P = int(z.size());
+  Basis b;
+  b.order = order;
+  b.Qw.resize(P, order + 1);
+  b.H = MatR::Zero(order + 1, std::max(order, 1));
+  double nrm = 0;
+  for (double s : sw) nrm += s * s;
+  b.nu0 = std::sqrt(nrm);
+  for (int i = 0; i < P; ++i) b.Qw(i, 0) = sw[i] / b.nu0;
+  for (int k = 0; k < order; ++k) {
+    Eigen::VectorXcd v(P);
+    for (int i = 0; i < P; ++i) v(i) = z[i] * b.Qw(i, k);
+    for (int pass = 0; pass < 2; ++pass) {  // re-orthogonalise: classical Gram-Schmidt twice
+      for (int j = 0; j <= k; ++j) {
+        C h = b.Qw.col(j).dot(v);  // conj(q_j) . v
+        b.H(j, k) += h.real();
+        v -= h.real() * b.Qw.col(j);
+      }
+    }
+    double hn = v.norm();
+    b.H(k + 1, k) = hn;
+    b.Qw.col(k + 1) = v / hn;
+  }
+  return b;
+}
+
+// Value at s of the polynomial with coefficients c (basis of b, length <= order+1).
+C poly_at(const Basis& b, const VecR& c, C s) {
+  std::vector<C> q(c.size());
+  q[0] = 1.0 / b.nu0;
+  C v = c(0) * q[0];
+  for (int k = 0; k + 1 < int(c.size()); ++k) {
+    C t = s * q[k];
+    for (int j = 0; j <= k; ++j) t -= b.H(j, k) * q[j];
+    q[k + 1] = t / b.H(k + 1, k);
+    v += c(k + 1) * q[k + 1];
+  }
+  return v;
+}
+
+// Roots of sum c_k q_k (degree = c.size() - 1) via the confederate matrix.
+std::vector<C> poly_roots(const Basis& b, VecR c) {
+  int n = int(c.size()) - 1;
+  while (n > 0 && std::abs(c(n)) < 1e-13 * c.norm()) --n;  // deflate a vanishing leading term
+  if (n <= 0) return {};
+  MatR M = MatR::Zero(n, n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j <= std::min(k + 1, n - 1); ++j) M(k, j) = b.H(j, k);
+  }
+  for (int j = 0; j < n; ++j) M(n - 1, j) -= b.H(n, n - 1) * c(j) / c(n);
+  Eigen::EigenSolver<MatR> es(M, false);
+  std::vector<C> r;
+  for (int i = 0; i < n; ++i) r.push_back(es.eigenvalues()(i));
+  return r;
+}
+
+std::vector<Root> to_roots(const std::vector<C>& lam, double scale) {
+  std::vector<Root> out;
+  std::vector<bool> used(lam.size(), false);
+  for (size_t i = 0; i < lam.size(); ++i) {
+    if (used[i]) continue;
+    C l = lam[i] * scale;
+    if (std::abs(l.imag()) <= 1e-7 * std::abs(l)) {
+      out.push_back(Root::Real(l.real()));
+      used[i] = true;
+      continue;
+    }
+    // its conjugate
+    size_t best = i;
+    double bd = 1e300;
+    for (size_t j = 0; j < lam.size(); ++j) {
+      if (j == i || used[j]) continue;
+      double d = std::abs(lam[j] * scale - std::conj(l));
+      if (d < bd) bd = d, best = j;
+    }
+    used[i] = true;
+    if (best != i) used[best] = true;
+    const double wn = std::abs(l);
+    out.push_back(Root::Pair(wn, -l.real() / wn));
+  }
+  std::sort(out.begin(), out.end(), [](const Root& a, const Root& b) {
+    return (a.pair ? a.wn : std::abs(a.real)) < (b.pair ? b.wn : std::abs(b.real));
+  });
+  return out;
+}
+
+struct Sk {
+  bool ok = false;
+  Tf tf;
+  int iterations = 0;
+  double e_phi = 0;
+};
+
+// SK iteration at orders (n, m) on data g (delay already removed), scaled frequency.
+Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const FitOptions& o) {
+  const int M = int(d.w.size());
+  std::vector<C> z(2 * M);
+  for (int i = 0; i < M; ++i) {
+    z[i] = C(0, d.w[i] / ws);
+    z[M + i] = std::conj(z[i]);
+  }
+  std::vector<double> phi(d.W);
+  std::vector<C> dprev(M, 1.0);
+  Sk r;
+  double best_sse = 1e300;
+  const int order = std::max(n, m);
+  for (int it = 1; it <= o.max_iterations; ++it) {
+    std::vector<double> sw(2 * M);
+    for (int i = 0; i < M; ++i) sw[i] = sw[M + i] = std::sqrt(phi[i]);
+    Basis b = arnoldi(z, sw, order);
+    MatR AN(2 * M, m + 1), AD(2 * M, n + 1);
+    for (int i = 0; i < M; ++i) {
+      for (int k = 0; k <= m; ++k) {
+        C q = -b.Qw(i, k);
+        AN(i, k) = q.real();
+        AN(M + i, k) = q.imag();
+      }
+      for (int k = 0; k <= n; ++k) {
+        C q = g[i] * b.Qw(i, k);
+        AD(i, k) = q.real();
+        AD(M + i, k) = q.imag();
+      }
+    }
+    Eigen::HouseholderQR<MatR> qr(AN);
+    MatR Q1 = qr.householderQ() * MatR::Identity(2 * M, m + 1);
+    MatR ADp = AD - Q1 * (Q1.transpose() * AD);
+    // The smallest right singular vector of ADp is that of its small triangular factor R.
+    Eigen::HouseholderQR<MatR> qd(ADp);
+    MatR R = qd.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
+    Eigen::JacobiSVD<MatR> svd(R, Eigen::ComputeFullV);
+    VecR a = svd.matrixV().col(n);
+    VecR bb = -AN.colPivHouseholderQr().solve(AD * a);
+    const C d0 = poly_at(b, a, 0.0), n0 = poly_at(b, bb, 0.0);
+    if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) return r;  // best so far, if any
+    std::vector<C> dk(M);
+    double eph = 0, sse = 0;
+    for (int i = 0; i < M; ++i) {
+      const C dv = (b.Qw.row(i).head(n + 1) * a)(0), nv = (b.Qw.row(i).head(m + 1) * bb)(0);
+      dk[i] = dv / sw[i] / d0;
+      eph += std::abs(1.0 - dk[i] / dprev[i]);
+      sse += d.W[i] * std::norm(g[i] - nv / dv);
+    }
+    eph /= M;
+    r.iterations = it;
+    r.e_phi = eph;
+    // SK is a fixed-point iteration, not a descent: keep the iterate with the lowest real error.
+    if (sse < best_sse && std::isfinite(sse)) {
+      best_sse = sse;
+      r.tf.gain = (n0 / d0).real();
+      r.tf.zeros = to_roots(poly_roots(b, bb), ws);
+      r.tf.poles = to_roots(poly_roots(b, a), ws);
+      r.ok = std::isfinite(r.tf.gain);
+    }
+    if ((it > 1 && eph <= o.c_phi) || it == o.max_iterations) return r;
+    for (int i = 0; i < M; ++i) phi[i] = d.W[i] / std::norm(dk[i]);
+    dprev = dk;
+  }
+  return r;
+}
+
+// ---- output-error refinement -------------------------------------------------------------------
+struct Param {
+  Tf shape;  // structure (which roots are real / pairs)
+  double g0;
+  bool free_delay;
+  double fixed_delay;
+  int size() const {
+    int k = 1 + (free_delay ? 1 : 0);
+    for (const Root& z : shape.zeros) k += z.order();
+    for (const Root& p : shape.poles) k += p.order();
+    return k;
+  }
+  VecR pack(const Tf& t) const {
+    VecR x(size());
+    int k = 0;
+    x(k++) = t.gain / g0;
+    for (const Root& z : t.zeros) {
+      if (z.pair) { x(k++) = std::log(z.wn); x(k++) = z.zeta; } else { x(k++) = 1.0 / z.real; }
+    }
+    for (const Root& p : t.poles) {
+      if (p.pair) { x(k++) = std::log(p.wn); x(k++) = std::log(p.zeta); } else { x(k++) = std::log(-p.real); }
+    }
+    if (free_delay) x(k++) = t.delay_s;
+    return x;
+  }
+  Tf unpack(const VecR& x) const {
+    Tf t = shape;
+    int k = 0;
+    t.gain = x(k++) * g0;
+    for (Root& z : t.zeros) {
+      if (z.pair) { z.wn = std::exp(x(k++)); z.zeta = x(k++); } else { z.real = 1.0 / x(k++); }
+    }
+    for (Root& p : t.poles) {
+      // Bounded away from the imaginary axis: exp() of a runaway parameter must not underflow to 0.
+      if (p.pair) { p.wn = std::exp(x(k++)); p.zeta = std::max(std::exp(x(k++)), 1e-9); }
+      else { p.real = -std::max(std::exp(x(k++)), 1e-12); }
+    }
+    t.delay_s = free_delay ? std::abs(x(k++)) : fixed_delay;
+    return t;
+  }
+};
+
+// Residuals sqrt(W_i) (G_i - G_a(j w_i)) (real and imaginary rows) with the exact Jacobian: every
+// parameter enters through one factor F, so dG_a/dx = +-G_a (dF/dx) / F.
+void split_overdamped(std::vector<Root>& v);
+
+struct OeFunctor {
+  using Scalar = double;
+  using InputType = VecR;
+  using ValueType = VecR;
+  using JacobianType = MatR;
+  enum { InputsAtCompileTime = Eigen::Dynamic, ValuesAtCompileTime = Eigen::Dynamic };
+  const Data* d;
+  const Param* p;
+  int inputs() const { return p->size(); }
+  int values() const { return 2 * int(d->w.size()); }
+  int operator()(const VecR& x, VecR& f) const {
+    Tf t = p->unpack(x);
+    const int M = int(d->w.size());
+    for (int i = 0; i < M; ++i) {
+      C e = (d->g[i] - t.at(d->w[i])) * std::sqrt(d->W[i]);
+      f(i) = e.real();
+      f(M + i) = e.imag();
+    }
+    return 0;
+  }
+  int df(const VecR& x, MatR& J) const {
+    Tf t = p->unpack(x);
+    const int M = int(d->w.size());
+    for (int i = 0; i < M; ++i) {
+      const C s(0.0, d->w[i]);
+      const C G = t.at(d->w[i]);
+      const double sw = std::sqrt(d->W[i]);
+      int k = 0;
+      auto put = [&](C dG) {  // de/dx = -sqrt(W) dG/dx
+        J(i, k) = -sw * dG.real();
+        J(M + i, k) = -sw * dG.imag();
+        ++k;
+      };
+      put(G / x(0));
+      for (const Root& z : t.zeros) {
+        const C F = z.factor(s);
+        if (z.pair) {
+          put(G * (-2.0 * s * s / (z.wn * z.wn) - 2.0 * z.zeta * s / z.wn) / F);
+          put(G * (2.0 * s / z.wn) / F);
+        } else {
+          put(G * (-s) / F);  // F = 1 - s u, u = 1/r
+        }
+      }
+      for (const Root& q : t.poles) {
+        const C F = q.factor(s);
+        if (q.pair) {
+          put(-G * (-2.0 * s * s / (q.wn * q.wn) - 2.0 * q.zeta * s / q.wn) / F);
+          put(-G * (2.0 * q.zeta * s / q.wn) / F);
+        } else {
+          put(-G * (s / q.real) / F);  // F = 1 - s/r, r = -e^th: dF/dth = s/r
+        }
+      }
+      if (p->free_delay) put(-s * G * (x(k) >= 0 ? 1.0 : -1.0));
+    }
+    return 0;
+  }
+};
+
+Tf refine(const Data& d, const Tf& start, bool free_delay) {
+  // A zero at exactly s = 0 cannot be packed; such starts are returned unrefined.
+  for (const Root& z : start.zeros) if (!z.pair && z.real == 0) return start;
+  Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s};
+  OeFunctor f{&d, &p};
+  Eigen::LevenbergMarquardt<OeFunctor> lm(f);
+  lm.parameters.maxfev = 200 * (p.size() + 1);
+  lm.parameters.xtol = 1e-12;
+  lm.parameters.ftol = 1e-14;
+  VecR x = p.pack(start);
+  lm.minimize(x);
+  Tf out = p.unpack(x);
+  for (const Root& q : out.poles) if (!std::isfinite(q.wn) || !std::isfinite(q.real)) return start;
+  if (!std::isfinite(out.gain)) return start;
+  split_overdamped(out.zeros);
+  split_overdamped(out.poles);
+  return out;
+}
+
+struct Score {
+  double sse = 0;        // sum W |e|^2
+  double e_n = 0;        // sse / sum W |G|^2
+  double chi2 = -1;      // with sigma: sum |e|^2/sigma^2
+  double rms_rel = 0, max_rel = 0;
+};
+
+Score score(const Data& d, const Tf& t) {
+  Score s;
+  double den = 0, rel2 = 0;
+  double chi = 0;
+  for (size_t i = 0; i < d.w.size(); ++i) {
+    C e = d.g[i] - t.at(d.w[i]);
+    s.sse += d.W[i] * std::norm(e);
+    den += d.W[i] * std::norm(d.g[i]);
+    double rel = std::abs(e) / std::max(std::abs(d.g[i]), 1e-300);
+    rel2 += rel * rel;
+    s.max_rel = std::max(s.max_rel, rel);
+    if (d.has_sigma) chi += std::norm(e) / (d.sigma[i] * d.sigma[i]);
+  }
+  s.e_n = s.sse / den;
+  s.rms_rel = std::sqrt(rel2 / d.w.size());
+  if (d.has_sigma) s.chi2 = chi;
+  return s;
+}
+
+// A "pair" with |zeta| >= 1 is two real roots: list it so (the refinement may cross zeta = 1).
+void split_overdamped(std::vector<Root>& v) {
+  std::vector<Root> out;
+  for (const Root& r : v) {
+    if (r.pair && std::abs(r.zeta) >= 1.0) {
+      const double q = std::sqrt(r.zeta * r.zeta - 1.0);
+      out.push_back(Root::Real(-r.wn * (r.zeta + q)));
+      out.push_back(Root::Real(-r.wn * (r.zeta - q)));
+    } else {
+      out.push_back(r);
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const Root& a, const Root& b) {
+    return (a.pair ? a.wn : std::abs(a.real)) < (b.pair ? b.wn : std::abs(b.real));
+  });
+  v = out;
+}
+
+// Standard deviations of the fit's parameters from the Jacobian at the optimum:
+// cov = (J^T J)^-1 (residuals already weighted by 1/sigma; scaled by the residual variance when
+// the data carry no sigma). Returns relative sigmas per root (listing order) and of the gain.
+struct Sigmas {
+  std::vector<double> zeros, poles;
+  double gain = -1, delay = -1;
+};
+Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse) {
+  Sigmas out;
+  Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s};
+  for (const Root& z : t.zeros) if (!z.pair && z.real == 0) return out;
+  OeFunctor f{&d, &p};
+  VecR x = p.pack(t);
+  MatR J(f.values(), f.inputs());
+  f.df(x, J);
+  // cov = V diag(1/s^2) V^T from the SVD of J; a direction with s ~ 0 is not identified by the
+  // data: its parameters get an infinite standard deviation.
+  Eigen::JacobiSVD<MatR> svd(J, Eigen::ComputeThinV);
+  const VecR sv = svd.singularValues();
+  MatR cov = MatR::Zero(J.cols(), J.cols());
+  std::vector<bool> unidentified(J.cols(), false);
+  for (int i = 0; i < sv.size(); ++i) {
+    if (sv(i) <= 1e-12 * sv(0)) {
+      for (int k = 0; k < J.cols(); ++k) if (std::abs(svd.matrixV()(k, i)) > 1e-6) unidentified[k] = true;
+      continue;
+    }
+    cov += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
+  }
+  for (int k = 0; k < J.cols(); ++k) if (unidentified[k]) cov(k, k) = INFINITY;
+  if (!d.has_sigma) cov *= sse / std::max(1.0, double(f.values() - f.inputs()));
+  auto sd = [&](int k) { return std::sqrt(std::max(0.0, cov(k, k))); };
+  int k = 0;
+  out.gain = sd(k++);  // x0 = gain / g0 ~ 1: relative
+  for (const Root& z : t.zeros) {
+    if (z.pair) { out.zeros.push_back(std::hypot(sd(k), sd(k + 1))); k += 2; }
+    else { out.zeros.push_back(sd(k) * std::abs(z.real)); ++k; }
+  }
+  for (const Root& q : t.poles) {
+    if (q.pair) { out.poles.push_back(std::hypot(sd(k), q.zeta * sd(k + 1))); k += 2; }
+    else { out.poles.push_back(sd(k)); ++k; }
+  }
+  if (free_delay) out.delay = sd(k);
+  return out;
+}
+
+int n_params(const Tf& t, bool free_delay) { return 1 + t.num_order() + t.den_order() + (free_delay ? 1 : 0); }
+
+bool adequate(const Data& d, const Score& s, int params, const FitOptions& o, double* chi2dof) {
+  if (d.has_sigma) {
+    const double N = double(d.w.size());
+    const double dof = std::max(1.0, N - params / 2.0);
+    *chi2dof = s.chi2 / dof;
+    return *chi2dof <= 1.0 + 3.0 / std::sqrt(N);
+  }
+  return s.e_n <= o.c_n;
+}
+
+int reflect_unstable(Tf& t) {
+  int k = 0;
+  for (Root& p : t.poles) {
+    if (p.pair && p.zeta <= 0) { p.zeta = std::max(-p.zeta, 1e-6); ++k; }
+    if (!p.pair && p.real >= 0) { p.real = -std::max(p.real, 1e-9); ++k; }
+  }
+  return k;
+}
+
+std::vector<C> remove_delay(const Data& d, double tau) {
+  std::vector<C> g(d.g);
+  for (size_t i = 0; i < g.size(); ++i) g[i] *= std::polar(1.0, d.w[i] * tau);
+  return g;
+}
+
+}  // namespace
+
+void FitOptions::validate() const {
+  auto bad = [](const std::string& m) { throw InputError("fit: " + m); };
+  if (den_order_start < 0 || num_order_start < 0) bad("starting orders must be >= 0");
+  if (num_order_start > den_order_start) bad("numerator starting order must be <= denominator starting order");
+  if (max_den_order < den_order_start || max_den_order > 30) bad("max order must be in [start, 30]");
+  if (!(c_phi > 0) || !(c_n > 0)) bad("tolerances c_phi and c_n must be > 0");
+  if (max_iterations < 2) bad("max_iterations must be >= 2");
+  if (delay == Delay::kFixed && !(delay_s >= 0)) bad("a fixed delay must be >= 0 s");
+  if (!(max_delay_s > 0)) bad("max_delay_s must be > 0");
+}
+
+std::string FitResult::status_str() const {
+  switch (status) {
+    case Status::kConverged: return "converged";
+    case Status::kMaxOrderReached: return "max_order_reached";
+    default: return "failed";
+  }
+}
+
+std::vector<RootInfo> root_info(const std::vector<Root>& roots) {
+  std::vector<RootInfo> v;
+  for (const Root& r : roots) {
+    RootInfo i;
+    i.pair = r.pair;
+    if (r.pair) {
+      C l = r.locations()[0];
+      if (l.imag() < 0) l = std::conj(l);
+      i.real = l.real();
+      i.imag = l.imag();
+      i.wn = r.wn;
+      i.zeta = r.zeta;
+    } else {
+      i.real = r.real;
+      i.wn = std::abs(r.real);
+      i.zeta = r.real < 0 ? 1.0 : -1.0;
+    }
+    v.push_back(i);
+  }
+  return v;
+}
+
+std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
+  std::vector<PadeSet> out;
+  std::vector<bool> used(tf.poles.size(), false);
+  for (const Root& z : tf.zeros) {
+    const bool rhp = z.pair ? z.zeta < 0 : z.real > 0;
+    if (!rhp) continue;
+    for (size_t k = 0; k < tf.poles.size(); ++k) {
+      const Root& p = tf.poles[k];
+      if (used[k] || p.pair != z.pair) continue;
+      const double wz = z.pair ? z.wn : z.real, wp = p.pair ? p.wn : -p.real;
+      if (std::abs(wz - wp) > tol * wp) continue;
+      if (z.pair && std::abs(-z.zeta - p.zeta) > std::max(0.35 * p.zeta, 0.05)) continue;
+      PadeSet s{z, p, z.pair ? 2 * (-z.zeta) / z.wn + 2 * p.zeta / p.wn : 1 / wz + 1 / wp};
+      used[k] = true;
+      out.push_back(s);
+      break;
+    }
+  }
+  return out;
+}
+
+FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
+  o.validate();
+  Data d;
+  std::vector<FrdPoint> v;
+  for (const auto& p : pts) if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
+  std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  FitResult res;
+  res.n_points = int(v.size());
+  if (v.size() < 3) {
+    res.message = "need at least 3 valid points, have " + std::to_string(v.size());
+    return res;
+  }
+  d.has_sigma = o.use_sigma;
+  for (const auto& p : v) d.has_sigma = d.has_sigma && p.sigma > 0;
+  for (const auto& p : v) {
+    d.w.push_back(p.w);
+    d.g.push_back(p.value());
+    d.sigma.push_back(p.sigma);
+    double mag2 = std::max(std::norm(p.value()), 1e-300);
+    d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
+  }
+  const double ws = std::sqrt(d.w.front() * d.w.back());
+  const int max_n = std::min(o.max_den_order, int(d.w.size()) - 1);
+
+  struct Cand {
+    Tf tf;
+    Score s;
+    bool ok = false, adequate = false, free_delay = false;
+    double chi2dof = -1;
+    int params = 0, iterations = 0, reflected = 0;
+    double e_phi = 0;
+  };
+  auto evaluate = [&](Cand& c) {
+    c.s = score(d, c.tf);
+    c.params = n_params(c.tf, c.free_delay);
+    c.adequate = adequate(d, c.s, c.params, o, &c.chi2dof);
+  };
+  // One order loop for a delay hypothesis; returns the lowest adequate candidate or the best.
+  // SK error of orders (n, m) with delay tau removed.
+  auto sk_err = [&](double tau, int n, int m, FitOptions oo) {
+    Sk sk = sk_fit(d, remove_delay(d, tau), n, m, ws, oo);
+    if (!sk.ok) return std::make_pair(1e300, sk);
+    sk.tf.delay_s = tau;
+    return std::make_pair(score(d, sk.tf).sse, sk);
+  };
+  const double tau_window = o.max_delay_s / 100;  // 0.5 ms at the default range
+  // max_params: stop once every candidate of an order would have at least this many parameters
+  // (an alternative only wins with fewer parameters than an adequate fit already found).
+  auto order_loop = [&](double tau0, bool free_delay, int max_params) {
+    Cand best;
+    for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
+      if (n + std::max(0, n - 3) + 1 + (free_delay ? 1 : 0) >= max_params) break;
+      Cand best_n;
+      for (int m = n; m >= std::max(0, n - 3); --m) {
+        if (n == o.den_order_start && m < o.num_order_start) continue;
+        // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
+        // of SK errors over tau0 +- 10 windows (the SK error is spiky in tau; the joint refinement
+        // from several starts finds the basin that one start can miss).
+        std::vector<double> starts = {tau0};
+        if (free_delay) {
+          FitOptions quick = o;
+          quick.max_iterations = 6;
+          std::vector<std::pair<double, double>> grid;  // (err, tau)
+          for (int k = -10; k <= 10; ++k) {
+            const double t = tau0 + k * tau_window;
+            if (t >= 0) grid.push_back({sk_err(t, n, m, quick).first, t});
+          }
+          std::sort(grid.begin(), grid.end());
+          starts.clear();
+          for (const auto& [e, t] : grid) {
+            bool far = true;
+            for (double u : starts) far = far && std::abs(u - t) > 1.5 * tau_window;
+            if (far) starts.push_back(t);
+            if (starts.size() == 3) break;
+          }
+        }
+        Cand c;
+        for (double tau : starts) {
+          Sk sk = sk_err(tau, n, m, o).second;
+          if (!sk.ok) continue;
+          Cand t;
+          t.tf = sk.tf;
+          t.tf.delay_s = tau;
+          t.free_delay = free_delay;
+          t.reflected = reflect_unstable(t.tf);
+          t.iterations = sk.iterations;
+          t.e_phi = sk.e_phi;
+          t.ok = true;
+          evaluate(t);
+          // With a free delay the SK result sits at a grid delay: refine every start jointly, so the
+          // right order is not beaten by one whose extra roots absorb a delay error.
+          // Without a delay, refine only near-adequate candidates: LM at hopeless orders is wasted.
+          const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
+          if (o.refine && (free_delay || t.reflected || (!t.adequate && near))) {
+            Cand r = t;
+            r.tf = refine(d, t.tf, free_delay);
+            evaluate(r);
+            if (r.s.sse <= t.s.sse) t = r;
+          }
+          if (!c.ok || t.s.sse < c.s.sse) c = t;
+        }
+        if (!c.ok) continue;
+        if (!best_n.ok || (c.adequate && !best_n.adequate) ||
+            (c.adequate == best_n.adequate && (c.adequate ? c.params < best_n.params : c.s.sse < best_n.s.sse))) {
+          best_n = c;
+        }
+      }
+      if (!best_n.ok) continue;
+      if (!best.ok || best_n.s.sse < best.s.sse || best_n.adequate) best = best_n;
+      if (best_n.adequate) return best_n;
+    }
+    return best;
+  };
+
+  std::vector<Cand> cands;
+  if (o.delay == FitOptions::Delay::kFixed) {
+    cands.push_back(order_loop(o.delay_s, false, 1 << 20));
+  } else {
+    cands.push_back(order_loop(0.0, false, 1 << 20));
+    bool rhp_zeros = false;
+    for (const Root& z : cands[0].tf.zeros) rhp_zeros |= z.pair ? z.zeta < 0 : z.real > 0;
+    if (o.delay == FitOptions::Delay::kAuto && cands[0].ok && (!cands[0].adequate || rhp_zeros)) {
+      // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first
+      // (a short rational cannot imitate a large high-frequency phase lag, so the error has a
+      // clear minimum near the delay), then per order in order_loop, then jointly in refine().
+      FitOptions quick = o;
+      quick.max_iterations = 6;
+      auto err_at = [&](double tau) {
+        return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
+      };
+      const int G = 26;
+      double bt = 0, be = err_at(0.0);
+      for (int k = 1; k < G; ++k) {
+        double t = o.max_delay_s * k / (G - 1), e = err_at(t);
+        if (e < be) be = e, bt = t;
+      }
+      const double step = o.max_delay_s / (G - 1);
+      const double lo = std::max(0.0, bt - step), hi = bt + step;
+      const double gr = (std::sqrt(5.0) - 1) / 2;
+      double a = lo, b = hi, x1 = b - gr * (b - a), x2 = a + gr * (b - a), f1 = err_at(x1), f2 = err_at(x2);
+      for (int it = 0; it < 20; ++it) {
+        if (f1 < f2) { b = x2; x2 = x1; f2 = f1; x1 = b - gr * (b - a); f1 = err_at(x1); }
+        else { a = x1; x1 = x2; f1 = f2; x2 = a + gr * (b - a); f2 = err_at(x2); }
+      }
+      const double tau0 = (a + b) / 2;
+      if (tau0 * d.w.back() > 0.05) {
+        cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
+      }
+    }
+  }
+  // The adequate candidate with the fewest parameters; else the smallest error.
+  const Cand* pick = nullptr;
+  for (const Cand& c : cands) {
+    if (!c.ok) continue;
+    if (!pick || (c.adequate && !pick->adequate) ||
+        (c.adequate == pick->adequate && (c.adequate ? (c.params < pick->params || (c.params == pick->params && c.s.sse < pick->s.sse))
+                                                     : c.s.sse < pick->s.sse))) {
+      pick = &c;
+    }
+  }
+  if (!pick) {
+    res.message = "no order from " + std::to_string(o.den_order_start) + " to " + std::to_string(max_n) + " could be fitted";
+    return res;
+  }
+  res.tf = pick->tf;
+  res.num_order = pick->tf.num_order();
+  res.den_order = pick->tf.den_order();
+  res.iterations = pick->iterations;
+  res.e_phi = pick->e_phi;
+  res.e_n = pick->s.e_n;
+  res.chi2_per_dof = pick->chi2dof;
+  res.rms_rel_error = pick->s.rms_rel;
+  res.max_rel_error = pick->s.max_rel;
+  res.unstable_reflected = pick->reflected;
+  res.pade = find_pade_sets(res.tf);
+  for (const auto& s : res.pade) res.pade_delay_s += s.delay_s;
+  res.zero_info = root_info(res.tf.zeros);
+  res.pole_info = root_info(res.tf.poles);
+  {
+    Sigmas sg = parameter_sigmas(d, res.tf, pick->free_delay, pick->s.sse);
+    for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i) res.zero_info[i].rel_sigma = sg.zeros[i];
+    for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i) res.pole_info[i].rel_sigma = sg.poles[i];
+    res.gain_rel_sigma = sg.gain;
+    res.delay_sigma_s = sg.delay;
+  }
+  res.status = pick->adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
+                res.status_str().c_str(), res.num_order, res.den_order, d.has_sigma ? "chi2/dof" : "E_N",
+                d.has_sigma ? res.chi2_per_dof : res.e_n, res.tf.delay_s, res.iterations);
+  res.message = buf;
+  return res;
+}
+
+Json fit_to_json(const FitResult& r, const std::string& pair) {
+  Json j = tf_to_json(r.tf);
+  j["delay_s"] = r.tf.delay_s;
+  if (!pair.empty()) j["pair"] = pair;
+  j["fit"] = {{"status", r.status_str()}, {"message", r.message}, {"num_order", r.num_order},
+              {"den_order", r.den_order}, {"iterations", r.iterations}, {"e_phi", r.e_phi}, {"e_n", r.e_n},
+              {"rms_rel_error", r.rms_rel_error}, {"max_rel_error", r.max_rel_error}, {"n_points", r.n_points},
+              {"unstable_reflected", r.unstable_reflected}};
+  if (r.chi2_per_dof >= 0) j["fit"]["chi2_per_dof"] = r.chi2_per_dof;
+  if (r.gain_rel_sigma >= 0) j["fit"]["gain_rel_sigma"] = r.gain_rel_sigma;
+  if (r.delay_sigma_s >= 0) j["fit"]["delay_sigma_s"] = r.delay_sigma_s;
+  auto roots = [](const std::vector<RootInfo>& v) {
+    Json a = Json::array();
+    for (const auto& i : v) {
+      Json r{{"real", i.real}, {"imag", i.imag}, {"wn", i.wn}, {"zeta", i.zeta}, {"f_hz", i.wn / (2 * std::numbers::pi)}};
+      if (i.rel_sigma >= 0) r["rel_sigma"] = i.rel_sigma;
+      a.push_back(r);
+    }
+    return a;
+  };
+  j["roots"] = {{"zeros", roots(r.zero_info)}, {"poles", roots(r.pole_info)}};
+  j["pade"] = Json::array();
+  for (const auto& s : r.pade) j["pade"].push_back({{"zero", root_to_json(s.zero)}, {"pole", root_to_json(s.pole)}, {"delay_s", s.delay_s}});
+  j["pade_delay_s"] = r.pade_delay_s;
+  return j;
+}
+
+}  // namespace fralab

@@ -1,0 +1,104 @@
+#include "fralab/identify/readers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+using namespace fralab;
+
+namespace {
+
+std::string write(const std::string& name, const std::string& text) {
+  auto p = std::filesystem::temp_directory_path() / ("fralab_readers_" + name);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// A data card: 1 flag, 15-29 frequency, 30-44 part 1, 45-59 part 2.
+std::string card(char flag, const std::string& f, const std::string& a, const std::string& b) {
+  std::string l(60, ' ');
+  l[0] = flag;
+  l.replace(14, f.size(), f);
+  l.replace(29, a.size(), a);
+  l.replace(44, b.size(), b);
+  return l + "\n";
+}
+
+std::string error_of(const std::string& file) {
+  try {
+    read_fit_input(file);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(Readers, CsvWithNamedColumns) {
+  Frd a = read_frd_csv(write("a.csv", "f_hz,mag_db,phase_deg,sigma\n1,20,-45,0.1\n0.5,0,10,0.2\n"));
+  ASSERT_EQ(a.points.size(), 2u);  // sorted by frequency
+  EXPECT_NEAR(a.points[1].w, 2 * std::numbers::pi, 1e-12);
+  EXPECT_NEAR(a.points[1].mag, 10.0, 1e-12);
+  EXPECT_NEAR(a.points[1].phase_deg, -45.0, 1e-12);
+  EXPECT_DOUBLE_EQ(a.points[1].sigma, 0.1);
+  Frd b = read_fit_input(write("b.csv", "w,re,im\n3,0,-2\n")).frd;
+  EXPECT_NEAR(b.points[0].mag, 2.0, 1e-12);
+  EXPECT_NEAR(b.points[0].phase_deg, -90.0, 1e-12);
+}
+
+TEST(Readers, CsvErrorsNameFileAndLine) {
+  std::string f = write("c.csv", "w,mag,phase_deg\n1,2,3\n2,x,3\n");
+  EXPECT_NE(error_of(f).find(f + ":3: \"x\" is not a number"), std::string::npos) << error_of(f);
+  f = write("d.csv", "w,gain,phase\n1,2,3\n");
+  EXPECT_NE(error_of(f).find("the header needs mag or mag_db with phase_deg, or re and im"), std::string::npos);
+}
+
+TEST(Readers, TfnsDeckWithUnitOverrides) {
+  std::string deck = std::string("C        3         2     0.005      0.02       0.1      0.01\n") +
+                     "O       10        40      0.01\n" + "P03 Z02\n" + "*\n" +
+                     card(' ', "1.0", "20.0", "-45.0") +       // Bode: rad/s, dB, degrees
+                     card('B', "H1.0", "M2.0", "R-0.5") +      // Hz, magnitude, radians
+                     card('P', "R10.0", "3.0", "-1.0") +       // polar: magnitude, radians
+                     card('R', "20.0", "0.0", "-4.0") + "*\n";  // rectangular
+  FitInput in = read_tfns_deck(write("deck.dat", deck));
+  ASSERT_TRUE(in.has_control);
+  EXPECT_EQ(in.options.den_order_start, 3);
+  EXPECT_EQ(in.options.num_order_start, 2);
+  EXPECT_DOUBLE_EQ(in.options.c_phi, 0.005);
+  EXPECT_DOUBLE_EQ(in.options.c_n, 0.02);
+  EXPECT_EQ(in.deletions, (std::vector<std::string>{"P03", "Z02"}));
+  ASSERT_EQ(in.frd.points.size(), 4u);
+  EXPECT_NEAR(in.frd.points[0].mag, 10.0, 1e-12);
+  EXPECT_NEAR(in.frd.points[0].phase_deg, -45.0, 1e-12);
+  EXPECT_NEAR(in.frd.points[1].w, 2 * std::numbers::pi, 1e-12);
+  EXPECT_NEAR(in.frd.points[1].mag, 2.0, 1e-12);
+  EXPECT_NEAR(in.frd.points[1].phase_deg, -0.5 * 180 / std::numbers::pi, 1e-9);
+  EXPECT_NEAR(in.frd.points[2].mag, 3.0, 1e-12);
+  EXPECT_NEAR(in.frd.points[3].mag, 4.0, 1e-12);
+  EXPECT_NEAR(in.frd.points[3].phase_deg, -90.0, 1e-12);
+}
+
+TEST(Readers, TfnsDeckErrorsNameTheLine) {
+  std::string f = write("bad.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0") + card(' ', "1.0", "0.0", "0.0") + "*\n");
+  EXPECT_NE(error_of(f).find(f + ":4: cards must be in ascending frequency"), std::string::npos) << error_of(f);
+  f = write("nostar.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0"));
+  EXPECT_NE(error_of(f).find("two groups each ended by a '*' card"), std::string::npos) << error_of(f);
+  f = write("badnum.dat", "C        2         1\n*\n" + card(' ', "2.0", "1.2.3", "0.0") + "*\n");
+  EXPECT_NE(error_of(f).find(f + ":3 (columns 30-44): \"1.2.3\" is not a number"), std::string::npos) << error_of(f);
+}
+
+TEST(Readers, RootDeletionKeepsTheDcGain) {
+  Tf t;
+  t.gain = 2.0;
+  t.zeros = {Root::Real(-10.0), Root::Pair(50.0, 0.1)};
+  t.poles = {Root::Real(-1.0), Root::Real(-3.0), Root::Pair(40.0, 0.2)};
+  Tf d = delete_roots(t, {"P03", "Z02"});
+  EXPECT_EQ(d.poles.size(), 2u);
+  EXPECT_EQ(d.zeros.size(), 1u);
+  EXPECT_DOUBLE_EQ(d.at(0).real(), 2.0);
+  EXPECT_THROW(delete_roots(t, {"P04"}), InputError);
+}
