@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <iostream>
 
+#include "fralab/identify/fit_io.h"
+#include "fralab/identify/readers.h"
 #include "lab.h"
 #include "tape_analysis.h"
 
@@ -104,6 +106,15 @@ int main(int argc, char** argv) {
   analyze->add_option("--out", out, "writes OUT/frd/<E1>_<E2>.json")->required();
   analyze->add_option("--input", aopt.input, "only steps exciting this input");
 
+  std::string fit_in, fit_out, fit_delay = "auto", deletions;
+  int max_order = -1;
+  auto* fit = app.add_subcommand("fit", "identification alone: a transfer function from frequency-response data");
+  fit->add_option("--frd", fit_in, "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck")->required();
+  fit->add_option("--delay", fit_delay, "auto, none or SECONDS (subtracted)")->capture_default_str();
+  fit->add_option("--out", fit_out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")->required();
+  fit->add_option("--max-order", max_order, "highest denominator order");
+  fit->add_option("--delete", deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)");
+
   std::string info_log;
   auto* tape = app.add_subcommand("tape", "summarise a tape: channels, blocks, gaps, excitation states (JSON)");
   tape->add_option("--log", info_log, "tape (LCM log)")->required();
@@ -116,6 +127,30 @@ int main(int argc, char** argv) {
     } else if (*measure) {
       MeasureResult r = run_measure(mo);
       print_measure(r, mo.out);
+    } else if (*fit) {
+      FitInput in = read_fit_input(fit_in);
+      FitOptions o = in.has_control ? in.options : FitOptions{};
+      parse_delay_option(fit_delay, &o);
+      if (max_order > 0) o.max_den_order = max_order;
+      FitResult r = fit_tf(in.frd.points, o);
+      if (r.status == FitResult::Status::kFailed) throw InputError(fit_in + ": " + r.message);
+      std::vector<std::string> del = in.deletions;
+      for (size_t a = 0; a < deletions.size();) {
+        size_t b = deletions.find(',', a);
+        if (b == std::string::npos) b = deletions.size();
+        if (b > a) del.push_back(deletions.substr(a, b - a));
+        a = b + 1;
+      }
+      Json j = fit_to_json(r, in.frd.pair);
+      if (!del.empty()) {
+        Tf kept = delete_roots(r.tf, del);
+        j["deleted"] = del;
+        j["zeros"] = tf_to_json(kept)["zeros"];
+        j["poles"] = tf_to_json(kept)["poles"];
+      }
+      json_save_file(fit_out, j);
+      std::printf("fralab: %s -> %s: %s\n", fit_in.c_str(), fit_out.c_str(), r.message.c_str());
+      std::printf("  %s\n", tf_to_text(r.tf).c_str());
     } else if (*tape) {
       std::printf("%s\n", tape_summary(info_log).dump(2).c_str());
     } else if (*analyze) {

@@ -128,6 +128,12 @@ MeasureResult run_measure(const MeasureOptions& o) {
       waits.push_back(name);
     }
   }
+  // The identifier: fits every curve once the analysers publish them complete.
+  sup.start({"identify",
+             {module_path("fralab-identify"), "--lcm-url", url, "--run-id", r.run_id, "--expect",
+              std::to_string(r.pairs.size()), "--out", o.out, "--delay", o.fit_delay, "--title",
+              model.name + ": measured transfer matrix"},
+             log("identify")});
   std::string consumers_csv;
   for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
   std::string inputs_csv;
@@ -149,6 +155,9 @@ MeasureResult run_measure(const MeasureOptions& o) {
   waits.push_back("acquire");
   sup.wait_for(waits, o.timeout_s);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t_fit = std::chrono::steady_clock::now();
+  sup.wait_for({"identify"}, o.timeout_s);
+  r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
 
   // The logger: stop it only once the tape holds the whole run (lcm-logger 1.3.1 drops its queue on
   // SIGINT), and fail loudly if anything was lost.
@@ -176,7 +185,8 @@ MeasureResult run_measure(const MeasureOptions& o) {
   r.engine_time_s = acq_summary.value("engine_time_s", 0.0);
   Json summary{{"run_id", r.run_id}, {"engine", model.name}, {"lcm_url", url}, {"inputs", inputs_csv},
                {"pairs", r.pairs}, {"engine_time_s", r.engine_time_s}, {"wall_time_s", r.wall_time_s},
-               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)}, {"tape_blocks", n}};
+               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)}, {"tape_blocks", n},
+               {"fit_time_s", r.fit_time_s}};
   json_save_file(o.out + "/run.json", summary);
   return r;
 }

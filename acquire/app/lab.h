@@ -24,12 +24,14 @@ struct MeasureOptions {
   double min_integrate_s = 4.0;
   std::string lcm_url;  // "" = a fresh private URL
   double timeout_s = 3600;
+  std::string fit_delay = "auto";  // the identifier's --delay
 };
 
 struct MeasureResult {
   std::vector<std::string> pairs;
   double engine_time_s = 0;
-  double wall_time_s = 0;
+  double wall_time_s = 0;  // acquisition and analysis (plant, acquire, analysers, logger)
+  double fit_time_s = 0;   // the identifier, after the analysers finished
   int64_t tape_blocks = 0;
   std::string run_id;
 };

@@ -1,5 +1,7 @@
 #include "tape_analysis.h"
 
+#include <algorithm>
+
 namespace fralab {
 
 TapeFeeder::TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOptions& opt, std::string run_id)
@@ -78,6 +80,28 @@ frd_t to_frd_msg(const Frd& frd, const std::string& run_id, int64_t seq, bool co
   }
   m.n_points = static_cast<int32_t>(m.points.size());
   return m;
+}
+
+Frd from_frd_msg(const frd_t& m) {
+  Frd f;
+  f.pair = m.pair;
+  for (const frd_point_t& q : m.points) {
+    FrdPoint p;
+    p.step = q.step;
+    p.w = q.w;
+    p.mag = q.mag;
+    p.phase_deg = q.phase_deg;
+    p.sigma = q.sigma;
+    p.coherence = q.coherence;
+    p.h2_rel = q.h2_rel;
+    p.h3_rel = q.h3_rel;
+    p.n_cycles = q.n_cycles;
+    p.valid = q.valid;
+    p.note = q.note;
+    f.points.push_back(p);
+  }
+  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  return f;
 }
 
 }  // namespace fralab

@@ -37,5 +37,6 @@ std::vector<Frd> analyze_tape_file(const std::string& path, const std::vector<st
                                    const AnalyzerOptions& opt);
 
 frd_t to_frd_msg(const Frd& frd, const std::string& run_id, int64_t seq, bool complete);
+Frd from_frd_msg(const frd_t& m);
 
 }  // namespace fralab

@@ -545,6 +545,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   // (an alternative only wins with fewer parameters than an adequate fit already found).
   auto order_loop = [&](double tau0, bool free_delay, int max_params) {
     Cand best;
+    int stalled = 0;
     for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
       if (n + std::max(0, n - 3) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
@@ -603,6 +604,13 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         }
       }
       if (!best_n.ok) continue;
+      // Two orders in a row without a 5 % error improvement: higher orders only chase noise or a
+      // nonlinearity (e.g. a backlash's describing function); stop raising.
+      if (n > 3 && best.ok && !best_n.adequate && best_n.s.sse > 0.95 * best.s.sse) {
+        if (++stalled >= 2) return best;
+      } else {
+        stalled = 0;
+      }
       if (!best.ok || best_n.s.sse < best.s.sse || best_n.adequate) best = best_n;
       if (best_n.adequate) return best_n;
     }

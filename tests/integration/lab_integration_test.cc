@@ -95,6 +95,31 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   }
   Json run = json_load_file(d + "/run.json");
   EXPECT_GT(run["engine_time_s"].get<double>(), 50.0);
+  // The identifier ran as a process: a tf per pair and the transfer matrix.
+  Json p3 = json_load_file(d + "/tf/Wf_P3.json");
+  EXPECT_EQ(p3["fit"]["status"], "converged");
+  // (4 points over 1-10 Hz cannot pin the 11 ms delay; delay accuracy is tfns_test's subject.)
+  EXPECT_GE(p3["delay_s"].get<double>(), 0.0);
+  EXPECT_LT(p3["fit"]["rms_rel_error"].get<double>(), 0.01);
+  Json n = json_load_file(d + "/tf/Wf_N.json");
+  EXPECT_NEAR(n["gain"].get<double>(), 2.86, 0.05 * 2.86);
+  Json tm = json_load_file(d + "/transfer_matrix.json");
+  EXPECT_EQ(tm["outputs"].size(), 5u);
+  EXPECT_TRUE(fs::exists(d + "/transfer_matrix.md"));
+}
+
+TEST(Lab, FitCommandReadsAnFrdAndWritesATf) {
+  const std::string& d = measured();
+  std::string t = tmpdir("fit");
+  Cmd c = sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay 0.011 --out " + t + "/tf.json");
+  ASSERT_EQ(c.status, 0) << c.output;
+  Json j = json_load_file(t + "/tf.json");
+  EXPECT_DOUBLE_EQ(j["delay_s"].get<double>(), 0.011);
+  EXPECT_EQ(j["pair"], "Wf:P3");
+  EXPECT_TRUE(j.contains("roots"));
+  c = sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay soon --out " + t + "/x.json");
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("--delay \"soon\" must be auto, none or a delay in seconds"), std::string::npos) << c.output;
 }
 
 TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {

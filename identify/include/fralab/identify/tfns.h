@@ -21,6 +21,7 @@
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <= c_n.
 //    At each n, numerator orders n down to n-3 are tried; the fewest parameters that pass win.
+//    Above order 3, raising stops when two successive orders improve the error by less than 5 %.
 // Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
 // on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
 // Units: w rad/s, tau seconds, phases radians inside, degrees in files.

@@ -1,0 +1,39 @@
+// Identification speed: every transfer function of the report (Tables 4-23, the 57 of models/:
+// actuators and paths at 70/85/95 %) fitted from 0.05-100 Hz data, 10 points per decade, 2 % noise;
+// and one order-3 fit from 100 points.
+#include <benchmark/benchmark.h>
+
+#include "fralab/identify/tfns.h"
+#include "fralab/plant/model.h"
+#include "test_util.h"
+
+using namespace fralab;
+
+static void BM_ReportCampaignFits(benchmark::State& state) {
+  std::vector<std::vector<FrdPoint>> data;
+  for (int op : {70, 85, 95}) {
+    Model m = load_model(std::string(FRALAB_SOURCE_DIR) + "/models/j85_" + std::to_string(op) + ".json");
+    for (const auto& in : m.inputs) data.push_back(fralab::testing::tf_points(*in.actuator, 0.05, 100, 10, 0.02, 3));
+    for (const auto& p : m.paths) data.push_back(fralab::testing::tf_points(p.tf, 0.05, 100, 10, 0.02, 3));
+  }
+  for (auto _ : state) {
+    for (const auto& d : data) benchmark::DoNotOptimize(fit_tf(d, FitOptions{}).tf.gain);
+  }
+  state.counters["fits"] = double(data.size());
+}
+BENCHMARK(BM_ReportCampaignFits)->Unit(benchmark::kMillisecond);
+
+static void BM_Order3Fit100Points(benchmark::State& state) {
+  Tf t;
+  t.gain = 2.86;
+  t.zeros = {Root::Real(192)};
+  t.poles = {Root::Real(-2.86), Root::Real(-76.7), Root::Real(-260)};
+  auto d = fralab::testing::tf_points(t, 0.05, 100, 30, 0.02, 3);  // 100 points
+  FitOptions o;
+  o.delay = FitOptions::Delay::kNone;
+  for (auto _ : state) benchmark::DoNotOptimize(fit_tf(d, o).tf.gain);
+  state.counters["points"] = double(d.size());
+}
+BENCHMARK(BM_Order3Fit100Points)->Unit(benchmark::kMicrosecond);
+
+BENCHMARK_MAIN();

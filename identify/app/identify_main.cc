@@ -1,0 +1,96 @@
+// fralab-identify: the live identifier. Collects the analysers' finished curves of a run
+// (FRALAB_FRD, complete = true), fits every pair, publishes each fit (FRALAB_TF), and writes
+// DIR/tf/<E1>_<E2>.json and the transfer matrix DIR/transfer_matrix.{json,md}.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <iostream>
+#include <map>
+
+#include "fralab/identify/fit_io.h"
+#include "tape_analysis.h"
+
+using namespace fralab;
+
+namespace {
+
+struct Collector {
+  std::string run_id;
+  std::map<std::string, Frd> complete;
+  std::string error;
+  void on_frd(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+    try {
+      frd_t m = decode_checked<frd_t>(rbuf, ch);
+      if (!run_id.empty() && m.run_id != run_id) return;
+      if (m.complete) complete[m.pair] = from_frd_msg(m);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+};
+
+tf_t to_tf_msg(const FitResult& r, const std::string& pair, const std::string& run_id) {
+  tf_t m;
+  m.run_id = run_id;
+  m.pair = pair;
+  m.gain = r.tf.gain;
+  auto conv = [](const Root& x) {
+    root_t q;
+    q.kind = x.pair ? "pair" : "real";
+    q.real = x.real;
+    q.wn = x.wn;
+    q.zeta = x.zeta;
+    return q;
+  };
+  for (const Root& z : r.tf.zeros) m.zeros.push_back(conv(z));
+  for (const Root& p : r.tf.poles) m.poles.push_back(conv(p));
+  m.n_zeros = int32_t(m.zeros.size());
+  m.n_poles = int32_t(m.poles.size());
+  m.delay_s = r.tf.delay_s;
+  m.fit_error = r.e_n;
+  m.status = r.status_str();
+  return m;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fralab-identify: transfer functions and the transfer matrix of a run"};
+  std::string url, out, run_id, delay = "auto", title = "fralab transfer matrix";
+  int expect = 0;
+  double timeout = 3600;
+  app.add_option("--lcm-url", url);
+  app.add_option("--run-id", run_id);
+  app.add_option("--expect", expect, "number of pairs to wait for")->required();
+  app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")->required();
+  app.add_option("--delay", delay, "auto, none or seconds")->capture_default_str();
+  app.add_option("--title", title);
+  app.add_option("--timeout", timeout, "seconds")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    FitOptions o;
+    parse_delay_option(delay, &o);
+    lcm::LCM lcm(resolve_lcm_url(url));
+    if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
+    Collector c{run_id, {}, ""};
+    lcm.subscribe(kFrdChannel, &Collector::on_frd, &c)->setQueueCapacity(100000);
+    const auto t0 = std::chrono::steady_clock::now();
+    while (int(c.complete.size()) < expect) {
+      lcm.handleTimeout(100);
+      if (!c.error.empty()) throw InputError(c.error);
+      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) {
+        throw InputError("only " + std::to_string(c.complete.size()) + " of " + std::to_string(expect) + " curves arrived");
+      }
+    }
+    std::vector<Frd> curves;
+    for (auto& [p, f] : c.complete) curves.push_back(f);
+    auto fits = fit_and_write(curves, o, out, title);
+    for (size_t i = 0; i < fits.size(); ++i) {
+      tf_t m = to_tf_msg(fits[i], curves[i].pair, run_id);
+      lcm.publish(kTfChannel, &m);
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "fralab-identify: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,21 @@
+// Fitting a set of curves and writing the results the way `fralab measure` and `fralab fit` lay
+// them out: DIR/tf/<E1>_<E2>.json per pair and DIR/transfer_matrix.{json,md}.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fralab/identify/transfer_matrix.h"
+
+namespace fralab {
+
+/// "auto", "none" or a number of seconds -> options; InputError naming the text otherwise.
+void parse_delay_option(const std::string& text, FitOptions* o);
+
+/// Fits every curve, writes DIR/tf/<stem>.json for each and the transfer matrix of the pairs whose
+/// E1 is an input position and E2 an output (u_X:X actuator fits are listed beside it). Returns the
+/// fits in the order of `curves`.
+std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o, const std::string& dir,
+                                     const std::string& title);
+
+}  // namespace fralab

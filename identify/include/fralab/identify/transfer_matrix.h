@@ -1,0 +1,46 @@
+// The transfer matrix of an operating point (the report's Figures 1-3): each measured path's fitted
+// tf in a table of outputs (rows) by inputs (columns), and the common poles across it.
+//
+// Common poles (Section I, "Form of the model"): poles of all paths are clustered (real with real,
+// pairs with pairs; a root joins a cluster whose mean lies within `rel_tol` relative distance).
+// A cluster present in every fitted path into one output is that output's (a sensor, scope
+// "output"); in every fitted path from one input, that input's (an actuator, scope "input"); in
+// every path, a plant state ("plant"); otherwise "path". The state count of the operating point is
+// the number of distinct clusters (each counted once), as the report's recipe counts states.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fralab/identify/tfns.h"
+
+namespace fralab {
+
+struct MatrixEntry {
+  std::string input, output;  // response output / input
+  FitResult fit;
+};
+
+struct PoleCluster {
+  Root mean;  // mean location (real) or (wn, zeta)
+  std::vector<std::string> pairs;  // "input:output" members
+  std::string scope;               // "plant", "output", "input", "path"
+  std::string where;               // the output or input name for those scopes
+};
+
+struct TransferMatrix {
+  std::vector<std::string> inputs, outputs;
+  std::map<std::pair<std::string, std::string>, FitResult> fits;  // (output, input)
+  std::vector<PoleCluster> clusters;
+  int state_count = 0;
+};
+
+/// Human form of a tf in the report's notation: 2.86 [1 - s/192] / ([s/2.86 + 1][s/76.7 + 1]) e^(-0.011 s).
+std::string tf_to_text(const Tf& tf);
+
+TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, double rel_tol = 0.1);
+Json transfer_matrix_json(const TransferMatrix& m);
+std::string transfer_matrix_markdown(const TransferMatrix& m, const std::string& title);
+
+}  // namespace fralab

@@ -1,0 +1,60 @@
+#include "fralab/identify/fit_io.h"
+
+#include <filesystem>
+#include <fstream>
+
+namespace fralab {
+
+void parse_delay_option(const std::string& text, FitOptions* o) {
+  if (text == "auto") {
+    o->delay = FitOptions::Delay::kAuto;
+  } else if (text == "none") {
+    o->delay = FitOptions::Delay::kNone;
+  } else {
+    try {
+      size_t p = 0;
+      double v = std::stod(text, &p);
+      if (p != text.size() || !(v >= 0)) throw std::invalid_argument("x");
+      o->delay = FitOptions::Delay::kFixed;
+      o->delay_s = v;
+    } catch (const std::exception&) {
+      throw InputError("--delay \"" + text + "\" must be auto, none or a delay in seconds >= 0");
+    }
+  }
+}
+
+std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o, const std::string& dir,
+                                     const std::string& title) {
+  std::filesystem::create_directories(dir + "/tf");
+  std::vector<FitResult> fits;
+  std::vector<MatrixEntry> entries;
+  Json actuators = Json::array();
+  for (const Frd& f : curves) {
+    FitResult r = fit_tf(f.points, o);
+    json_save_file(dir + "/tf/" + pair_file_stem(f.pair) + ".json", fit_to_json(r, f.pair));
+    auto [e1, e2] = split_pair(f.pair);
+    if (e1.rfind("u_", 0) == 0 && e1.substr(2) == e2) {
+      Json a = fit_to_json(r, f.pair);
+      a["text"] = tf_to_text(r.tf);
+      actuators.push_back(a);
+    } else if (e1.rfind("u_", 0) != 0) {
+      entries.push_back({e1, e2, r});
+    }
+    fits.push_back(r);
+  }
+  TransferMatrix m = build_transfer_matrix(entries);
+  Json j = transfer_matrix_json(m);
+  j["actuators"] = actuators;
+  j["title"] = title;
+  json_save_file(dir + "/transfer_matrix.json", j);
+  std::ofstream md(dir + "/transfer_matrix.md");
+  md << transfer_matrix_markdown(m, title);
+  md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";
+  for (const auto& a : actuators) {
+    md << "| " << a["pair"].get<std::string>() << " | " << a["text"].get<std::string>() << " | "
+       << a["fit"]["status"].get<std::string>() << " |\n";
+  }
+  return fits;
+}
+
+}  // namespace fralab
