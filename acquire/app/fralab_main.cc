@@ -3,10 +3,14 @@
 // success, non-zero with a one-line reason on stderr otherwise.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+
+#include "fralab/plant/embedded_models.h"
 
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
+#include "diagnose_cmd.h"
 #include "lab.h"
 #include "tape_analysis.h"
 
@@ -89,6 +93,8 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "the lab end to end on an engine (default: embedded J85 95 %)");
   run->add_option("--engine", run_opt.engine, "engine model file or embedded name")->capture_default_str();
   run->add_option("--out", run_opt.out)->capture_default_str();
+  std::string run_sim;
+  run->add_option("--simulation", run_sim, "diagnose against this simulation (default: the engine's _sim model when embedded)");
   add_measure_flags(run, run_opt);
 
   MeasureOptions mo;
@@ -115,6 +121,15 @@ int main(int argc, char** argv) {
   fit->add_option("--max-order", max_order, "highest denominator order");
   fit->add_option("--delete", deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)");
 
+  DiagnoseCommand dc;
+  auto* diag = app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
+  diag->add_option("--simulation", dc.simulation, "the simulation (fralab-model/1 file or embedded name)")->required();
+  diag->add_option("--engine", dc.engine, "measure this engine model first (every flag of measure applies)");
+  diag->add_option("--measured", dc.measured, "or: a measure output folder");
+  diag->add_option("--out", dc.out)->required();
+  diag->add_flag("!--no-plots", dc.plots, "skip the gnuplot figures");
+  add_measure_flags(diag, dc.measure);
+
   std::string info_log;
   auto* tape = app.add_subcommand("tape", "summarise a tape: channels, blocks, gaps, excitation states (JSON)");
   tape->add_option("--log", info_log, "tape (LCM log)")->required();
@@ -122,11 +137,35 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) {
-      MeasureResult r = run_measure(run_opt);
-      print_measure(r, run_opt.out);
+      // The lab end to end: the diagnosis measures the engine (and once more for validation),
+      // identifies every path, and compares with the simulation.
+      std::string sim = run_sim;
+      if (sim.empty()) {
+        std::string base = std::filesystem::path(run_opt.engine).stem().string();
+        for (const auto& e : embedded_models()) if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
+      }
+      if (sim.empty()) {
+        MeasureResult r = run_measure(run_opt);
+        print_measure(r, run_opt.out);
+      } else {
+        DiagnoseCommand d;
+        d.simulation = sim;
+        d.engine = run_opt.engine;
+        d.out = run_opt.out;
+        d.measure = run_opt;
+        std::printf("fralab: measuring %s and diagnosing %s ...\n", run_opt.engine.c_str(), sim.c_str());
+        std::string summary = run_diagnose(d);
+        Json rj = json_load_file(run_opt.out + "/measure/run.json");
+        std::printf("fralab: engine time %.0f s (%.2f h) measured in %.1f s (%.0fx), tape %s/measure/tape.lcmlog, transfer matrix %s/measure/transfer_matrix.md\n",
+                    rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600, rj["wall_time_s"].get<double>(),
+                    rj["speedup"].get<double>(), run_opt.out.c_str(), run_opt.out.c_str());
+        std::printf("fralab: %s\n", summary.c_str());
+      }
     } else if (*measure) {
       MeasureResult r = run_measure(mo);
       print_measure(r, mo.out);
+    } else if (*diag) {
+      std::printf("fralab: %s\n", run_diagnose(dc).c_str());
     } else if (*fit) {
       FitInput in = read_fit_input(fit_in);
       FitOptions o = in.has_control ? in.options : FitOptions{};

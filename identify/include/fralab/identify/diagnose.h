@@ -1,0 +1,94 @@
+// Diagnosis (contracts 6): where a simulation is wrong, why, and what the extended model gains.
+//
+// Points with sigma > 0.3 |G| (an actuator inside its own backlash, a response in the noise) are
+// left out of fitting and of the error metric. For every measured pair the residual is R(w) = G_meas(jw) / G_sim(jw) (ratio in dB and phase in
+// degrees), with the measurement's uncertainty sigma_R = sigma_eff / |G_sim|, where
+// sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the analyser/plant accuracy, 2e-3).
+// A pair is beyond its uncertainty when chi2 = sum |G_meas - G_sim|^2 / sigma_eff^2 exceeds
+// N + 4 sqrt(N) (N points; each complex point contributes 1 on average when the model is right).
+//
+// Catalogue (each a factor F(s; theta) multiplying the simulated response, fitted by weighted least
+// squares over the points; s = jw, w rad/s):
+//   time_delay          F = e^{-s tau}                           delay_s
+//   missing_lag         F = 1 / (1 + s/a)                        corner_rad_s = a
+//   missing_lead        F = 1 + s/a                              corner_rad_s = a
+//   missing_resonance   F = 1 / (s^2/wn^2 + 2 zeta s/wn + 1)     wn_rad_s, zeta (a peak; a notch is
+//                       its inverse, reported with zeta < 0 ... as "notch": true)
+//   pole_shift          F = D_from(s) / D_to(s), one real pole or pair of the simulated chain moved
+//                       (pairs keep their damping)          from_rad_s, to_rad_s
+//   gain_mismatch       F = k                                    gain_db = 20 log10 k
+//   hysteresis/deadband the actuator's describing function N(A) at the measured amplitude (odd
+//                       harmonics in the position are the trigger)    width (input units)
+//   measurement_coupling  the position channel X records X + g O: u_X:X sees F = 1 + g H_OX, every
+//                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
+// A cause is accepted when it lowers chi2 by more than its parameters' BIC penalty (k ln 2N) and
+// by at least 25 %; a second cause may follow on what remains. Scope: the same cause with
+// consistent parameters (delays within 0.5 ms or 10 %, corners within 10 %, gains within 0.3 dB) in
+// every measured path into one output is reported once for that output (a sensor), in every path
+// from one input for that input (its actuator or calibration), everywhere for the plant.
+// Error metric (summary.metric): the rms over points of |ln(G_model / G_meas)| (nepers and radians
+// combined), per finding over the paths it covers, in total over every pair.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fralab/analyze/frd.h"
+#include "fralab/plant/model.h"
+
+namespace fralab {
+
+struct DiagnoseOptions {
+  double sigma_floor = 2e-3;      // relative accuracy floor of measurement and simulation
+  double min_improvement = 0.25;  // a cause must remove at least this fraction of chi2
+  int max_causes_per_path = 2;
+  double max_rel_sigma = 0.3;     // points measured worse than this (sigma / |G|) are not used
+  void validate() const;
+};
+
+struct MeasuredPair {
+  std::string pair;  // "X:O" (position-relative) or "u_X:X" (actuator)
+  Frd frd;           // the measurement used for fitting
+  Frd validation;    // an independent measurement (other seed or amplitude); may be empty
+};
+
+struct Finding {
+  std::string cause, scope, output, input;  // output/input "" = null
+  std::map<std::string, double> parameters;
+  std::map<std::string, std::string> text_parameters;  // measurement_coupling's channel names
+  std::string explanation;
+  double error_before = 0, error_after = 0;
+  std::vector<std::string> pairs;  // the measured pairs it explains
+};
+
+struct PairReport {  // per pair, for the report
+  std::string pair;
+  std::vector<double> w;
+  std::vector<std::complex<double>> meas, sim, ext;
+  std::vector<double> sigma;
+  double chi2_sim = 0, chi2_ext = 0;
+  bool beyond = false;
+  double error_sim = 0, error_ext = 0;
+};
+
+struct Diagnosis {
+  std::vector<Finding> findings;
+  Model extended;
+  std::vector<PairReport> pairs;
+  double error_before = 0, error_after = 0;
+  double validation_before = -1, validation_after = -1;
+  std::string metric = "rms over points of |ln(G_model/G_measured)| (nepers and radians combined)";
+};
+
+Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data, const DiagnoseOptions& opt = {});
+
+/// fralab-diagnosis/1 JSON (contracts 6).
+Json diagnosis_to_json(const Diagnosis& d);
+
+/// The model's response for a measured pair ("X:O" position -> output, "u_X:X" the actuator's
+/// linear response, "u_X:O" command -> output); nullopt when the model has no such path.
+std::optional<std::complex<double>> model_pair_response(const Model& m, const std::string& pair, double w,
+                                                        double amplitude = 0.0);
+
+}  // namespace fralab
