@@ -331,7 +331,18 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     }
     double n = 0;
     for (size_t k : idx) n += pairs[k].w.size();
-    if (!best_o.empty() && base - best_c > std::max(std::log(2 * n), opt.min_improvement * base) && base > n + 4 * std::sqrt(n)) {
+    // The signature must be in the channel's own actuator response (1 + g H): that pair has to be
+    // beyond its uncertainty and be explained by the coupling (a path gain error is not a coupling).
+    bool act_signature = false;
+    if (!best_o.empty()) {
+      const PairFit& a = pairs[act];
+      const double na = double(a.w.size());
+      const double ca0 = chi2(a, std::vector<C>(a.w.size(), 1.0));
+      const int o = sim.output_index(best_o);
+      const double ca1 = chi2(a, factor_of(a.w, [&](C s) { return 1.0 + best_g * sim.position_to_output(o, i, s.imag()); }));
+      act_signature = ca0 > na + 4 * std::sqrt(na) && ca0 - ca1 > opt.min_improvement * ca0;
+    }
+    if (act_signature && base - best_c > std::max(std::log(2 * n), opt.min_improvement * base) && base > n + 4 * std::sqrt(n)) {
       // Accept only if no single-path cause explains it as well (coupling touches every path).
       const int o = sim.output_index(best_o);
       Finding f;

@@ -1,0 +1,201 @@
+// Diagnosis integration: each case hides one effect (or two, or none) in an engine built from a
+// small two-input, two-output simulation, runs the real processes end to end (`fralab diagnose
+// --engine`: plant, acquisition, analysers, logger, identifier; measured twice for validation), and
+// requires diagnosis.json to name the cause, the scope and place, and the parameter within
+// tolerance, with error_after well below error_before. ctest runs it through scripts/isolated.sh.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <sys/wait.h>
+
+#include "fralab/plant/model.h"
+
+using namespace fralab;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kBin = FRALAB_BIN_DIR;
+
+Tf lag(double a, double gain = 1.0) {
+  Tf t;
+  t.gain = gain;
+  t.poles = {Root::Real(-a)};
+  return t;
+}
+
+// The simulation: inputs U1, U2 (actuators: lags at 40 and 30 rad/s), outputs Y1, Y2, four paths.
+Model simulation() {
+  Model m;
+  m.name = "two-by-two test plant";
+  m.speed_pct = 100;
+  m.steady_state = {{"U1", 10.0}, {"U2", 5.0}, {"Y1", 100.0}, {"Y2", 50.0}};
+  for (auto [n, a] : {std::pair{"U1", 40.0}, std::pair{"U2", 30.0}}) {
+    ModelInput in;
+    in.name = n;
+    in.units = "1";
+    in.full_scale = 10.0;
+    in.noise_rms = 0.002;
+    in.actuator = lag(a);
+    m.inputs.push_back(in);
+  }
+  for (const char* n : {"Y1", "Y2"}) {
+    ModelOutput out;
+    out.name = n;
+    out.units = "1";
+    out.noise_rms = 0.002;
+    m.outputs.push_back(out);
+  }
+  Tf p11 = lag(2.0, 3.0);
+  Tf p21;  // Y2/U1: lag and a zero
+  p21.gain = -1.5;
+  p21.zeros = {Root::Real(-8.0)};
+  p21.poles = {Root::Real(-1.0), Root::Real(-25.0)};
+  Tf p12 = lag(5.0, 0.8);
+  Tf p22 = lag(3.0, 2.0);
+  m.paths = {{"Y1", "U1", p11, Json::object()}, {"Y2", "U1", p21, Json::object()},
+             {"Y1", "U2", p12, Json::object()}, {"Y2", "U2", p22, Json::object()}};
+  return m;
+}
+
+int run(const std::string& cmd) {
+  int st = std::system((cmd + " > /dev/null 2>&1").c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// Runs the diagnosis of `truth` against the simulation; returns diagnosis.json.
+Json diagnose(const std::string& name, const Model& truth) {
+  const std::string d = (fs::temp_directory_path() / ("fralab_diag_" + name + "_" + std::to_string(getpid()))).string();
+  fs::remove_all(d);
+  fs::create_directories(d);
+  save_model(d + "/sim.json", simulation());
+  save_model(d + "/truth.json", truth);
+  const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
+                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 --no-plots --out " + d + "/out";
+  EXPECT_EQ(run(cmd), 0) << cmd << "\n" << d;
+  return json_load_file(d + "/out/diagnosis.json");
+}
+
+const Json* find(const Json& d, const std::string& cause) {
+  for (const auto& f : d["findings"]) if (f["cause"] == cause) return &f;
+  return nullptr;
+}
+
+void expect_gain(const Json& d) {
+  EXPECT_LT(d["summary"]["error_after"].get<double>(), 0.3 * d["summary"]["error_before"].get<double>()) << d.dump(1);
+  EXPECT_LT(d["summary"]["validation_error_after"].get<double>(), 0.3 * d["summary"]["validation_error_before"].get<double>());
+}
+
+}  // namespace
+
+TEST(Diagnose, NothingHiddenNoFinding) {
+  Json d = diagnose("none", simulation());
+  EXPECT_EQ(d["findings"].size(), 0u) << d.dump(1);
+}
+
+TEST(Diagnose, DelayInOnePath) {
+  Model t = simulation();
+  t.path("Y1", "U1")->tf.delay_s = 0.012;
+  Json d = diagnose("delay", t);
+  const Json* f = find(d, "time_delay");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "path");
+  EXPECT_EQ((*f)["input"], "U1");
+  EXPECT_EQ((*f)["output"], "Y1");
+  EXPECT_NEAR((*f)["parameters"]["delay_s"].get<double>(), 0.012, 0.5e-3);
+  EXPECT_EQ(d["findings"].size(), 1u) << d.dump(1);
+  expect_gain(d);
+}
+
+TEST(Diagnose, MissingLagInOnePath) {
+  Model t = simulation();
+  t.path("Y2", "U2")->tf.poles.push_back(Root::Real(-20.0));
+  Json d = diagnose("lag", t);
+  const Json* f = find(d, "missing_lag");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "path");
+  EXPECT_EQ((*f)["output"], "Y2");
+  EXPECT_EQ((*f)["input"], "U2");
+  EXPECT_NEAR((*f)["parameters"]["corner_rad_s"].get<double>(), 20.0, 2.0);
+  expect_gain(d);
+}
+
+TEST(Diagnose, SensorLagIsReportedOnceForItsOutput) {
+  Model t = simulation();
+  t.outputs[0].sensor = lag(12.0);
+  Json d = diagnose("sensor", t);
+  const Json* f = find(d, "missing_lag");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "output");
+  EXPECT_EQ((*f)["output"], "Y1");
+  EXPECT_TRUE((*f)["input"].is_null());
+  EXPECT_NEAR((*f)["parameters"]["corner_rad_s"].get<double>(), 12.0, 1.2);
+  EXPECT_EQ(d["findings"].size(), 1u) << d.dump(1);
+  expect_gain(d);
+}
+
+TEST(Diagnose, ActuatorCalibrationErrorIsReportedForItsInput) {
+  Model t = simulation();
+  for (auto& p : t.paths) if (p.input == "U2") p.tf.gain *= std::pow(10.0, 1.5 / 20);
+  Json d = diagnose("calibration", t);
+  const Json* f = find(d, "gain_mismatch");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "input");
+  EXPECT_EQ((*f)["input"], "U2");
+  EXPECT_NEAR((*f)["parameters"]["gain_db"].get<double>(), 1.5, 0.3);
+  EXPECT_EQ(d["findings"].size(), 1u) << d.dump(1);
+  expect_gain(d);
+}
+
+TEST(Diagnose, HysteresisInAnActuator) {
+  Model t = simulation();
+  t.inputs[0].nonlinearity.push_back({"hysteresis", 0.08});  // amplitude 0.2 (2 % of 10)
+  Json d = diagnose("hysteresis", t);
+  const Json* f = find(d, "hysteresis");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "input");
+  EXPECT_EQ((*f)["input"], "U1");
+  EXPECT_NEAR((*f)["parameters"]["width"].get<double>(), 0.08, 0.25 * 0.08);
+  expect_gain(d);
+}
+
+TEST(Diagnose, MissingResonance) {
+  Model t = simulation();
+  t.path("Y1", "U2")->tf.poles.push_back(Root::Pair(40.0, 0.1));
+  Json d = diagnose("resonance", t);
+  const Json* f = find(d, "missing_resonance");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["scope"], "path");
+  EXPECT_NEAR((*f)["parameters"]["wn_rad_s"].get<double>(), 40.0, 4.0);
+  EXPECT_NEAR((*f)["parameters"]["zeta"].get<double>(), 0.1, 0.03);
+  expect_gain(d);
+}
+
+TEST(Diagnose, MeasurementCouplingOfAnActuatorChannel) {
+  Model t = simulation();
+  t.inputs[0].measurement_coupling.push_back({"Y1", -0.1});  // U1's channel sees Y1, as Wf sees P3
+  Json d = diagnose("coupling", t);
+  const Json* f = find(d, "measurement_coupling");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["parameters"]["channel"], "U1");
+  EXPECT_EQ((*f)["parameters"]["coupled_to"], "Y1");
+  EXPECT_NEAR((*f)["parameters"]["gain"].get<double>(), -0.1, 0.02);
+  expect_gain(d);
+}
+
+TEST(Diagnose, TwoEffectsAtOnce) {
+  Model t = simulation();
+  t.path("Y1", "U1")->tf.delay_s = 0.008;
+  t.outputs[1].sensor = lag(15.0);
+  Json d = diagnose("two", t);
+  const Json* f1 = find(d, "time_delay");
+  const Json* f2 = find(d, "missing_lag");
+  ASSERT_TRUE(f1 && f2) << d.dump(1);
+  EXPECT_NEAR((*f1)["parameters"]["delay_s"].get<double>(), 0.008, 0.5e-3);
+  EXPECT_EQ((*f2)["scope"], "output");
+  EXPECT_EQ((*f2)["output"], "Y2");
+  EXPECT_NEAR((*f2)["parameters"]["corner_rad_s"].get<double>(), 15.0, 1.5);
+  expect_gain(d);
+}
