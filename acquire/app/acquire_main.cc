@@ -72,13 +72,14 @@ int main(int argc, char** argv) {
   std::string engine = "j85_95", inputs_csv, band = "0.04:100", url, ctl_url, run_id = "run", consumers_csv = "plant",
               summary;
   SteppedSineOptions so;
-  double amplitude_pct = -1, speed = 0, ready_timeout = 30, stall_timeout = 60;
+  double amplitude_pct = -1, amplitude_scale = 1, speed = 0, ready_timeout = 30, stall_timeout = 60;
   int block = 100, window = 2;
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
   app.add_option("--input", inputs_csv, "input(s) to excite, comma separated (default: all)");
   app.add_option("--band", band, "LO_HZ:HI_HZ")->capture_default_str();
   app.add_option("--points-per-decade", so.points_per_decade)->capture_default_str();
   app.add_option("--amplitude-pct", amplitude_pct, "amplitude, % of full scale (default: the input's test_amplitude_pct, else 2)");
+  app.add_option("--amplitude-scale", amplitude_scale, "multiplies every input's amplitude")->capture_default_str();
   app.add_option("--min-cycles", so.min_cycles)->capture_default_str();
   app.add_option("--min-integrate-s", so.min_integrate_s)->capture_default_str();
   app.add_option("--sample-rate", so.sample_rate_hz)->capture_default_str();
@@ -104,7 +105,7 @@ int main(int argc, char** argv) {
     if (window < 1) throw InputError("--window must be >= 1");
     if (speed < 0) throw InputError("--speed must be >= 0");
     std::vector<int> excite = select_inputs(model, inputs_csv);
-    auto cin = campaign_inputs(model, amplitude_pct);
+    auto cin = campaign_inputs(model, amplitude_pct, amplitude_scale);
     SteppedSineCampaign camp(cin, excite, plan_stepped_sine(so), so.sample_rate_hz, run_id);
 
     lcm::LCM lcm(resolve_lcm_url(url));

@@ -116,13 +116,16 @@ std::string run_diagnose(const DiagnoseCommand& c) {
     }
     m.out = c.out + "/measure";
     run_measure(m);
-    MeasureOptions v = m;  // an independent measurement for validation: another noise seed
+    // An independent measurement for validation, not used for fitting: another noise seed and a
+    // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
+    MeasureOptions v = m;
     v.seed = m.seed + 1;
+    v.amplitude_scale = 1.5 * m.amplitude_scale;
     v.out = c.out + "/measure/validation";
     run_measure(v);
     data_dir = m.out;
-    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) + "; validation seed " +
-                std::to_string(v.seed) + ")";
+    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) + "; validation: seed " +
+                std::to_string(v.seed) + " at 1.5x the amplitude)";
   }
   auto data = read_measured(data_dir);
   Diagnosis d = diagnose(sim, data);

@@ -24,6 +24,7 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--points-per-decade", m.points_per_decade)->capture_default_str();
   c->add_option("--amplitude-pct", m.amplitude_pct, "% of full scale (default: per input, 2)");
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
+  c->add_option("--amplitude-scale", m.amplitude_scale, "multiplies every input's amplitude")->capture_default_str();
   c->add_option("--speed", m.speed, "1 = real time, 0 = as fast as possible")->capture_default_str();
   c->add_option("--sample-rate", m.sample_rate_hz, "Hz")->capture_default_str();
   c->add_option("--min-cycles", m.min_cycles)->capture_default_str();

@@ -146,6 +146,8 @@ MeasureResult run_measure(const MeasureOptions& o) {
                                   "--min-cycles", std::to_string(o.min_cycles),
                                   "--min-integrate-s", std::to_string(o.min_integrate_s),
                                   "--summary", o.out + "/acquire.json"};
+  acq.push_back("--amplitude-scale");
+  acq.push_back(std::to_string(o.amplitude_scale));
   if (o.amplitude_pct >= 0) {
     acq.push_back("--amplitude-pct");
     acq.push_back(std::to_string(o.amplitude_pct));

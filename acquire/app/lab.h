@@ -15,6 +15,7 @@ struct MeasureOptions {
   std::string band = "0.04:100";
   int points_per_decade = 10;
   double amplitude_pct = -1;  // < 0: each input's default
+  double amplitude_scale = 1.0;  // multiplies every input's amplitude
   uint64_t seed = 1;
   std::string out;
   double speed = 0;

@@ -55,10 +55,11 @@ std::vector<int> select_inputs(const Model& m, const std::string& csv) {
   return out;
 }
 
-std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct) {
+std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct, double scale) {
+  if (!(scale > 0)) throw InputError("--amplitude-scale must be > 0");
   std::vector<CampaignInput> v;
   for (const auto& in : m.inputs) {
-    double pct = amplitude_pct >= 0 ? amplitude_pct : (in.test_amplitude_pct > 0 ? in.test_amplitude_pct : 2.0);
+    double pct = scale * (amplitude_pct >= 0 ? amplitude_pct : (in.test_amplitude_pct > 0 ? in.test_amplitude_pct : 2.0));
     if (!(pct > 0) || pct > 50) throw InputError("amplitude " + std::to_string(pct) + " % of full scale must be in (0, 50]");
     v.push_back({in.name, m.dc(in.name), pct / 100.0 * in.full_scale});
   }

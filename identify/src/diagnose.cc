@@ -598,7 +598,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       if (f.cause == "pole_shift") ex << "the simulated pole at " << fmt(f.parameters["from_rad_s"]) << " rad/s sits at " << fmt(f.parameters["to_rad_s"]) << " rad/s in the data";
       if (f.cause == "gain_mismatch") ex << "flat gain offset of " << fmt(f.parameters["gain_db"]) << " dB, no phase";
       if (f.scope == "output") ex << "; common to every path into " << f.output << ": its sensor";
-      if (f.scope == "input") ex << "; common to every path from " << f.input << ": its actuator or calibration";
+      const bool own = f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input;
+      if (f.scope == "input") ex << (own ? "; in the actuator's own response " + f.pairs[0]
+                                         : "; common to every path from " + f.input + ": its actuator or calibration");
       if (f.scope == "plant") ex << "; common to every path: a plant state";
       f.explanation = ex.str();
     }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <sys/wait.h>
 
@@ -66,14 +67,16 @@ int run(const std::string& cmd) {
 }
 
 // Runs the diagnosis of `truth` against the simulation; returns diagnosis.json.
-Json diagnose(const std::string& name, const Model& truth) {
+Json diagnose(const std::string& name, const Model& truth, bool plots = false, std::string* out_dir = nullptr) {
   const std::string d = (fs::temp_directory_path() / ("fralab_diag_" + name + "_" + std::to_string(getpid()))).string();
   fs::remove_all(d);
   fs::create_directories(d);
   save_model(d + "/sim.json", simulation());
   save_model(d + "/truth.json", truth);
   const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
-                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 --no-plots --out " + d + "/out";
+                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 " + (plots ? "" : "--no-plots ") +
+                          "--out " + d + "/out";
+  if (out_dir) *out_dir = d + "/out";
   EXPECT_EQ(run(cmd), 0) << cmd << "\n" << d;
   return json_load_file(d + "/out/diagnosis.json");
 }
@@ -98,7 +101,16 @@ TEST(Diagnose, NothingHiddenNoFinding) {
 TEST(Diagnose, DelayInOnePath) {
   Model t = simulation();
   t.path("Y1", "U1")->tf.delay_s = 0.012;
-  Json d = diagnose("delay", t);
+  std::string dir;
+  Json d = diagnose("delay", t, true, &dir);
+  // The report: findings in words and a Bode plot per pair, rendered by gnuplot.
+  std::ifstream md(dir + "/report.md");
+  std::string report((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("**time_delay** (path, input U1, output Y1)"), std::string::npos) << report;
+  EXPECT_NE(report.find("![U1:Y1](plots/U1_Y1.png)"), std::string::npos);
+  EXPECT_GT(fs::file_size(dir + "/plots/U1_Y1.png"), 10000u);
+  Json ext = json_load_file(dir + "/extended_model.json");
+  EXPECT_NO_THROW(parse_model(ext, "extended_model.json"));
   const Json* f = find(d, "time_delay");
   ASSERT_TRUE(f) << d.dump(1);
   EXPECT_EQ((*f)["scope"], "path");
