@@ -211,3 +211,42 @@ TEST(Diagnose, TwoEffectsAtOnce) {
   EXPECT_NEAR((*f2)["parameters"]["corner_rad_s"].get<double>(), 15.0, 1.5);
   expect_gain(d);
 }
+
+// The default demonstration: the J85 95 % engine against the simulation the report compared with
+// must give the report's headline findings with its numbers (5 points per decade to keep CI short).
+TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
+  const std::string d = (fs::temp_directory_path() / ("fralab_diag_j85_" + std::to_string(getpid()))).string();
+  fs::remove_all(d);
+  const std::string cmd = kBin + "/fralab diagnose --simulation j85_95_sim --engine j85_95 --points-per-decade 5 --out " + d;
+  ASSERT_EQ(run(cmd), 0) << cmd;
+  Json j = json_load_file(d + "/diagnosis.json");
+  auto get = [&](const std::string& cause, const std::string& in, const std::string& out) -> const Json* {
+    for (const auto& f : j["findings"]) {
+      if (f["cause"] == cause && f["input"] == in && (out.empty() ? f["output"].is_null() : f["output"] == out)) return &f;
+    }
+    return nullptr;
+  };
+  for (const char* o : {"P3", "P5", "DPP3"}) {  // the 11 ms combustion delay in every pressure response to Wf
+    const Json* f = get("time_delay", "Wf", o);
+    ASSERT_TRUE(f) << o << j.dump(1);
+    EXPECT_NEAR((*f)["parameters"]["delay_s"].get<double>(), 0.011, 0.5e-3);
+  }
+  const Json* lag = get("missing_lag", "Wf", "N");  // the extra spool lag
+  ASSERT_TRUE(lag);
+  EXPECT_NEAR((*lag)["parameters"]["corner_rad_s"].get<double>(), 76.7, 7.67);
+  const Json* a8n = get("missing_lag", "A8", "N");
+  ASSERT_TRUE(a8n);
+  EXPECT_NEAR((*a8n)["parameters"]["corner_rad_s"].get<double>(), 53.9, 5.39);
+  struct Shift { const char* in; double from, to; };
+  for (const Shift& s : {Shift{"A8", 3.142, 38.2}, Shift{"BLD", 2.0, 35.8}, Shift{"IGV", 5.0, 19.9}}) {
+    const Json* f = get("pole_shift", s.in, "");  // the geometry actuators: much faster than modelled
+    ASSERT_TRUE(f) << s.in;
+    EXPECT_NEAR((*f)["parameters"]["from_rad_s"].get<double>(), s.from, 0.01 * s.from);
+    EXPECT_NEAR((*f)["parameters"]["to_rad_s"].get<double>(), s.to, 0.1 * s.to);
+  }
+  const Json* h = get("hysteresis", "A8", "");  // -30 degrees at +-5 %
+  ASSERT_TRUE(h);
+  EXPECT_NEAR((*h)["parameters"]["width"].get<double>(), 9.24, 0.25 * 9.24);
+  EXPECT_LT(j["summary"]["error_after"].get<double>(), 0.2 * j["summary"]["error_before"].get<double>());
+  EXPECT_LT(j["summary"]["validation_error_after"].get<double>(), 0.2 * j["summary"]["validation_error_before"].get<double>());
+}
