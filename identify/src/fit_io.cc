@@ -1,5 +1,7 @@
 #include "fralab/identify/fit_io.h"
 
+#include "fralab/identify/state_model.h"
+
 #include <filesystem>
 #include <fstream>
 
@@ -44,11 +46,19 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   }
   TransferMatrix m = build_transfer_matrix(entries);
   Json j = transfer_matrix_json(m);
+  std::map<std::string, std::vector<FrdPoint>> data;
+  for (const Frd& f : curves) data[f.pair] = f.points;
+  StateModel sm = build_state_model(m, data);
+  j["state_model"] = state_model_json(sm);
   j["actuators"] = actuators;
   j["title"] = title;
   json_save_file(dir + "/transfer_matrix.json", j);
   std::ofstream md(dir + "/transfer_matrix.md");
   md << transfer_matrix_markdown(m, title);
+  md << "\n## State model\n\nOrder " << sm.order << " (one state per distinct real pole, two per pair; "
+     << "residue matrices reduced to rank one); error against the data (rms |ln(G_model/G_measured)|): "
+     << sm.error << " in total.\n\n| path | error |\n|---|---|\n";
+  for (const auto& [k, e] : sm.path_error) md << "| " << k << " | " << e << " |\n";
   md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";
   for (const auto& a : actuators) {
     md << "| " << a["pair"].get<std::string>() << " | " << a["text"].get<std::string>() << " | "

@@ -31,14 +31,18 @@ struct Basis {
   int order = 0;
 };
 
+// The points are +-j w_i (conjugate pairs) with equal weights, so for real-coefficient polynomials
+// the inner product over all 2M points is 2 Re of the sum over the first M: the process runs on the
+// first M points only (z: the M points j w_i / ws; sw: their weights).
 Basis arnoldi(const std::vector<C>& z, const std::vector<double>& sw, int order) {
   const int P = int(z.size());
   Basis b;
   b.order = order;
   b.Qw.resize(P, order + 1);
   b.H = MatR::Zero(order + 1, std::max(order, 1));
+  auto dot = [&](int j, const Eigen::VectorXcd& v) { return 2.0 * b.Qw.col(j).dot(v).real(); };
   double nrm = 0;
-  for (double s : sw) nrm += s * s;
+  for (double s : sw) nrm += 2 * s * s;
   b.nu0 = std::sqrt(nrm);
   for (int i = 0; i < P; ++i) b.Qw(i, 0) = sw[i] / b.nu0;
   for (int k = 0; k < order; ++k) {
@@ -46,12 +50,12 @@ Basis arnoldi(const std::vector<C>& z, const std::vector<double>& sw, int order)
     for (int i = 0; i < P; ++i) v(i) = z[i] * b.Qw(i, k);
     for (int pass = 0; pass < 2; ++pass) {  // re-orthogonalise: classical Gram-Schmidt twice
       for (int j = 0; j <= k; ++j) {
-        C h = b.Qw.col(j).dot(v);  // conj(q_j) . v
-        b.H(j, k) += h.real();
-        v -= h.real() * b.Qw.col(j);
+        const double h = dot(j, v);
+        b.H(j, k) += h;
+        v -= h * b.Qw.col(j);
       }
     }
-    double hn = v.norm();
+    const double hn = std::sqrt(2.0) * v.norm();
     b.H(k + 1, k) = hn;
     b.Qw.col(k + 1) = v / hn;
   }
@@ -128,19 +132,16 @@ struct Sk {
 // SK iteration at orders (n, m) on data g (delay already removed), scaled frequency.
 Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const FitOptions& o) {
   const int M = int(d.w.size());
-  std::vector<C> z(2 * M);
-  for (int i = 0; i < M; ++i) {
-    z[i] = C(0, d.w[i] / ws);
-    z[M + i] = std::conj(z[i]);
-  }
+  std::vector<C> z(M);
+  for (int i = 0; i < M; ++i) z[i] = C(0, d.w[i] / ws);
   std::vector<double> phi(d.W);
   std::vector<C> dprev(M, 1.0);
   Sk r;
   double best_sse = 1e300;
   const int order = std::max(n, m);
   for (int it = 1; it <= o.max_iterations; ++it) {
-    std::vector<double> sw(2 * M);
-    for (int i = 0; i < M; ++i) sw[i] = sw[M + i] = std::sqrt(phi[i]);
+    std::vector<double> sw(M);
+    for (int i = 0; i < M; ++i) sw[i] = std::sqrt(phi[i]);
     Basis b = arnoldi(z, sw, order);
     MatR AN(2 * M, m + 1), AD(2 * M, n + 1);
     for (int i = 0; i < M; ++i) {
@@ -163,7 +164,7 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     MatR R = qd.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
     Eigen::JacobiSVD<MatR> svd(R, Eigen::ComputeFullV);
     VecR a = svd.matrixV().col(n);
-    VecR bb = -AN.colPivHouseholderQr().solve(AD * a);
+    VecR bb = -qr.solve(AD * a);  // AN's columns are orthonormal-ish (Arnoldi): its QR suffices
     const C d0 = poly_at(b, a, 0.0), n0 = poly_at(b, bb, 0.0);
     if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) return r;  // best so far, if any
     std::vector<C> dk(M);
