@@ -11,6 +11,7 @@
 #include <iostream>
 #include <map>
 #include <set>
+#include <memory>
 #include <thread>
 
 #include "fralab/acquire/campaign.h"
@@ -74,9 +75,11 @@ int main(int argc, char** argv) {
   SteppedSineOptions so;
   double amplitude_pct = -1, amplitude_scale = 1, speed = 0, ready_timeout = 30, stall_timeout = 60;
   int block = 100, window = 2;
+  std::string excitation = "stepped";
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
   app.add_option("--input", inputs_csv, "input(s) to excite, comma separated (default: all)");
   app.add_option("--band", band, "LO_HZ:HI_HZ")->capture_default_str();
+  app.add_option("--excitation", excitation, "stepped (stepped sine) or sweep (continuous log sweep)")->capture_default_str();
   app.add_option("--points-per-decade", so.points_per_decade)->capture_default_str();
   app.add_option("--amplitude-pct", amplitude_pct, "amplitude, % of full scale (default: the input's test_amplitude_pct, else 2)");
   app.add_option("--amplitude-scale", amplitude_scale, "multiplies every input's amplitude")->capture_default_str();
@@ -106,7 +109,15 @@ int main(int argc, char** argv) {
     if (speed < 0) throw InputError("--speed must be >= 0");
     std::vector<int> excite = select_inputs(model, inputs_csv);
     auto cin = campaign_inputs(model, amplitude_pct, amplitude_scale);
-    SteppedSineCampaign camp(cin, excite, plan_stepped_sine(so), so.sample_rate_hz, run_id);
+    std::unique_ptr<Campaign> campaign;
+    if (excitation == "stepped") {
+      campaign = std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so), so.sample_rate_hz, run_id);
+    } else if (excitation == "sweep") {
+      campaign = std::make_unique<SweepCampaign>(cin, excite, so, run_id);
+    } else {
+      throw InputError("--excitation \"" + excitation + "\": stepped or sweep");
+    }
+    const Campaign& camp = *campaign;
 
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));

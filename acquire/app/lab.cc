@@ -140,6 +140,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
   std::vector<std::string> acq = {module_path("fralab-acquire"), "--engine", engine_file, "--lcm-url", url,
                                   "--run-id", r.run_id, "--input", inputs_csv, "--band", o.band,
+                                  "--excitation", o.excitation,
                                   "--points-per-decade", std::to_string(o.points_per_decade),
                                   "--speed", std::to_string(o.speed), "--consumers", consumers_csv,
                                   "--sample-rate", std::to_string(o.sample_rate_hz),

@@ -131,4 +131,98 @@ void SteppedSineCampaign::fill(int64_t start, int n, std::vector<std::vector<dou
   }
 }
 
+SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& o,
+                             std::string run_id)
+    : inputs_(std::move(inputs)), fs_(o.sample_rate_hz) {
+  const auto steps = plan_stepped_sine(o);  // validates; gives the centres and cycle counts
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  const double r = steps.size() > 1 ? steps[1].f_hz / steps[0].f_hz : std::pow(10.0, 1.0 / o.points_per_decade);
+  std::vector<std::string> names;
+  for (const auto& in : inputs_) names.push_back(in.name);
+  int64_t n = 0, seq = 0;
+  double phi = 0.0;
+  const int n_steps = int(steps.size() * excite.size());
+  int global = 0;
+  for (int i : excite) {
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    std::vector<double> amps(inputs_.size(), 0.0);
+    amps[i] = inputs_[i].amplitude;
+    StatusEvent e;
+    e.run_id = run_id;
+    e.sample_rate_hz = fs_;
+    e.excitation = "sweep";
+    e.n_steps = n_steps;
+    e.inputs = names;
+    e.amplitudes = amps;
+    // Settle at the sweep's starting frequency.
+    const double f0 = steps[0].f_hz / std::sqrt(r);
+    const int64_t settle = steps[0].settle_samples;
+    segs_.push_back({i, n, settle, f0, 0.0, phi});
+    e.seq = seq++;
+    e.state = "settle";
+    e.step = global;
+    e.sample = n;
+    e.frequency_hz = f0;
+    e.ref_phase_rad = phi;
+    e.n_samples = settle;
+    events_.push_back(e);
+    phi = std::fmod(phi + 2 * std::numbers::pi * f0 * settle / fs_, 2 * std::numbers::pi);
+    n += settle;
+    for (const SineStep& st : steps) {
+      const double fa = st.f_hz / std::sqrt(r);
+      const double T = st.n_cycles * std::log(r) / (fa * (r - 1));  // N cycles while f rises by r
+      const int64_t L = std::max<int64_t>(1, std::llround(T * fs_));
+      const double beta = std::log(r) / (double(L) / fs_);
+      segs_.push_back({i, n, L, fa, beta, phi});
+      e.seq = seq++;
+      e.state = "integrate";
+      e.step = global++;
+      e.sample = n;
+      e.frequency_hz = st.f_hz;
+      e.ref_phase_rad = phi;
+      e.n_cycles = st.n_cycles;
+      e.n_samples = L;
+      events_.push_back(e);
+      const double t = double(L) / fs_;
+      phi = std::fmod(phi + 2 * std::numbers::pi * fa * std::expm1(beta * t) / beta, 2 * std::numbers::pi);
+      n += L;
+    }
+  }
+  total_ = n;
+  StatusEvent done;
+  done.run_id = run_id;
+  done.seq = seq++;
+  done.sample_rate_hz = fs_;
+  done.excitation = "sweep";
+  done.state = "done";
+  done.sample = n;
+  done.n_steps = n_steps;
+  done.step = n_steps;
+  done.inputs = names;
+  done.amplitudes.assign(names.size(), 0.0);
+  events_.push_back(done);
+}
+
+void SweepCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+                         std::vector<double>& ref_freq) const {
+  cmd.assign(inputs_.size(), std::vector<double>(n));
+  ref_phase.assign(n, 0.0);
+  ref_freq.assign(n, 0.0);
+  for (size_t i = 0; i < inputs_.size(); ++i) std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
+  auto it = std::upper_bound(segs_.begin(), segs_.end(), start, [](int64_t v, const Segment& s) { return v < s.start; });
+  size_t si = it == segs_.begin() ? 0 : size_t(it - segs_.begin() - 1);
+  for (int k = 0; k < n; ++k) {
+    const int64_t m = start + k;
+    if (m >= total_ || segs_.empty()) continue;
+    while (si + 1 < segs_.size() && segs_[si + 1].start <= m) ++si;
+    const Segment& s = segs_[si];
+    const double t = double(m - s.start) / fs_;
+    const double phi = s.beta == 0.0 ? s.phi0 + 2 * std::numbers::pi * s.fa * t
+                                     : s.phi0 + 2 * std::numbers::pi * s.fa * std::expm1(s.beta * t) / s.beta;
+    ref_phase[k] = phi;
+    ref_freq[k] = s.fa * std::exp(s.beta * t);
+    cmd[s.input][k] = inputs_[s.input].dc + inputs_[s.input].amplitude * std::sin(phi);
+  }
+}
+
 }  // namespace fralab

@@ -79,13 +79,16 @@ void PairAnalyzer::on_block(const Block& b) {
   if (end - base_ > int64_t(x1_.size())) {
     x1_.resize(end - base_, 0.0);
     x2_.resize(end - base_, 0.0);
+    ref_.resize(end - base_, NAN);
     have_.resize(end - base_, 0);
   }
+  const int cr = b.channel_index("ref_phase");  // the generator's reference (sweeps use it)
   for (int k = 0; k < b.n_samples; ++k) {
     const int64_t n = b.start_sample + k - base_;
     if (n < 0) continue;  // already discarded
     x1_[n] = b.at(c1, k);
     x2_[n] = b.at(c2, k);
+    if (cr >= 0) ref_[n] = b.at(cr, k);
     have_[n] = 1;
   }
   max_seen_ = std::max(max_seen_, end);
@@ -165,6 +168,7 @@ void PairAnalyzer::trim() {
     const int64_t drop = keep - base_;
     x1_.erase(x1_.begin(), x1_.begin() + drop);
     x2_.erase(x2_.begin(), x2_.begin() + drop);
+    ref_.erase(ref_.begin(), ref_.begin() + drop);
     have_.erase(have_.begin(), have_.begin() + drop);
     base_ = keep;
   }
@@ -176,7 +180,24 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   const double* a = x1_.data() + (st.sample - base_);
   const double* b = x2_.data() + (st.sample - base_);
   const double dphi = 2 * std::numbers::pi * st.frequency_hz / st.sample_rate_hz;
-  Reference ref = make_reference(L, st.ref_phase_rad, dphi, 1);
+  // A stepped sine's reference is the status's phase and frequency; a sweep's is the recorded
+  // per-sample reference phase (tape channel ref_phase).
+  const bool sweep = st.excitation == "sweep";
+  const double* rp = ref_.data() + (st.sample - base_);
+  if (sweep) {
+    for (size_t k = 0; k < L; ++k) {
+      if (std::isnan(rp[k])) {
+        FrdPoint bad;
+        bad.w = 2 * std::numbers::pi * st.frequency_hz;
+        bad.step = st.step;
+        bad.valid = false;
+        bad.note = "sweep window without the ref_phase channel on the tape";
+        return bad;
+      }
+    }
+  }
+  auto reference = [&](int h) { return sweep ? make_reference(rp, L, h) : make_reference(L, st.ref_phase_rad, dphi, h); };
+  Reference ref = reference(1);
   // Window means (exactly DC + noise mean: the window holds whole cycles), removed for the blocks.
   double m1 = 0, m2 = 0;
   for (size_t k = 0; k < L; ++k) {
@@ -223,7 +244,7 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   p.sigma = std::sqrt(se / (double(K) * (K - 1))) / std::abs(p1);
   p.coherence = (s11 > 0 && s22 > 0) ? std::norm(s12) / (s11 * s22) : 0.0;
   for (int h : {2, 3}) {
-    Reference rh = make_reference(L, st.ref_phase_rad, dphi, h);
+    Reference rh = reference(h);
     double rel = std::abs(fourier_phasor(d2.data(), rh, 0, L)) / std::max(std::abs(p2), 1e-300);
     (h == 2 ? p.h2_rel : p.h3_rel) = rel;
   }

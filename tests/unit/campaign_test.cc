@@ -78,3 +78,42 @@ TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
   EXPECT_EQ(c.events().back().state, "done");
   EXPECT_EQ(c.events().back().sample, c.total_samples());
 }
+
+TEST(Sweep, PhaseAndFrequencyAreContinuousAndWindowsTileTheSweep) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
+  SteppedSineOptions o;
+  o.f_lo_hz = 0.5;
+  o.f_hi_hz = 20;
+  o.points_per_decade = 5;
+  SweepCampaign c(campaign_inputs(m, 2.0), select_inputs(m, "Wf"), o, "r");
+  std::vector<std::vector<double>> cmd;
+  std::vector<double> ph, fr;
+  c.fill(0, int(c.total_samples()), cmd, ph, fr);
+  int integrates = 0;
+  int64_t expect_start = -1;
+  for (const auto& e : c.events()) {
+    if (e.state != "integrate") continue;
+    EXPECT_EQ(e.excitation, "sweep");
+    if (expect_start >= 0) {
+      EXPECT_EQ(e.sample, expect_start);  // windows tile the sweep
+    }
+    expect_start = e.sample + e.n_samples;
+    // The window holds its whole cycles (to within a sample's phase) and its centre frequency lies
+    // inside it.
+    const double cycles = (ph[e.sample + e.n_samples - 1] - ph[e.sample]) / (2 * std::numbers::pi);
+    EXPECT_NEAR(cycles, e.n_cycles, 0.05) << e.step;
+    EXPECT_LT(fr[e.sample], e.frequency_hz);
+    EXPECT_GT(fr[e.sample + e.n_samples - 1], e.frequency_hz);
+    ++integrates;
+  }
+  EXPECT_EQ(integrates, 9);
+  const double amp = 0.02 * 3000;
+  for (size_t k = 1; k < ph.size(); ++k) {
+    // The phase advances by 2 pi f / fs each sample (continuous modulo 2 pi), the frequency has no
+    // jumps, and neither has the command.
+    const double d = std::remainder(ph[k] - ph[k - 1], 2 * std::numbers::pi);
+    ASSERT_NEAR(d, 2 * std::numbers::pi * fr[k - 1] / 1000.0, 0.01 * d + 1e-9) << k;
+    ASSERT_LE(std::abs(fr[k] - fr[k - 1]), 0.01 * fr[k - 1]) << k;
+    ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * fr[k] / 1000.0 * 1.01) << k;
+  }
+}

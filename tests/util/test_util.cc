@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <numbers>
+#include <memory>
 #include <random>
 
 #include "fralab/acquire/model_info.h"
@@ -48,11 +49,17 @@ Model siso_model(const Tf& path, const Tf* actuator, const Tf* sensor, double no
 }
 
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
-                      bool noise, uint64_t seed, int block, double amplitude_pct) {
+                      bool noise, uint64_t seed, int block, double amplitude_pct, bool sweep) {
   std::string csv;
   for (const auto& e : excite) csv += (csv.empty() ? "" : ",") + e;
-  SteppedSineCampaign camp(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), plan_stepped_sine(so),
-                           so.sample_rate_hz, "test");
+  std::unique_ptr<Campaign> owner;
+  if (sweep) {
+    owner = std::make_unique<SweepCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), so, "test");
+  } else {
+    owner = std::make_unique<SteppedSineCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv),
+                                                  plan_stepped_sine(so), so.sample_rate_hz, "test");
+  }
+  const Campaign& camp = *owner;
   SimulatorOptions opt;
   opt.sample_rate_hz = so.sample_rate_hz;
   opt.noise = noise;
@@ -75,12 +82,14 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, co
     b.final_block = s0 + n >= camp.total_samples();
     for (const auto& in : m.inputs) b.channels.push_back("u_" + in.name);
     for (const auto& c : sim.channel_names()) b.channels.push_back(c);
+    b.channels.push_back("ref_phase");
     b.samples.resize(b.channels.size() * n);
     for (int k = 0; k < n; ++k) {
       for (int i = 0; i < ni; ++i) u[i] = cmd[i][k];
       sim.step(u.data(), y.data());
       for (int i = 0; i < ni; ++i) b.at(i, k) = u[i];
       for (size_t c = 0; c < y.size(); ++c) b.at(ni + int(c), k) = y[c];
+      b.at(int(b.channels.size()) - 1, k) = ph[k];
     }
     r.blocks.push_back(std::move(b));
   }

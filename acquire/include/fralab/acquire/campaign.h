@@ -53,22 +53,35 @@ struct CampaignInput {
   double amplitude = 0.0;  // peak, input units, when excited
 };
 
+/// What the oscillator does over a whole run, sample-exact: commands, reference, status events.
+class Campaign {
+ public:
+  virtual ~Campaign() = default;
+  virtual int64_t total_samples() const = 0;
+  virtual double sample_rate_hz() const = 0;
+  /// Status events in sample order, ending with "done".
+  virtual const std::vector<StatusEvent>& events() const = 0;
+  /// Fills commands for samples [start, start + n): cmd[i][k] absolute command of input i,
+  /// ref_phase[k] (radians, continuous within a segment) and ref_freq_hz[k] (0 when idle).
+  virtual void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+                    std::vector<double>& ref_freq) const = 0;
+  virtual const std::vector<CampaignInput>& inputs() const = 0;
+};
+
 /// The whole run: every excited input through every step, then "done". Sample-exact.
-class SteppedSineCampaign {
+class SteppedSineCampaign : public Campaign {
  public:
   /// `inputs`: every plant input (dc values); `excite`: indices into `inputs`, in test order.
   SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
                       std::vector<SineStep> steps, double sample_rate_hz, std::string run_id);
 
-  int64_t total_samples() const { return total_; }
-  double sample_rate_hz() const { return fs_; }
+  int64_t total_samples() const override { return total_; }
+  double sample_rate_hz() const override { return fs_; }
   /// Status events in sample order: settle and integrate per step and input, then done.
-  const std::vector<StatusEvent>& events() const { return events_; }
-  /// Fills commands for samples [start, start + n): cmd[i][k] absolute command of input i,
-  /// ref_phase[k] (radians, continuous within a step) and ref_freq_hz[k] (0 when idle).
+  const std::vector<StatusEvent>& events() const override { return events_; }
   void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-            std::vector<double>& ref_freq) const;
-  const std::vector<CampaignInput>& inputs() const { return inputs_; }
+            std::vector<double>& ref_freq) const override;
+  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
 
  private:
   struct Segment {
@@ -76,6 +89,37 @@ class SteppedSineCampaign {
     SineStep step;
     int64_t start;  // settle start
     double phi0;    // phase at start
+  };
+  std::vector<CampaignInput> inputs_;
+  std::vector<Segment> segs_;
+  std::vector<StatusEvent> events_;
+  double fs_;
+  int64_t total_ = 0;
+};
+
+/// Continuous logarithmic sweep (as the BAFCO drove the engine): per excited input, a settle at the
+/// lowest frequency (as a stepped-sine settle), then one continuous sweep whose frequency rises by
+/// r = 10^(1/points_per_decade) over each analysis window of N whole reference cycles
+/// (N = max(min_cycles, ceil(min_integrate_s f))): within window j, f = f_a r^(c/N) after c cycles,
+/// f_a = f_j / sqrt(r), so phase and frequency are continuous and the windows tile the sweep. Each
+/// window is an "integrate" status (excitation "sweep", frequency_hz its geometric centre f_j); the
+/// analyser integrates against the recorded per-sample reference phase (tape channel ref_phase).
+class SweepCampaign : public Campaign {
+ public:
+  SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& opt,
+                std::string run_id);
+  int64_t total_samples() const override { return total_; }
+  double sample_rate_hz() const override { return fs_; }
+  const std::vector<StatusEvent>& events() const override { return events_; }
+  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+            std::vector<double>& ref_freq) const override;
+  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
+
+ private:
+  struct Segment {
+    int input;
+    int64_t start, length;
+    double fa, beta, phi0;  // f(t) = fa e^{beta t}; beta = 0: a constant-frequency settle
   };
   std::vector<CampaignInput> inputs_;
   std::vector<Segment> segs_;

@@ -2,7 +2,8 @@
 //
 // Input: tape blocks (any subset of channels; E1 and E2 must be among them) and excitation status
 // events. Each "integrate" status defines a window [sample, sample + n_samples) of whole reference
-// cycles; when both channels cover it, the window gives one point:
+// cycles (a stepped sine: reference from the status's phase and frequency; a sweep: the tape's
+// per-sample ref_phase channel); when both channels cover it, the window gives one point:
 //   ratio R = P2 / P1 (fourier_filter.h), w = 2 pi f, mag = |R|, phase_deg = arg R in degrees;
 //   sigma: the window is cut into K = min(8, n_cycles) blocks after removing each channel's window
 //          mean; with block phasors p1_b, p2_b and residuals e_b = p2_b - R p1_b,
@@ -73,7 +74,7 @@ class PairAnalyzer {
   std::vector<FrdPoint> points_, fresh_;
   // sample store from base_
   int64_t base_ = 0;
-  std::vector<double> x1_, x2_;
+  std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)
   std::vector<char> have_;
   int64_t max_seen_ = -1;
   int64_t blocks_seen_ = 0;
