@@ -50,165 +50,49 @@ double plan_duration_s(const std::vector<SineStep>& steps, double fs) {
   return n / fs;
 }
 
-SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
-                                         std::vector<SineStep> steps, double fs, std::string run_id)
-    : inputs_(std::move(inputs)), fs_(fs) {
-  if (steps.empty()) throw InputError("campaign: no frequency steps");
-  if (excite.empty()) throw InputError("campaign: no input to excite");
-  std::vector<std::string> names;
-  for (const auto& in : inputs_) names.push_back(in.name);
-  int64_t n = 0;
-  double phi = 0.0;
-  int64_t seq = 0;
-  const int n_steps = int(steps.size() * excite.size());
-  int global = 0;
-  for (int i : excite) {
-    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
-    std::vector<double> amps(inputs_.size(), 0.0);
-    amps[i] = inputs_[i].amplitude;
-    for (const SineStep& s : steps) {
-      segs_.push_back({i, s, n, phi});
-      const double dphi = 2 * std::numbers::pi * s.f_hz / fs;
-      StatusEvent e;
-      e.run_id = run_id;
-      e.sample_rate_hz = fs;
-      e.step = global;
-      e.n_steps = n_steps;
-      e.frequency_hz = s.f_hz;
-      e.n_cycles = s.n_cycles;
-      e.inputs = names;
-      e.amplitudes = amps;
-      e.seq = seq++;
-      e.state = "settle";
-      e.sample = n;
-      e.ref_phase_rad = phi;
-      e.n_samples = s.settle_samples;
-      events_.push_back(e);
-      e.seq = seq++;
-      e.state = "integrate";
-      e.sample = n + s.settle_samples;
-      e.ref_phase_rad = std::fmod(phi + dphi * double(s.settle_samples), 2 * std::numbers::pi);
-      e.n_samples = s.integrate_samples;
-      events_.push_back(e);
-      n += s.settle_samples + s.integrate_samples;
-      phi = std::fmod(phi + dphi * double(s.settle_samples + s.integrate_samples), 2 * std::numbers::pi);
-      ++global;
-    }
-  }
-  total_ = n;
-  StatusEvent done;
-  done.run_id = run_id;
-  done.seq = seq++;
-  done.sample_rate_hz = fs;
-  done.state = "done";
-  done.sample = n;
-  done.n_steps = n_steps;
-  done.step = n_steps;
-  done.inputs = names;
-  done.amplitudes.assign(names.size(), 0.0);
-  events_.push_back(done);
+double SegmentCampaign::add_segment(int input, int64_t length, double fa, double beta, double phi0) {
+  if (input < 0 || input >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+  segs_.push_back({input, total_, length, fa, beta, phi0});
+  total_ += length;
+  const double t = double(length) / fs_;
+  const double cycles = beta == 0.0 ? fa * t : fa * std::expm1(beta * t) / beta;
+  return std::fmod(phi0 + 2 * std::numbers::pi * cycles, 2 * std::numbers::pi);
 }
 
-void SteppedSineCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
-                               std::vector<double>& ref_phase, std::vector<double>& ref_freq) const {
-  cmd.assign(inputs_.size(), std::vector<double>(n));
-  ref_phase.assign(n, 0.0);
-  ref_freq.assign(n, 0.0);
-  for (size_t i = 0; i < inputs_.size(); ++i) std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
-  // Segment of the first sample, then walk.
-  auto it = std::upper_bound(segs_.begin(), segs_.end(), start,
-                             [](int64_t v, const Segment& s) { return v < s.start; });
-  size_t si = it == segs_.begin() ? 0 : size_t(it - segs_.begin() - 1);
-  for (int k = 0; k < n; ++k) {
-    const int64_t m = start + k;
-    if (m >= total_ || segs_.empty()) continue;
-    while (si + 1 < segs_.size() && segs_[si + 1].start <= m) ++si;
-    const Segment& s = segs_[si];
-    const double phi = s.phi0 + 2 * std::numbers::pi * s.step.f_hz * double(m - s.start) / fs_;
-    ref_phase[k] = phi;
-    ref_freq[k] = s.step.f_hz;
-    cmd[s.input][k] = inputs_[s.input].dc + inputs_[s.input].amplitude * std::sin(phi);
-  }
+std::vector<std::string> SegmentCampaign::names() const {
+  std::vector<std::string> v;
+  for (const auto& in : inputs_) v.push_back(in.name);
+  return v;
 }
 
-SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& o,
-                             std::string run_id)
-    : inputs_(std::move(inputs)), fs_(o.sample_rate_hz) {
-  const auto steps = plan_stepped_sine(o);  // validates; gives the centres and cycle counts
-  if (excite.empty()) throw InputError("campaign: no input to excite");
-  const double r = steps.size() > 1 ? steps[1].f_hz / steps[0].f_hz : std::pow(10.0, 1.0 / o.points_per_decade);
-  std::vector<std::string> names;
-  for (const auto& in : inputs_) names.push_back(in.name);
-  int64_t n = 0, seq = 0;
-  double phi = 0.0;
-  const int n_steps = int(steps.size() * excite.size());
-  int global = 0;
-  for (int i : excite) {
-    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
-    std::vector<double> amps(inputs_.size(), 0.0);
-    amps[i] = inputs_[i].amplitude;
-    StatusEvent e;
-    e.run_id = run_id;
-    e.sample_rate_hz = fs_;
-    e.excitation = "sweep";
-    e.n_steps = n_steps;
-    e.inputs = names;
-    e.amplitudes = amps;
-    // Settle at the sweep's starting frequency.
-    const double f0 = steps[0].f_hz / std::sqrt(r);
-    const int64_t settle = steps[0].settle_samples;
-    segs_.push_back({i, n, settle, f0, 0.0, phi});
-    e.seq = seq++;
-    e.state = "settle";
-    e.step = global;
-    e.sample = n;
-    e.frequency_hz = f0;
-    e.ref_phase_rad = phi;
-    e.n_samples = settle;
-    events_.push_back(e);
-    phi = std::fmod(phi + 2 * std::numbers::pi * f0 * settle / fs_, 2 * std::numbers::pi);
-    n += settle;
-    for (const SineStep& st : steps) {
-      const double fa = st.f_hz / std::sqrt(r);
-      const double T = st.n_cycles * std::log(r) / (fa * (r - 1));  // N cycles while f rises by r
-      const int64_t L = std::max<int64_t>(1, std::llround(T * fs_));
-      const double beta = std::log(r) / (double(L) / fs_);
-      segs_.push_back({i, n, L, fa, beta, phi});
-      e.seq = seq++;
-      e.state = "integrate";
-      e.step = global++;
-      e.sample = n;
-      e.frequency_hz = st.f_hz;
-      e.ref_phase_rad = phi;
-      e.n_cycles = st.n_cycles;
-      e.n_samples = L;
-      events_.push_back(e);
-      const double t = double(L) / fs_;
-      phi = std::fmod(phi + 2 * std::numbers::pi * fa * std::expm1(beta * t) / beta, 2 * std::numbers::pi);
-      n += L;
-    }
-  }
-  total_ = n;
+std::vector<double> SegmentCampaign::only(int i) const {
+  std::vector<double> a(inputs_.size(), 0.0);
+  a.at(i) = inputs_[i].amplitude;
+  return a;
+}
+
+void SegmentCampaign::finish(const std::string& run_id, int64_t seq, int n_steps, const std::string& excitation) {
   StatusEvent done;
   done.run_id = run_id;
-  done.seq = seq++;
+  done.seq = seq;
   done.sample_rate_hz = fs_;
-  done.excitation = "sweep";
+  done.excitation = excitation;
   done.state = "done";
-  done.sample = n;
+  done.sample = total_;
   done.n_steps = n_steps;
   done.step = n_steps;
-  done.inputs = names;
-  done.amplitudes.assign(names.size(), 0.0);
+  done.inputs = names();
+  done.amplitudes.assign(inputs_.size(), 0.0);
   events_.push_back(done);
 }
 
-void SweepCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-                         std::vector<double>& ref_freq) const {
+void SegmentCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+                           std::vector<double>& ref_freq) const {
   cmd.assign(inputs_.size(), std::vector<double>(n));
   ref_phase.assign(n, 0.0);
   ref_freq.assign(n, 0.0);
   for (size_t i = 0; i < inputs_.size(); ++i) std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
+  // The segment of the first sample, then walk.
   auto it = std::upper_bound(segs_.begin(), segs_.end(), start, [](int64_t v, const Segment& s) { return v < s.start; });
   size_t si = it == segs_.begin() ? 0 : size_t(it - segs_.begin() - 1);
   for (int k = 0; k < n; ++k) {
@@ -223,6 +107,95 @@ void SweepCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>&
     ref_freq[k] = s.fa * std::exp(s.beta * t);
     cmd[s.input][k] = inputs_[s.input].dc + inputs_[s.input].amplitude * std::sin(phi);
   }
+}
+
+SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                                         std::vector<SineStep> steps, double fs, std::string run_id)
+    : SegmentCampaign(std::move(inputs), fs) {
+  if (steps.empty()) throw InputError("campaign: no frequency steps");
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  double phi = 0.0;
+  int64_t seq = 0;
+  const int n_steps = int(steps.size() * excite.size());
+  int global = 0;
+  for (int i : excite) {
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    for (const SineStep& s : steps) {
+      const double dphi = 2 * std::numbers::pi * s.f_hz / fs;
+      StatusEvent e;
+      e.run_id = run_id;
+      e.sample_rate_hz = fs;
+      e.step = global++;
+      e.n_steps = n_steps;
+      e.frequency_hz = s.f_hz;
+      e.n_cycles = s.n_cycles;
+      e.inputs = names();
+      e.amplitudes = only(i);
+      e.seq = seq++;
+      e.state = "settle";
+      e.sample = total_;
+      e.ref_phase_rad = phi;
+      e.n_samples = s.settle_samples;
+      events_.push_back(e);
+      e.seq = seq++;
+      e.state = "integrate";
+      e.sample = total_ + s.settle_samples;
+      e.ref_phase_rad = std::fmod(phi + dphi * double(s.settle_samples), 2 * std::numbers::pi);
+      e.n_samples = s.integrate_samples;
+      events_.push_back(e);
+      phi = add_segment(i, s.settle_samples + s.integrate_samples, s.f_hz, 0.0, phi);
+    }
+  }
+  finish(run_id, seq, n_steps, "stepped_sine");
+}
+
+SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& o,
+                             std::string run_id)
+    : SegmentCampaign(std::move(inputs), o.sample_rate_hz) {
+  const auto steps = plan_stepped_sine(o);  // validates; gives the centres and cycle counts
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  const double r = steps.size() > 1 ? steps[1].f_hz / steps[0].f_hz : std::pow(10.0, 1.0 / o.points_per_decade);
+  int64_t seq = 0;
+  double phi = 0.0;
+  const int n_steps = int(steps.size() * excite.size());
+  int global = 0;
+  for (int i : excite) {
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    StatusEvent e;
+    e.run_id = run_id;
+    e.sample_rate_hz = fs_;
+    e.excitation = "sweep";
+    e.n_steps = n_steps;
+    e.inputs = names();
+    e.amplitudes = only(i);
+    // Settle at the sweep's starting frequency.
+    const double f0 = steps[0].f_hz / std::sqrt(r);
+    e.seq = seq++;
+    e.state = "settle";
+    e.step = global;
+    e.sample = total_;
+    e.frequency_hz = f0;
+    e.ref_phase_rad = phi;
+    e.n_samples = steps[0].settle_samples;
+    events_.push_back(e);
+    phi = add_segment(i, steps[0].settle_samples, f0, 0.0, phi);
+    for (const SineStep& st : steps) {
+      const double fa = st.f_hz / std::sqrt(r);
+      const double T = st.n_cycles * std::log(r) / (fa * (r - 1));  // N cycles while f rises by r
+      const int64_t L = std::max<int64_t>(1, std::llround(T * fs_));
+      e.seq = seq++;
+      e.state = "integrate";
+      e.step = global++;
+      e.sample = total_;
+      e.frequency_hz = st.f_hz;
+      e.ref_phase_rad = phi;
+      e.n_cycles = st.n_cycles;
+      e.n_samples = L;
+      events_.push_back(e);
+      phi = add_segment(i, L, fa, std::log(r) / (double(L) / fs_), phi);
+    }
+  }
+  finish(run_id, seq, n_steps, "sweep");
 }
 
 }  // namespace fralab

@@ -68,33 +68,47 @@ class Campaign {
   virtual const std::vector<CampaignInput>& inputs() const = 0;
 };
 
-/// The whole run: every excited input through every step, then "done". Sample-exact.
-class SteppedSineCampaign : public Campaign {
+/// A campaign made of contiguous segments, each exciting one input with phase
+/// phi(t) = phi0 + 2 pi fa (e^{beta t} - 1) / beta (beta = 0: phi0 + 2 pi fa t, a constant
+/// frequency), t the time since the segment's start; phase is continuous from one segment to the
+/// next. The stepped sine and the sweep differ only in their segments and status events.
+class SegmentCampaign : public Campaign {
  public:
-  /// `inputs`: every plant input (dc values); `excite`: indices into `inputs`, in test order.
-  SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
-                      std::vector<SineStep> steps, double sample_rate_hz, std::string run_id);
-
   int64_t total_samples() const override { return total_; }
   double sample_rate_hz() const override { return fs_; }
-  /// Status events in sample order: settle and integrate per step and input, then done.
   const std::vector<StatusEvent>& events() const override { return events_; }
   void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
             std::vector<double>& ref_freq) const override;
   const std::vector<CampaignInput>& inputs() const override { return inputs_; }
 
- private:
+ protected:
+  SegmentCampaign(std::vector<CampaignInput> inputs, double fs) : inputs_(std::move(inputs)), fs_(fs) {}
   struct Segment {
     int input;
-    SineStep step;
-    int64_t start;  // settle start
-    double phi0;    // phase at start
+    int64_t start, length;
+    double fa, beta, phi0;
   };
+  /// Appends a segment at the end of the run and returns the phase (mod 2 pi) where it ends.
+  double add_segment(int input, int64_t length, double fa, double beta, double phi0);
+  /// Closes the run with its "done" event.
+  void finish(const std::string& run_id, int64_t seq, int n_steps, const std::string& excitation);
+  /// Every input's name, and amplitudes with only input i excited.
+  std::vector<std::string> names() const;
+  std::vector<double> only(int i) const;
+
   std::vector<CampaignInput> inputs_;
   std::vector<Segment> segs_;
   std::vector<StatusEvent> events_;
   double fs_;
   int64_t total_ = 0;
+};
+
+/// The whole run: every excited input through every step, then "done". Sample-exact.
+class SteppedSineCampaign : public SegmentCampaign {
+ public:
+  /// `inputs`: every plant input (dc values); `excite`: indices into `inputs`, in test order.
+  SteppedSineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                      std::vector<SineStep> steps, double sample_rate_hz, std::string run_id);
 };
 
 /// Continuous logarithmic sweep (as the BAFCO drove the engine): per excited input, a settle at the
@@ -104,28 +118,10 @@ class SteppedSineCampaign : public Campaign {
 /// f_a = f_j / sqrt(r), so phase and frequency are continuous and the windows tile the sweep. Each
 /// window is an "integrate" status (excitation "sweep", frequency_hz its geometric centre f_j); the
 /// analyser integrates against the recorded per-sample reference phase (tape channel ref_phase).
-class SweepCampaign : public Campaign {
+class SweepCampaign : public SegmentCampaign {
  public:
   SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& opt,
                 std::string run_id);
-  int64_t total_samples() const override { return total_; }
-  double sample_rate_hz() const override { return fs_; }
-  const std::vector<StatusEvent>& events() const override { return events_; }
-  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-            std::vector<double>& ref_freq) const override;
-  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
-
- private:
-  struct Segment {
-    int input;
-    int64_t start, length;
-    double fa, beta, phi0;  // f(t) = fa e^{beta t}; beta = 0: a constant-frequency settle
-  };
-  std::vector<CampaignInput> inputs_;
-  std::vector<Segment> segs_;
-  std::vector<StatusEvent> events_;
-  double fs_;
-  int64_t total_ = 0;
 };
 
 /// Engine time of a plan for one input, seconds.
