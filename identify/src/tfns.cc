@@ -449,6 +449,7 @@ std::string FitResult::status_str() const {
   switch (status) {
     case Status::kConverged: return "converged";
     case Status::kMaxOrderReached: return "max_order_reached";
+    case Status::kNoResponse: return "no_response";
     default: return "failed";
   }
 }
@@ -516,6 +517,16 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     d.sigma.push_back(p.sigma);
     double mag2 = std::max(std::norm(p.value()), 1e-300);
     d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
+  }
+  if (d.has_sigma) {
+    int clear = 0;
+    for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
+    if (clear < 3) {
+      res.status = FitResult::Status::kNoResponse;
+      res.message = "no response above the noise: " + std::to_string(clear) + " of " + std::to_string(v.size()) +
+                    " points measured to better than 30 %";
+      return res;
+    }
   }
   const double ws = std::sqrt(d.w.front() * d.w.back());
   const int max_n = std::min(o.max_den_order, int(d.w.size()) - 1);

@@ -139,6 +139,10 @@ std::string transfer_matrix_markdown(const TransferMatrix& m, const std::string&
         continue;
       }
       const FitResult& f = it->second;
+      if (f.status == FitResult::Status::kNoResponse) {
+        s << " 0<br>*no response above the noise* |";
+        continue;
+      }
       s << " " << tf_to_text(f.tf) << "<br>*" << f.status_str() << ", order " << f.num_order << "/" << f.den_order;
       if (f.chi2_per_dof >= 0) s << ", chi2/dof " << num(f.chi2_per_dof);
       s << "* |";

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "fralab/plant/model.h"
 #include "test_util.h"
@@ -185,4 +186,19 @@ TEST(Tfns, NeverWorseThanOctaveInvfreqs) {
     for (const auto& p : pts) ours += std::norm(p.value() - r.tf.at(p.w)) / std::norm(p.value());
     EXPECT_LE(ours, octave_err * (1 + 1e-9)) << path;
   }
+}
+
+TEST(Tfns, AZeroPathIsReportedAsNoResponse) {
+  // Pure noise (a path the plant does not have): sigma as large as the "response".
+  std::vector<FrdPoint> pts = tf_points(Tf{}, 0.1, 10, 10, 0.0, 1);
+  std::mt19937 g(4);
+  std::normal_distribution<double> n(0, 1);
+  for (auto& p : pts) {
+    p.mag = std::abs(std::complex<double>(n(g), n(g))) * 1e-3;
+    p.sigma = 1e-3;
+  }
+  FitResult r = fit_tf(pts, FitOptions{});
+  EXPECT_EQ(r.status, FitResult::Status::kNoResponse);
+  EXPECT_EQ(r.status_str(), "no_response");
+  EXPECT_NE(r.message.find("no response above the noise"), std::string::npos) << r.message;
 }

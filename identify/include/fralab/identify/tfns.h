@@ -66,7 +66,9 @@ struct PadeSet {
 };
 
 struct FitResult {
-  enum class Status { kConverged, kMaxOrderReached, kFailed } status = Status::kFailed;
+  // kNoResponse: the data carry sigma and fewer than 3 points rise above it (sigma <= 0.3 |G|):
+  // the path is zero within the measurement (the report's matrix shows such paths as 0).
+  enum class Status { kConverged, kMaxOrderReached, kFailed, kNoResponse } status = Status::kFailed;
   std::string message;
   Tf tf;
   int num_order = 0, den_order = 0;
