@@ -75,11 +75,14 @@ int main(int argc, char** argv) {
   SteppedSineOptions so;
   double amplitude_pct = -1, amplitude_scale = 1, speed = 0, ready_timeout = 30, stall_timeout = 60;
   int block = 100, window = 2;
-  std::string excitation = "stepped";
+  std::string excitation = "stepped", ms_phases = "schroeder";
+  bool odd_lines = false;
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
   app.add_option("--input", inputs_csv, "input(s) to excite, comma separated (default: all)");
   app.add_option("--band", band, "LO_HZ:HI_HZ")->capture_default_str();
-  app.add_option("--excitation", excitation, "stepped (stepped sine) or sweep (continuous log sweep)")->capture_default_str();
+  app.add_option("--excitation", excitation, "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at once, orthogonal lines; --min-cycles = periods)")->capture_default_str();
+  app.add_option("--multisine-phases", ms_phases, "schroeder or random")->capture_default_str();
+  app.add_flag("--odd-lines", odd_lines, "multisine: odd harmonics only");
   app.add_option("--points-per-decade", so.points_per_decade)->capture_default_str();
   app.add_option("--amplitude-pct", amplitude_pct, "amplitude, % of full scale (default: the input's test_amplitude_pct, else 2)");
   app.add_option("--amplitude-scale", amplitude_scale, "multiplies every input's amplitude")->capture_default_str();
@@ -114,8 +117,19 @@ int main(int argc, char** argv) {
       campaign = std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so), so.sample_rate_hz, run_id);
     } else if (excitation == "sweep") {
       campaign = std::make_unique<SweepCampaign>(cin, excite, so, run_id);
+    } else if (excitation == "multisine") {
+      MultisineOptions mo;
+      mo.f_lo_hz = so.f_lo_hz;
+      mo.f_hi_hz = so.f_hi_hz;
+      mo.points_per_decade = so.points_per_decade;
+      mo.periods = std::max(2, so.min_cycles);
+      mo.slowest_time_constant_s = so.slowest_time_constant_s;
+      mo.sample_rate_hz = so.sample_rate_hz;
+      mo.odd_lines = odd_lines;
+      mo.phases = ms_phases;
+      campaign = std::make_unique<MultisineCampaign>(cin, excite, mo, run_id);
     } else {
-      throw InputError("--excitation \"" + excitation + "\": stepped or sweep");
+      throw InputError("--excitation \"" + excitation + "\": stepped, sweep or multisine");
     }
     const Campaign& camp = *campaign;
 
@@ -206,7 +220,7 @@ int main(int argc, char** argv) {
     const double engine_s = double(total) / so.sample_rate_hz;
     Json sj{{"run_id", run_id}, {"engine_time_s", engine_s}, {"wall_time_s", wall},
             {"speedup", engine_s / std::max(wall, 1e-9)}, {"blocks", nblocks}, {"samples", total},
-            {"steps_per_input", camp.events().size() / 2 / excite.size()}};
+            {"excitation", excitation}};
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";
     if (!summary.empty()) json_save_file(summary, sj);
     return 0;

@@ -21,7 +21,9 @@ namespace {
 void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--input", m.inputs, "input(s) NAME[,NAME...] (default: all)");
   c->add_option("--band", m.band, "LO_HZ:HI_HZ")->capture_default_str();
-  c->add_option("--excitation", m.excitation, "stepped (stepped sine) or sweep (continuous log sweep)")->capture_default_str();
+  c->add_option("--excitation", m.excitation, "stepped, sweep or multisine (all inputs at once)")->capture_default_str();
+  c->add_option("--multisine-phases", m.multisine_phases, "schroeder or random")->capture_default_str();
+  c->add_flag("--odd-lines", m.odd_lines, "multisine: odd harmonics only");
   c->add_option("--points-per-decade", m.points_per_decade)->capture_default_str();
   c->add_option("--amplitude-pct", m.amplitude_pct, "% of full scale (default: per input, 2)");
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();

@@ -140,13 +140,14 @@ MeasureResult run_measure(const MeasureOptions& o) {
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
   std::vector<std::string> acq = {module_path("fralab-acquire"), "--engine", engine_file, "--lcm-url", url,
                                   "--run-id", r.run_id, "--input", inputs_csv, "--band", o.band,
-                                  "--excitation", o.excitation,
+                                  "--excitation", o.excitation, "--multisine-phases", o.multisine_phases,
                                   "--points-per-decade", std::to_string(o.points_per_decade),
                                   "--speed", std::to_string(o.speed), "--consumers", consumers_csv,
                                   "--sample-rate", std::to_string(o.sample_rate_hz),
                                   "--min-cycles", std::to_string(o.min_cycles),
                                   "--min-integrate-s", std::to_string(o.min_integrate_s),
                                   "--summary", o.out + "/acquire.json"};
+  if (o.odd_lines) acq.push_back("--odd-lines");
   acq.push_back("--amplitude-scale");
   acq.push_back(std::to_string(o.amplitude_scale));
   if (o.amplitude_pct >= 0) {

@@ -13,7 +13,9 @@ struct MeasureOptions {
   std::string engine = "j85_95";
   std::string inputs;  // "" = every input
   std::string band = "0.04:100";
-  std::string excitation = "stepped";  // or "sweep"
+  std::string excitation = "stepped";  // or "sweep", "multisine"
+  std::string multisine_phases = "schroeder";
+  bool odd_lines = false;
   int points_per_decade = 10;
   double amplitude_pct = -1;  // < 0: each input's default
   double amplitude_scale = 1.0;  // multiplies every input's amplitude

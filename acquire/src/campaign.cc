@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "fralab/plant/json_util.h"
 
@@ -196,6 +197,111 @@ SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int>
     }
   }
   finish(run_id, seq, n_steps, "sweep");
+}
+
+void MultisineOptions::validate() const {
+  if (!(sample_rate_hz > 0)) throw InputError("sample rate must be > 0 Hz");
+  if (!(f_lo_hz > 0) || !(f_hi_hz > f_lo_hz)) throw InputError("multisine band must satisfy 0 < LO < HI");
+  if (f_hi_hz > sample_rate_hz / 4) throw InputError("multisine band top is above fs/4: lower --band");
+  if (points_per_decade < 1) throw InputError("points per decade must be >= 1");
+  if (periods < 2) throw InputError("a multisine needs >= 2 measured periods (noise from their spread)");
+  if (phases != "schroeder" && phases != "random") throw InputError("--multisine-phases must be schroeder or random");
+}
+
+MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                                     const MultisineOptions& o, std::string run_id)
+    : inputs_(std::move(inputs)), fs_(o.sample_rate_hz) {
+  o.validate();
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  P_ = int(std::llround(fs_ / o.f_lo_hz));
+  const double df = fs_ / P_;
+  // Lines near log-spaced targets, unique, optionally odd.
+  std::vector<int> lines;
+  const int n_targets = int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
+  for (int j = 0; j < n_targets; ++j) {
+    int k = int(std::llround(o.f_lo_hz * std::pow(10.0, double(j) / o.points_per_decade) / df));
+    if (o.odd_lines && k % 2 == 0) ++k;
+    if (k < 1 || k >= P_ / 2) continue;
+    if (lines.empty() || k > lines.back()) lines.push_back(k);
+  }
+  const int ni = int(excite.size());
+  if (int(lines.size()) < ni) throw InputError("multisine: fewer lines than excited inputs; widen the band");
+  std::vector<int> line_input;
+  std::vector<std::vector<int>> per(inputs_.size());
+  for (size_t j = 0; j < lines.size(); ++j) {
+    const int i = excite[j % ni];
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    line_input.push_back(i);
+    per[i].push_back(lines[j]);
+  }
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> uni(0.0, 2 * std::numbers::pi);
+  period_.assign(inputs_.size(), {});
+  std::vector<double> amps(inputs_.size(), 0.0);
+  for (int i : excite) {
+    std::vector<double> x(P_, 0.0);
+    const double nk = double(per[i].size());
+    for (size_t j = 0; j < per[i].size(); ++j) {
+      const double ph = o.phases == "schroeder" ? -std::numbers::pi * double(j) * double(j + 1) / nk : uni(rng);
+      for (int n = 0; n < P_; ++n) x[n] += std::sin(2 * std::numbers::pi * double(per[i][j]) * n / P_ + ph);
+    }
+    double peak = 0;
+    for (double v : x) peak = std::max(peak, std::abs(v));
+    for (double& v : x) v *= inputs_[i].amplitude / peak;
+    period_[i] = std::move(x);
+    amps[i] = inputs_[i].amplitude;
+  }
+  const int settle = std::max(1, int(std::ceil(o.settle_time_constants * o.slowest_time_constant_s * df)));
+  StatusEvent e;
+  e.run_id = run_id;
+  e.sample_rate_hz = fs_;
+  e.excitation = "multisine";
+  for (const auto& in : inputs_) e.inputs.push_back(in.name);
+  e.amplitudes = amps;
+  e.n_steps = 1;
+  e.frequency_hz = df;
+  e.period_samples = P_;
+  e.lines = lines;
+  e.line_input = line_input;
+  e.seq = 0;
+  e.state = "settle";
+  e.sample = 0;
+  e.n_cycles = settle;
+  e.n_samples = int64_t(settle) * P_;
+  events_.push_back(e);
+  e.seq = 1;
+  e.state = "integrate";
+  e.sample = int64_t(settle) * P_;
+  e.n_cycles = o.periods;
+  e.n_samples = int64_t(o.periods) * P_;
+  events_.push_back(e);
+  total_ = int64_t(settle + o.periods) * P_;
+  e.seq = 2;
+  e.state = "done";
+  e.sample = total_;
+  e.n_samples = 0;
+  e.step = 1;
+  events_.push_back(e);
+}
+
+void MultisineCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+                             std::vector<double>& ref_freq) const {
+  cmd.assign(inputs_.size(), std::vector<double>(n));
+  ref_phase.assign(n, 0.0);
+  ref_freq.assign(n, 0.0);
+  const double df = fs_ / P_;
+  for (size_t i = 0; i < inputs_.size(); ++i) {
+    for (int k = 0; k < n; ++k) {
+      const int64_t m = start + k;
+      cmd[i][k] = inputs_[i].dc + (period_[i].empty() || m >= total_ ? 0.0 : period_[i][size_t(m % P_)]);
+    }
+  }
+  for (int k = 0; k < n; ++k) {
+    const int64_t m = start + k;
+    if (m >= total_) continue;
+    ref_phase[k] = std::fmod(2 * std::numbers::pi * double(m % P_) / P_, 2 * std::numbers::pi);
+    ref_freq[k] = df;
+  }
 }
 
 }  // namespace fralab

@@ -31,6 +31,7 @@ Json frd_to_json(const Frd& frd) {
     if (p.coherence >= 0) jp["coherence"] = p.coherence;
     jp["h2_rel"] = p.h2_rel;
     jp["h3_rel"] = p.h3_rel;
+    if (p.nl_rel >= 0) jp["nl_rel"] = p.nl_rel;
     jp["n_cycles"] = p.n_cycles;
     jp["step"] = p.step;
     if (!p.input.empty()) jp["input"] = p.input;
@@ -65,6 +66,7 @@ Frd frd_from_json(const Json& j, const std::string& source) {
     p.coherence = json_number_member(jp, w, "coherence", -1.0);
     p.h2_rel = json_number_member(jp, w, "h2_rel", 0.0);
     p.h3_rel = json_number_member(jp, w, "h3_rel", 0.0);
+    p.nl_rel = json_number_member(jp, w, "nl_rel", -1.0);
     p.n_cycles = static_cast<int>(json_number_member(jp, w, "n_cycles", 0.0));
     p.step = static_cast<int>(json_number_member(jp, w, "step", -1.0));
     p.amplitude = json_number_member(jp, w, "amplitude", 0.0);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <fftw3.h>
+
 #include "fralab/analyze/fourier_filter.h"
 
 namespace fralab {
@@ -141,6 +143,14 @@ void PairAnalyzer::try_complete(bool force) {
       continue;
     }
     FrdPoint p;
+    if (ready && st.excitation == "multisine") {
+      for (const FrdPoint& q : compute_multisine(it->second)) {
+        points_.push_back(q);
+        fresh_.push_back(q);
+      }
+      it = pending_.erase(it);
+      continue;
+    }
     if (ready) {
       p = compute(it->second);
     } else {
@@ -249,6 +259,99 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
     (h == 2 ? p.h2_rel : p.h3_rel) = rel;
   }
   return p;
+}
+
+std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
+  const StatusEvent& st = win.st;
+  const int P = st.period_samples;
+  const int M = P > 0 ? int(st.n_samples / P) : 0;
+  std::vector<FrdPoint> out;
+  auto invalid = [&](const std::string& why) {
+    FrdPoint p;
+    p.step = st.step;
+    p.valid = false;
+    p.note = why;
+    return std::vector<FrdPoint>{p};
+  };
+  if (P < 4 || M < 2 || st.lines.size() != st.line_input.size()) return invalid("multisine status without periods or lines");
+  // The pair's input: the one named by E1 or E2 (u_X or X); none: every line.
+  int want = -1;
+  for (size_t i = 0; i < st.inputs.size(); ++i) {
+    for (const std::string& ch : {e1_, e2_}) {
+      if (ch == st.inputs[i] || ch == "u_" + st.inputs[i]) want = int(i);
+    }
+  }
+  // Spectra of every period of both channels (window mean removed: DC does not touch lines k >= 1).
+  std::vector<double> buf(P);
+  std::vector<std::complex<double>> spec(P / 2 + 1);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()), FFTW_ESTIMATE);
+  std::vector<std::vector<std::complex<double>>> X1(M), X2(M);
+  const double* a = x1_.data() + (st.sample - base_);
+  const double* b = x2_.data() + (st.sample - base_);
+  for (int p = 0; p < M; ++p) {
+    std::copy(a + size_t(p) * P, a + size_t(p + 1) * P, buf.begin());
+    fftw_execute(plan);
+    X1[p] = spec;
+    std::copy(b + size_t(p) * P, b + size_t(p + 1) * P, buf.begin());
+    fftw_execute(plan);
+    X2[p] = spec;
+  }
+  fftw_destroy_plan(plan);
+  std::vector<bool> excited(P / 2 + 1, false);
+  for (int k : st.lines) if (k >= 0 && k <= P / 2) excited[k] = true;
+  const double df = st.sample_rate_hz / P;
+  for (size_t j = 0; j < st.lines.size(); ++j) {
+    const int k = st.lines[j];
+    if (k < 1 || k >= P / 2 || (want >= 0 && st.line_input[j] != want)) continue;
+    std::complex<double> m1 = 0, m2 = 0;
+    for (int p = 0; p < M; ++p) {
+      m1 += X1[p][k];
+      m2 += X2[p][k];
+    }
+    m1 /= double(M);
+    m2 /= double(M);
+    FrdPoint q;
+    q.w = 2 * std::numbers::pi * k * df;
+    q.step = st.step;
+    q.n_cycles = M;
+    q.input = st.inputs[st.line_input[j]];
+    q.amplitude = st.amplitudes.size() > size_t(st.line_input[j]) ? st.amplitudes[st.line_input[j]] : 0.0;
+    if (std::abs(m1) == 0.0 || !std::isfinite(std::abs(m1)) || !std::isfinite(std::abs(m2))) {
+      q.valid = false;
+      q.note = "channel " + e1_ + " has no component at line " + std::to_string(k);
+      out.push_back(q);
+      continue;
+    }
+    const std::complex<double> r = m2 / m1;
+    q.mag = std::abs(r);
+    q.phase_deg = std::arg(r) * 180 / std::numbers::pi;
+    double se = 0, s11 = 0, s22 = 0;
+    std::complex<double> s12 = 0;
+    for (int p = 0; p < M; ++p) {
+      se += std::norm(X2[p][k] - r * X1[p][k]);
+      s11 += std::norm(X1[p][k]);
+      s22 += std::norm(X2[p][k]);
+      s12 += std::conj(X1[p][k]) * X2[p][k];
+    }
+    q.sigma = std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1);
+    q.coherence = std::norm(s12) / (s11 * s22);
+    // Non-excited neighbours: the nearest unexcited line on each side.
+    double lvl = 0;
+    int cnt = 0;
+    for (int dir : {-1, 1}) {
+      for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir) {
+        if (excited[kk]) continue;
+        std::complex<double> v = 0;
+        for (int p = 0; p < M; ++p) v += X2[p][kk];
+        lvl += std::abs(v / double(M));
+        ++cnt;
+        break;
+      }
+    }
+    q.nl_rel = cnt ? lvl / cnt / std::max(std::abs(m2), 1e-300) : 0.0;
+    out.push_back(q);
+  }
+  return out;
 }
 
 std::vector<FrdPoint> PairAnalyzer::take_new_points() {

@@ -72,6 +72,11 @@ excitation_status_t to_status_msg(const StatusEvent& e) {
   m.amplitudes = e.amplitudes;
   m.amplitudes.resize(e.inputs.size(), 0.0);
   m.message = e.message;
+  m.period_samples = e.period_samples;
+  m.n_lines = int32_t(e.lines.size());
+  m.lines.assign(e.lines.begin(), e.lines.end());
+  m.line_input.assign(e.line_input.begin(), e.line_input.end());
+  m.line_input.resize(e.lines.size(), 0);
   return m;
 }
 
@@ -92,6 +97,9 @@ StatusEvent from_msg(const excitation_status_t& m) {
   e.inputs = m.inputs;
   e.amplitudes = m.amplitudes;
   e.message = m.message;
+  e.period_samples = m.period_samples;
+  e.lines.assign(m.lines.begin(), m.lines.end());
+  e.line_input.assign(m.line_input.begin(), m.line_input.end());
   return e;
 }
 

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 #include <sys/wait.h>
 
 #include <lcm/lcm-cpp.hpp>
 
 #include "fralab/analyze/frd.h"
 #include "fralab/lcm_io.h"
+#include "fralab/plant/model.h"
 #include "test_util.h"
 
 using namespace fralab;
@@ -190,4 +192,25 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
   EXPECT_NE(c.status, 0);
   EXPECT_NE(c.output.find("channel FRALAB_TAPE: message of"), std::string::npos) << c.output;
   EXPECT_NE(c.output.find("is not a fralab.tape_block_t"), std::string::npos) << c.output;
+}
+
+TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
+  std::string d = tmpdir("multisine");
+  Cmd c = sh(kBin + "/fralab measure --engine j85_95 --input Wf,BLD --excitation multisine --band 0.5:20 "
+             "--points-per-decade 8 --out " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  Model m = load_model(d + "/engine.json");
+  for (const auto& [pair, in, out] : {std::tuple{"Wf:P3", "Wf", "P3"}, std::tuple{"BLD:N", "BLD", "N"}}) {
+    Frd f = load_frd(d + "/frd/" + pair_file_stem(pair) + ".json");
+    ASSERT_GE(f.points.size(), 5u) << pair;
+    for (const auto& p : f.points) {
+      ASSERT_TRUE(p.valid) << p.note;
+      EXPECT_EQ(p.input, in);
+      // Against the model (noise on): within 5 sigma plus the plant's 0.2 % sampling allowance.
+      const auto want = m.position_to_output(m.output_index(out), m.input_index(in), p.w);
+      EXPECT_LT(std::abs(p.value() - want), 5 * p.sigma + 2e-3 * std::abs(want)) << pair << " " << p.w;
+    }
+  }
+  Json run = json_load_file(d + "/acquire.json");
+  EXPECT_EQ(run["excitation"], "multisine");
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <set>
 
 #include "fralab/acquire/model_info.h"
 #include "test_util.h"
@@ -116,4 +117,40 @@ TEST(Sweep, PhaseAndFrequencyAreContinuousAndWindowsTileTheSweep) {
     ASSERT_LE(std::abs(fr[k] - fr[k - 1]), 0.01 * fr[k - 1]) << k;
     ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * fr[k] / 1000.0 * 1.01) << k;
   }
+}
+
+TEST(Multisine, PeriodicOrthogonalAndScaledToTheAmplitude) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
+  MultisineOptions o;
+  o.f_lo_hz = 0.5;
+  o.f_hi_hz = 50;
+  o.points_per_decade = 8;
+  o.odd_lines = true;
+  o.slowest_time_constant_s = 0.5;
+  auto ins = campaign_inputs(m, 2.0);
+  MultisineCampaign c(ins, select_inputs(m, "Wf,A8"), o, "r");
+  const int P = c.period_samples();
+  EXPECT_EQ(P, 2000);
+  const StatusEvent& in = c.events()[1];
+  ASSERT_EQ(in.state, "integrate");
+  EXPECT_EQ(in.excitation, "multisine");
+  EXPECT_EQ(in.n_samples, int64_t(o.periods) * P);
+  std::set<int> seen;
+  for (size_t j = 0; j < in.lines.size(); ++j) {
+    EXPECT_EQ(in.lines[j] % 2, 1);                      // odd lines only
+    EXPECT_TRUE(seen.insert(in.lines[j]).second);       // each line once: inputs orthogonal
+    EXPECT_EQ(in.line_input[j], j % 2 == 0 ? 0 : 1);    // dealt to Wf, A8 in turn
+  }
+  std::vector<std::vector<double>> cmd;
+  std::vector<double> ph, fr;
+  c.fill(0, int(c.total_samples()), cmd, ph, fr);
+  for (int i : {0, 1}) {
+    double peak = 0;
+    for (int64_t n = 0; n + P < c.total_samples(); ++n) {
+      ASSERT_DOUBLE_EQ(cmd[i][n + P], cmd[i][n]);  // exactly periodic
+      peak = std::max(peak, std::abs(cmd[i][n] - ins[i].dc));
+    }
+    EXPECT_NEAR(peak, ins[i].amplitude, 1e-9 * ins[i].amplitude);
+  }
+  EXPECT_DOUBLE_EQ(cmd[2][123], ins[2].dc);  // BLD not excited: held at its operating point
 }

@@ -49,12 +49,20 @@ Model siso_model(const Tf& path, const Tf* actuator, const Tf* sensor, double no
 }
 
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
-                      bool noise, uint64_t seed, int block, double amplitude_pct, bool sweep) {
+                      bool noise, uint64_t seed, int block, double amplitude_pct, const std::string& excitation) {
   std::string csv;
   for (const auto& e : excite) csv += (csv.empty() ? "" : ",") + e;
   std::unique_ptr<Campaign> owner;
-  if (sweep) {
+  if (excitation == "sweep") {
     owner = std::make_unique<SweepCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), so, "test");
+  } else if (excitation == "multisine") {
+    MultisineOptions mo;
+    mo.f_lo_hz = so.f_lo_hz;
+    mo.f_hi_hz = so.f_hi_hz;
+    mo.points_per_decade = so.points_per_decade;
+    mo.slowest_time_constant_s = so.slowest_time_constant_s;
+    mo.sample_rate_hz = so.sample_rate_hz;
+    owner = std::make_unique<MultisineCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), mo, "test");
   } else {
     owner = std::make_unique<SteppedSineCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv),
                                                   plan_stepped_sine(so), so.sample_rate_hz, "test");

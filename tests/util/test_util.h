@@ -33,7 +33,8 @@ struct TapeRun {
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
 };
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
-                      bool noise, uint64_t seed, int block = 100, double amplitude_pct = 2.0, bool sweep = false);
+                      bool noise, uint64_t seed, int block = 100, double amplitude_pct = 2.0,
+                      const std::string& excitation = "stepped");
 
 /// Frequency-response points of `tf` at `per_decade` log-spaced frequencies over [f_lo, f_hi] Hz,
 /// with complex Gaussian noise of standard deviation rel_noise * |G| (sigma set accordingly; 0:

@@ -124,6 +124,48 @@ class SweepCampaign : public SegmentCampaign {
                 std::string run_id);
 };
 
+struct MultisineOptions {
+  double f_lo_hz = 0.04;       // the frequency resolution: period = round(fs / f_lo) samples
+  double f_hi_hz = 100.0;
+  int points_per_decade = 10;  // line density: log-spaced targets rounded to harmonics
+  int periods = 8;             // measured periods (>= 2: the noise comes from their spread)
+  double settle_time_constants = 5.0;
+  double slowest_time_constant_s = 0.0;
+  bool odd_lines = false;      // only odd harmonics: even lines then reveal even nonlinearities
+  std::string phases = "schroeder";  // or "random"
+  uint64_t seed = 1;           // random phases
+  double sample_rate_hz = 1000.0;
+  void validate() const;
+};
+
+/// Periodic multisine, all selected inputs at once with orthogonal (disjoint) line sets, so one run
+/// measures the whole transfer matrix: lines k of df = fs / P near log-spaced targets (unique,
+/// optionally odd), dealt to the excited inputs in turn; each input's signal
+/// x_i[n] = a_i sum_{k in K_i} sin(2 pi k n / P + phi_k), phases Schroeder
+/// (phi_k = -pi j (j - 1) / |K_i| for its j-th line) or random, a_i scaling the period's peak to the
+/// input's amplitude. Settle periods (>= 1, >= the slowest time constants) then `periods` measured
+/// periods in one "integrate" status (excitation "multisine", with period_samples and the lines).
+class MultisineCampaign : public Campaign {
+ public:
+  MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const MultisineOptions& opt,
+                    std::string run_id);
+  int64_t total_samples() const override { return total_; }
+  double sample_rate_hz() const override { return fs_; }
+  const std::vector<StatusEvent>& events() const override { return events_; }
+  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
+            std::vector<double>& ref_freq) const override;
+  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
+  int period_samples() const { return P_; }
+
+ private:
+  std::vector<CampaignInput> inputs_;
+  std::vector<std::vector<double>> period_;  // per input, one period of its deviation (empty: idle)
+  std::vector<StatusEvent> events_;
+  double fs_;
+  int P_ = 0;
+  int64_t total_ = 0;
+};
+
 /// Engine time of a plan for one input, seconds.
 double plan_duration_s(const std::vector<SineStep>& steps, double sample_rate_hz);
 

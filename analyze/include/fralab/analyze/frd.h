@@ -23,6 +23,7 @@ struct FrdPoint {
   double coherence = -1.0;  // < 0: unknown
   double h2_rel = 0.0;
   double h3_rel = 0.0;
+  double nl_rel = -1.0;  // multisine: level on non-excited lines relative to the line (< 0: n/a)
   int n_cycles = 0;
   int step = -1;
   std::string input;  // the excited input

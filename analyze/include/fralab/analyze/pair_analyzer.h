@@ -10,6 +10,11 @@
 //          sigma = sqrt(sum |e_b|^2 / (K (K - 1))) / |P1| (the standard deviation of R);
 //   coherence = |sum conj(p1_b) p2_b|^2 / (sum |p1_b|^2 sum |p2_b|^2);
 //   h2_rel, h3_rel: E2's 2nd and 3rd harmonic amplitudes over its fundamental.
+// Multisine windows ("multisine": whole periods of period_samples) give one point per excited line
+// of the pair's input (the input named by E1 or E2; every line for two outputs): each period is
+// transformed (FFTW), R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma and coherence from the spread
+// over periods (as over blocks above), and nl_rel = the mean level of E2 on the nearest lines no
+// input excites, relative to |X2(k)| (the best linear approximation's nonlinear-distortion sign).
 // Arithmetic depends only on the samples and the status, never on arrival order or timing, so
 // live, replayed and offline analyses give identical numbers. A window with a missing sample
 // (lost or never-arrived block) yields a point with valid = false and a note naming the gap.
@@ -63,6 +68,7 @@ class PairAnalyzer {
   };
   void try_complete(bool force);
   FrdPoint compute(const Window& w);
+  std::vector<FrdPoint> compute_multisine(const Window& w);
   bool covers(int64_t a, int64_t b) const;
   std::string describe_gaps(int64_t a, int64_t b) const;
   bool wants(const StatusEvent& st) const;

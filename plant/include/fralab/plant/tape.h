@@ -50,6 +50,10 @@ struct StatusEvent {
   std::vector<std::string> inputs;
   std::vector<double> amplitudes;  // per input (all plant inputs), peak; 0 = not excited
   std::string message;
+  // Multisine ("multisine"): one period of period_samples; lines[j] is a harmonic of
+  // sample_rate_hz / period_samples excited by inputs[line_input[j]].
+  int period_samples = 0;
+  std::vector<int> lines, line_input;
 };
 
 }  // namespace fralab
