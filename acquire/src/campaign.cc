@@ -210,7 +210,7 @@ void MultisineOptions::validate() const {
 
 MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
                                      const MultisineOptions& o, std::string run_id)
-    : inputs_(std::move(inputs)), fs_(o.sample_rate_hz) {
+    : Campaign(std::move(inputs), o.sample_rate_hz) {
   o.validate();
   if (excite.empty()) throw InputError("campaign: no input to excite");
   P_ = int(std::llround(fs_ / o.f_lo_hz));

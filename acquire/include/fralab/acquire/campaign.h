@@ -57,15 +57,23 @@ struct CampaignInput {
 class Campaign {
  public:
   virtual ~Campaign() = default;
-  virtual int64_t total_samples() const = 0;
-  virtual double sample_rate_hz() const = 0;
+  int64_t total_samples() const { return total_; }
+  double sample_rate_hz() const { return fs_; }
   /// Status events in sample order, ending with "done".
-  virtual const std::vector<StatusEvent>& events() const = 0;
+  const std::vector<StatusEvent>& events() const { return events_; }
+  /// Every plant input (dc values and test amplitudes).
+  const std::vector<CampaignInput>& inputs() const { return inputs_; }
   /// Fills commands for samples [start, start + n): cmd[i][k] absolute command of input i,
   /// ref_phase[k] (radians, continuous within a segment) and ref_freq_hz[k] (0 when idle).
   virtual void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
                     std::vector<double>& ref_freq) const = 0;
-  virtual const std::vector<CampaignInput>& inputs() const = 0;
+
+ protected:
+  Campaign(std::vector<CampaignInput> inputs, double fs) : inputs_(std::move(inputs)), fs_(fs) {}
+  std::vector<CampaignInput> inputs_;
+  std::vector<StatusEvent> events_;
+  double fs_;
+  int64_t total_ = 0;
 };
 
 /// A campaign made of contiguous segments, each exciting one input with phase
@@ -74,15 +82,11 @@ class Campaign {
 /// next. The stepped sine and the sweep differ only in their segments and status events.
 class SegmentCampaign : public Campaign {
  public:
-  int64_t total_samples() const override { return total_; }
-  double sample_rate_hz() const override { return fs_; }
-  const std::vector<StatusEvent>& events() const override { return events_; }
   void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
             std::vector<double>& ref_freq) const override;
-  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
 
  protected:
-  SegmentCampaign(std::vector<CampaignInput> inputs, double fs) : inputs_(std::move(inputs)), fs_(fs) {}
+  SegmentCampaign(std::vector<CampaignInput> inputs, double fs) : Campaign(std::move(inputs), fs) {}
   struct Segment {
     int input;
     int64_t start, length;
@@ -96,11 +100,7 @@ class SegmentCampaign : public Campaign {
   std::vector<std::string> names() const;
   std::vector<double> only(int i) const;
 
-  std::vector<CampaignInput> inputs_;
   std::vector<Segment> segs_;
-  std::vector<StatusEvent> events_;
-  double fs_;
-  int64_t total_ = 0;
 };
 
 /// The whole run: every excited input through every step, then "done". Sample-exact.
@@ -149,21 +149,13 @@ class MultisineCampaign : public Campaign {
  public:
   MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const MultisineOptions& opt,
                     std::string run_id);
-  int64_t total_samples() const override { return total_; }
-  double sample_rate_hz() const override { return fs_; }
-  const std::vector<StatusEvent>& events() const override { return events_; }
   void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
             std::vector<double>& ref_freq) const override;
-  const std::vector<CampaignInput>& inputs() const override { return inputs_; }
   int period_samples() const { return P_; }
 
  private:
-  std::vector<CampaignInput> inputs_;
   std::vector<std::vector<double>> period_;  // per input, one period of its deviation (empty: idle)
-  std::vector<StatusEvent> events_;
-  double fs_;
   int P_ = 0;
-  int64_t total_ = 0;
 };
 
 /// Engine time of a plan for one input, seconds.
