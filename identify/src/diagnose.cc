@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fralab/plant/nonlinearity.h"
+#include "line_search.h"
 
 namespace fralab {
 namespace {
@@ -45,15 +46,7 @@ double chi2(const PairFit& p, const std::vector<C>& F) {
   return c;
 }
 
-double golden(const std::function<double(double)>& f, double lo, double hi, int iters = 40) {
-  const double g = (std::sqrt(5.0) - 1) / 2;
-  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
-  for (int i = 0; i < iters; ++i) {
-    if (f1 < f2) { hi = x2; x2 = x1; f2 = f1; x1 = hi - g * (hi - lo); f1 = f(x1); }
-    else { lo = x1; x1 = x2; f1 = f2; x2 = lo + g * (hi - lo); f2 = f(x2); }
-  }
-  return (lo + hi) / 2;
-}
+using detail::golden;
 
 // 1-D minimisation: a grid then golden section around the best grid point.
 double minimise_1d(const std::function<double(double)>& f, double lo, double hi, int grid = 60) {

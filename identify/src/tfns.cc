@@ -7,6 +7,8 @@
 #include <Eigen/Dense>
 #include <unsupported/Eigen/NonLinearOptimization>
 
+#include "line_search.h"
+
 namespace fralab {
 namespace {
 
@@ -653,13 +655,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       }
       const double step = o.max_delay_s / (G - 1);
       const double lo = std::max(0.0, bt - step), hi = bt + step;
-      const double gr = (std::sqrt(5.0) - 1) / 2;
-      double a = lo, b = hi, x1 = b - gr * (b - a), x2 = a + gr * (b - a), f1 = err_at(x1), f2 = err_at(x2);
-      for (int it = 0; it < 20; ++it) {
-        if (f1 < f2) { b = x2; x2 = x1; f2 = f1; x1 = b - gr * (b - a); f1 = err_at(x1); }
-        else { a = x1; x1 = x2; f1 = f2; x2 = a + gr * (b - a); f2 = err_at(x2); }
-      }
-      const double tau0 = (a + b) / 2;
+      const double tau0 = detail::golden(err_at, lo, hi, 20);
       if (tau0 * d.w.back() > 0.05) {
         cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
       }
