@@ -610,6 +610,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
             if (r.s.sse <= t.s.sse) t = r;
           }
           if (!c.ok || t.s.sse < c.s.sse) c = t;
+          if (c.adequate) break;  // an adequate start: the others cannot be preferred at this order
         }
         if (!c.ok) continue;
         if (!best_n.ok || (c.adequate && !best_n.adequate) ||

@@ -14,7 +14,9 @@
 //    right singular vector (||d|| = 1): never normal equations in raw powers of s.
 // 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
 //    left half plane.
-// 4. Output-error refinement (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the
+// 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
+//    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
+//    model wins only with fewer parameters. Output-error refinement (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the
 //    factored parameters (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by
 //    construction) and, with delay auto, tau jointly.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
