@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <set>
@@ -143,17 +144,21 @@ int main(int argc, char** argv) {
     std::vector<std::string> consumers = split_csv(consumers_csv);
     if (std::find(consumers.begin(), consumers.end(), "plant") == consumers.end()) consumers.push_back("plant");
 
-    // Ready handshake.
-    const auto t_ready = Clock::now();
+    // Waits until every consumer has acknowledged `target` (-1: ready); past `timeout` seconds the
+    // error names the slowest consumer (`lag`) through `why`.
     std::string lag;
-    while (acq.min_ack(consumers, &lag) < -1) {
-      handle_either(lcm, ctl, 50);
-      if (!acq.error.empty()) throw InputError(acq.error);
-      if (std::chrono::duration<double>(Clock::now() - t_ready).count() > ready_timeout) {
-        throw InputError("consumer \"" + lag + "\" never said ready within " + std::to_string(ready_timeout) +
-                         " s (is it running on the same LCM URL?)");
+    auto wait_acks = [&](int64_t target, double timeout, int poll_ms, const std::function<std::string()>& why) {
+      const auto t = Clock::now();
+      while (acq.min_ack(consumers, &lag) < target) {
+        handle_either(lcm, ctl, poll_ms);
+        if (!acq.error.empty()) throw InputError(acq.error);
+        if (std::chrono::duration<double>(Clock::now() - t).count() > timeout) throw InputError(why());
       }
-    }
+    };
+    wait_acks(-1, ready_timeout, 50, [&] {
+      return "consumer \"" + lag + "\" never said ready within " + std::to_string(ready_timeout) +
+             " s (is it running on the same LCM URL?)";
+    });
     auto publish_status = [&](const StatusEvent& e) {
       excitation_status_t m = to_status_msg(e);
       lcm.publish(kStatusChannel, &m);
@@ -172,15 +177,10 @@ int main(int argc, char** argv) {
     std::vector<std::vector<double>> cmd;
     std::vector<double> ref_phase, ref_freq;
     for (int64_t b = 0; b < nblocks; ++b) {
-      auto stall = Clock::now();
-      while (acq.min_ack(consumers, &lag) < b - window) {
-        handle_either(lcm, ctl, 20);
-        if (!acq.error.empty()) throw InputError(acq.error);
-        if (std::chrono::duration<double>(Clock::now() - stall).count() > stall_timeout) {
-          throw InputError("consumer \"" + lag + "\" stopped acknowledging at block " +
-                           std::to_string(acq.min_ack(consumers, nullptr)) + " (sent up to " + std::to_string(b - 1) + ")");
-        }
-      }
+      wait_acks(b - window, stall_timeout, 20, [&] {
+        return "consumer \"" + lag + "\" stopped acknowledging at block " +
+               std::to_string(acq.min_ack(consumers, nullptr)) + " (sent up to " + std::to_string(b - 1) + ")";
+      });
       const int64_t s0 = b * block;
       const int n = int(std::min<int64_t>(block, total - s0));
       if (speed > 0) {
@@ -208,14 +208,9 @@ int main(int argc, char** argv) {
       lcm.publish(kCmdChannel, &m);
     }
     // Wait for everyone to take the last block.
-    auto stall = Clock::now();
-    while (acq.min_ack(consumers, &lag) < nblocks - 1) {
-      handle_either(lcm, ctl, 20);
-      if (!acq.error.empty()) throw InputError(acq.error);
-      if (std::chrono::duration<double>(Clock::now() - stall).count() > stall_timeout) {
-        throw InputError("consumer \"" + lag + "\" did not acknowledge the final block " + std::to_string(nblocks - 1));
-      }
-    }
+    wait_acks(nblocks - 1, stall_timeout, 20, [&] {
+      return "consumer \"" + lag + "\" did not acknowledge the final block " + std::to_string(nblocks - 1);
+    });
     const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
     const double engine_s = double(total) / so.sample_rate_hz;
     Json sj{{"run_id", run_id}, {"engine_time_s", engine_s}, {"wall_time_s", wall},
