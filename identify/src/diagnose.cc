@@ -182,18 +182,11 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
   return out;
 }
 
-// The error metric for one pair under a response function.
+// The error metric for one pair under a response function (no response: the point is skipped).
 double pair_error(const std::vector<double>& w, const std::vector<C>& meas, const std::function<std::optional<C>(double, size_t)>& model) {
-  double s = 0;
-  int n = 0;
-  for (size_t i = 0; i < w.size(); ++i) {
-    auto g = model(w[i], i);
-    if (!g || std::abs(*g) == 0 || std::abs(meas[i]) == 0) continue;
-    C l = std::log(*g / meas[i]);
-    s += std::norm(C(l.real(), std::remainder(l.imag(), 2 * kPi)));
-    ++n;
-  }
-  return n ? std::sqrt(s / n) : 0.0;
+  std::vector<C> g;
+  for (size_t i = 0; i < w.size(); ++i) g.push_back(model(w[i], i).value_or(0.0));
+  return detail::rms_log_error(g, meas);
 }
 
 bool consistent(const Cause& a, const Cause& b) {
@@ -207,6 +200,55 @@ bool consistent(const Cause& a, const Cause& b) {
     if ((k == "corner_rad_s" || k == "wn_rad_s" || k == "to_rad_s" || k == "from_rad_s") && std::abs(v - u) > 0.1 * std::abs(v)) return false;
   }
   return true;
+}
+
+// Extends a tf by a finding's factor (delay, lag, lead, resonance, gain, moved pole).
+void apply_tf(Tf& t, const Finding& f) {
+  const auto& q = f.parameters;
+  if (f.cause == "time_delay") t.delay_s = std::max(0.0, t.delay_s + q.at("delay_s"));
+  if (f.cause == "missing_lag") t.poles.push_back(Root::Real(-q.at("corner_rad_s")));
+  if (f.cause == "missing_lead") t.zeros.push_back(Root::Real(-q.at("corner_rad_s")));
+  if (f.cause == "missing_resonance") {
+    Root r = Root::Pair(q.at("wn_rad_s"), q.at("zeta"));
+    (f.text_parameters.count("shape") ? t.zeros : t.poles).push_back(r);
+  }
+  if (f.cause == "gain_mismatch") t.gain *= std::pow(10.0, q.at("gain_db") / 20);
+  if (f.cause == "pole_shift") {
+    const double from = q.at("from_rad_s"), to = q.at("to_rad_s");
+    Root* best = nullptr;
+    for (Root& r : t.poles) {
+      const double v = r.pair ? r.wn : -r.real;
+      if (!best || std::abs(v - from) < std::abs((best->pair ? best->wn : -best->real) - from)) best = &r;
+    }
+    if (best) {
+      if (best->pair) best->wn = to; else best->real = -to;
+    }
+  }
+}
+
+// Extends a model by one finding: the coupling or nonlinearity of its input, the actuator's own tf
+// (a finding of the actuator pair u_X:X), the output's sensor, or the paths its scope covers.
+void apply_finding(Model& m, const Finding& f) {
+  if (f.cause == "measurement_coupling") {
+    m.inputs[m.input_index(f.input)].measurement_coupling.push_back({f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
+  } else if (f.cause == "hysteresis" || f.cause == "deadband") {
+    m.inputs[m.input_index(f.input)].nonlinearity.push_back({f.cause, f.parameters.at("width")});
+  } else if (f.scope == "input" && f.output.empty() && f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input) {
+    ModelInput& in = m.inputs[m.input_index(f.input)];
+    if (!in.actuator) in.actuator = Tf{};
+    apply_tf(*in.actuator, f);
+  } else if (f.scope == "output") {
+    ModelOutput& out = m.outputs[m.output_index(f.output)];
+    if (!out.sensor) out.sensor = Tf{};
+    apply_tf(*out.sensor, f);
+  } else {
+    for (auto& p : m.paths) {
+      if (f.scope == "plant" || (f.scope == "input" && p.input == f.input) ||
+          (f.scope == "path" && p.input == f.input && p.output == f.output)) {
+        apply_tf(p.tf, f);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -354,7 +396,6 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
           pairs[k].factor[q] *= pairs[k].output.empty() ? h : 1.0 / h;
         }
       }
-      d.extended.inputs[i].measurement_coupling.push_back({best_o, best_g});
       coupling_findings.push_back(f);
     }
   }
@@ -484,56 +525,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     if (!raw[a].c.detail.empty()) findings.back().explanation = raw[a].c.detail;
   }
 
-  // 4. The extended model.
-  auto apply_tf = [&](Tf& t, const Finding& f) {
-    const auto& q = f.parameters;
-    if (f.cause == "time_delay") t.delay_s = std::max(0.0, t.delay_s + q.at("delay_s"));
-    if (f.cause == "missing_lag") t.poles.push_back(Root::Real(-q.at("corner_rad_s")));
-    if (f.cause == "missing_lead") t.zeros.push_back(Root::Real(-q.at("corner_rad_s")));
-    if (f.cause == "missing_resonance") {
-      Root r = Root::Pair(q.at("wn_rad_s"), q.at("zeta"));
-      (f.text_parameters.count("shape") ? t.zeros : t.poles).push_back(r);
-    }
-    if (f.cause == "gain_mismatch") t.gain *= std::pow(10.0, q.at("gain_db") / 20);
-    if (f.cause == "pole_shift") {
-      const double from = q.at("from_rad_s"), to = q.at("to_rad_s");
-      Root* best = nullptr;
-      for (Root& r : t.poles) {
-        const double v = r.pair ? r.wn : -r.real;
-        if (!best || std::abs(v - from) < std::abs((best->pair ? best->wn : -best->real) - from)) best = &r;
-      }
-      if (best) {
-        if (best->pair) best->wn = to; else best->real = -to;
-      }
-    }
-  };
+  // 4. The extended model: the simulation plus every finding.
   Model& ext = d.extended;
-  for (auto& f : findings) {
-    if (f.cause == "measurement_coupling") continue;  // applied above
-    if (f.cause == "hysteresis" || f.cause == "deadband") {
-      ext.inputs[ext.input_index(f.input)].nonlinearity.push_back({f.cause, f.parameters.at("width")});
-      continue;
-    }
-    if (f.scope == "input" && f.output.empty() && f.pairs.size() == 1 && pairs.size() &&
-        split_pair(f.pairs[0]).first == "u_" + f.input) {
-      ModelInput& in = ext.inputs[ext.input_index(f.input)];
-      if (!in.actuator) in.actuator = Tf{};
-      apply_tf(*in.actuator, f);
-      continue;
-    }
-    if (f.scope == "output") {
-      ModelOutput& out = ext.outputs[ext.output_index(f.output)];
-      if (!out.sensor) out.sensor = Tf{};
-      apply_tf(*out.sensor, f);
-      continue;
-    }
-    for (auto& p : ext.paths) {
-      if (f.scope == "plant" || (f.scope == "input" && p.input == f.input) ||
-          (f.scope == "path" && p.input == f.input && p.output == f.output)) {
-        apply_tf(p.tf, f);
-      }
-    }
-  }
+  for (const auto& f : findings) apply_finding(ext, f);
 
   // 5. Errors: per finding (its pairs, the simulation plus that finding alone) and in total.
   auto err_over = [&](const Model& m, const std::vector<std::string>& which, bool validation) {
@@ -561,25 +555,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     return n ? std::sqrt(s / n) : -1.0;
   };
   for (auto& f : findings) {
-    Model one = sim;
-    if (f.cause == "measurement_coupling") {
-      one.inputs[one.input_index(f.input)].measurement_coupling.push_back({f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
-    } else if (f.cause == "hysteresis" || f.cause == "deadband") {
-      one.inputs[one.input_index(f.input)].nonlinearity.push_back({f.cause, f.parameters.at("width")});
-    } else if (f.scope == "input" && f.output.empty() && f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input) {
-      ModelInput& in = one.inputs[one.input_index(f.input)];
-      if (!in.actuator) in.actuator = Tf{};
-      apply_tf(*in.actuator, f);
-    } else if (f.scope == "output") {
-      ModelOutput& out = one.outputs[one.output_index(f.output)];
-      if (!out.sensor) out.sensor = Tf{};
-      apply_tf(*out.sensor, f);
-    } else {
-      for (auto& p : one.paths) {
-        if (f.scope == "plant" || (f.scope == "input" && p.input == f.input) ||
-            (f.scope == "path" && p.input == f.input && p.output == f.output)) apply_tf(p.tf, f);
-      }
-    }
+    Model one = sim;  // the simulation plus this finding alone
+    apply_finding(one, f);
     f.error_before = err_over(sim, f.pairs, false);
     f.error_after = err_over(one, f.pairs, false);
     if (f.explanation.empty()) {

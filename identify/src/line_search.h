@@ -1,8 +1,12 @@
-// One-dimensional minimisation shared by the identifier and the diagnosis (internal header).
+// Numerics shared by the identifier, the state model and the diagnosis (internal header): a
+// one-dimensional minimisation and the error metric fralab reports for models against data.
 #pragma once
 
 #include <cmath>
+#include <complex>
 #include <functional>
+#include <numbers>
+#include <vector>
 
 namespace fralab::detail {
 
@@ -27,6 +31,21 @@ inline double golden(const std::function<double(double)>& f, double lo, double h
     }
   }
   return (lo + hi) / 2;
+}
+
+/// rms over i of |ln(model_i / measured_i)| (nepers and radians combined, phase wrapped to
+/// (-pi, pi]); points where either value is 0 are skipped; 0 when none remains.
+inline double rms_log_error(const std::vector<std::complex<double>>& model,
+                            const std::vector<std::complex<double>>& measured) {
+  double s = 0;
+  int n = 0;
+  for (size_t i = 0; i < model.size() && i < measured.size(); ++i) {
+    if (std::abs(model[i]) == 0 || std::abs(measured[i]) == 0) continue;
+    const std::complex<double> l = std::log(model[i] / measured[i]);
+    s += std::norm(std::complex<double>(l.real(), std::remainder(l.imag(), 2 * std::numbers::pi)));
+    ++n;
+  }
+  return n ? std::sqrt(s / n) : 0.0;
 }
 
 }  // namespace fralab::detail

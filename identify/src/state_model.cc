@@ -1,5 +1,7 @@
 #include "fralab/identify/state_model.h"
 
+#include "line_search.h"
+
 #include <cmath>
 #include <functional>
 
@@ -14,15 +16,13 @@ Cx location(const Root& r) {
 }
 
 double error_of(const std::vector<FrdPoint>& pts, const std::function<Cx(double)>& g) {
-  double s = 0;
-  int n = 0;
+  std::vector<Cx> model, meas;
   for (const auto& p : pts) {
     if (!p.valid || p.mag <= 0) continue;
-    Cx l = std::log(g(p.w) / p.value());
-    s += std::norm(Cx(l.real(), std::remainder(l.imag(), 2 * M_PI)));
-    ++n;
+    model.push_back(g(p.w));
+    meas.push_back(p.value());
   }
-  return n ? std::sqrt(s / n) : 0.0;
+  return detail::rms_log_error(model, meas);
 }
 
 }  // namespace
