@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # Installs fralab's build and run dependencies from Debian, idempotently: packages already present
 # are not fetched again, and apt-get update runs only when something is missing.
+# Usage: setup.sh [--test]
 set -euo pipefail
 PKGS=(build-essential cmake pkg-config git
       liblcm-dev liblcm-bin liblcm-java default-jdk-headless libjchart2d-java
       libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
       nlohmann-json3-dev libcli11-dev gnuplot-nox iproute2 util-linux)
+# --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
+if [ "${1:-}" = "--test" ]; then PKGS+=(octave octave-signal); fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

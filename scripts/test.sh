@@ -2,6 +2,6 @@
 # The README's test command: installs dependencies, builds, and runs every test with ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 bash scripts/build.sh
 cd build && ctest --output-on-failure -j"$(nproc)" "$@"

@@ -124,6 +124,8 @@ std::vector<Root> to_roots(const std::vector<C>& lam, double scale) {
   return out;
 }
 
+constexpr int kSkStall = 8;
+
 struct Sk {
   bool ok = false;
   Tf tf;
@@ -140,6 +142,7 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
   std::vector<C> dprev(M, 1.0);
   Sk r;
   double best_sse = 1e300;
+  int it_best = 0;
   const int order = std::max(n, m);
   for (int it = 1; it <= o.max_iterations; ++it) {
     std::vector<double> sw(M);
@@ -158,15 +161,18 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
         AD(M + i, k) = q.imag();
       }
     }
-    Eigen::HouseholderQR<MatR> qr(AN);
-    MatR Q1 = qr.householderQ() * MatR::Identity(2 * M, m + 1);
-    MatR ADp = AD - Q1 * (Q1.transpose() * AD);
+    // AN's columns are the Arnoldi vectors stacked [Re; Im]: orthogonal with norm 1/sqrt(2) in the
+    // real inner product (the basis' inner product is 2 Re sum conj(u) v). So Q1 = sqrt(2) AN spans
+    // N's range exactly, and N is eliminated without a factorisation.
+    const MatR Q1 = std::sqrt(2.0) * AN;
+    const MatR Q1tAD = Q1.transpose() * AD;
+    MatR ADp = AD - Q1 * Q1tAD;
     // The smallest right singular vector of ADp is that of its small triangular factor R.
     Eigen::HouseholderQR<MatR> qd(ADp);
     MatR R = qd.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
     Eigen::JacobiSVD<MatR> svd(R, Eigen::ComputeFullV);
     VecR a = svd.matrixV().col(n);
-    VecR bb = -qr.solve(AD * a);  // AN's columns are orthonormal-ish (Arnoldi): its QR suffices
+    VecR bb = -std::sqrt(2.0) * (Q1tAD * a);  // the least-squares N for this D: AN^+ = 2 AN^T
     const C d0 = poly_at(b, a, 0.0), n0 = poly_at(b, bb, 0.0);
     if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) return r;  // best so far, if any
     std::vector<C> dk(M);
@@ -183,12 +189,16 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     // SK is a fixed-point iteration, not a descent: keep the iterate with the lowest real error.
     if (sse < best_sse && std::isfinite(sse)) {
       best_sse = sse;
+      it_best = it;
       r.tf.gain = (n0 / d0).real();
       r.tf.zeros = to_roots(poly_roots(b, bb), ws);
       r.tf.poles = to_roots(poly_roots(b, a), ws);
       r.ok = std::isfinite(r.tf.gain);
     }
-    if ((it > 1 && eph <= o.c_phi) || it == o.max_iterations) return r;
+    // Converged, out of iterations, or stalled: an iteration that oscillates without lowering the
+    // real error for kSkStall iterations will not converge (noise, a wrong delay); the
+    // output-error refinement continues from the best iterate.
+    if ((it > 1 && eph <= o.c_phi) || it == o.max_iterations || it - it_best >= kSkStall) return r;
     for (int i = 0; i < M; ++i) phi[i] = d.W[i] / std::norm(dk[i]);
     dprev = dk;
   }
@@ -299,17 +309,22 @@ struct OeFunctor {
   }
 };
 
-Tf refine(const Data& d, const Tf& start, bool free_delay) {
+// LM from `start`. max_evaluations > 0 caps the residual evaluations (a screening refinement of a
+// candidate: most converge within a few tens; a start that wanders is continued only if it wins);
+// 0: the full budget, 200 (p + 1). *budget_hit tells whether the cap stopped it.
+Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations = 0, bool* budget_hit = nullptr) {
+  if (budget_hit) *budget_hit = false;
   // A zero at exactly s = 0 cannot be packed; such starts are returned unrefined.
   for (const Root& z : start.zeros) if (!z.pair && z.real == 0) return start;
   Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s};
   OeFunctor f{&d, &p};
   Eigen::LevenbergMarquardt<OeFunctor> lm(f);
-  lm.parameters.maxfev = 200 * (p.size() + 1);
+  lm.parameters.maxfev = max_evaluations > 0 ? max_evaluations : 200 * (p.size() + 1);
   lm.parameters.xtol = 1e-12;
   lm.parameters.ftol = 1e-14;
   VecR x = p.pack(start);
-  lm.minimize(x);
+  const auto status = lm.minimize(x);
+  if (budget_hit) *budget_hit = status == Eigen::LevenbergMarquardtSpace::TooManyFunctionEvaluation;
   Tf out = p.unpack(x);
   for (const Root& q : out.poles) if (!std::isfinite(q.wn) || !std::isfinite(q.real)) return start;
   if (!std::isfinite(out.gain)) return start;
@@ -409,15 +424,21 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
 
 int n_params(const Tf& t, bool free_delay) { return 1 + t.num_order() + t.den_order() + (free_delay ? 1 : 0); }
 
-bool adequate(const Data& d, const Score& s, int params, const FitOptions& o, double* chi2dof) {
+// The misfit relative to the adequacy threshold (<= 1: adequate): chi2/dof over 1 + 3/sqrt(N) with
+// sigma, else E_N over c_N.
+double misfit(const Data& d, const Score& s, int params, const FitOptions& o, double* chi2dof) {
   if (d.has_sigma) {
     const double N = double(d.w.size());
     const double dof = std::max(1.0, N - params / 2.0);
     *chi2dof = s.chi2 / dof;
-    return *chi2dof <= 1.0 + 3.0 / std::sqrt(N);
+    return *chi2dof / (1.0 + 3.0 / std::sqrt(N));
   }
-  return s.e_n <= o.c_n;
+  return s.e_n / o.c_n;
 }
+
+// Residual evaluations allowed to a candidate's screening refinement (the median candidate
+// converges in ~35; the rest are mostly starts that lose).
+constexpr int kScreenEvaluations = 60;
 
 int reflect_unstable(Tf& t) {
   int k = 0;
@@ -537,14 +558,16 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     Tf tf;
     Score s;
     bool ok = false, adequate = false, free_delay = false;
-    double chi2dof = -1;
+    bool unfinished = false;  // its refinement stopped at the screening budget
+    double chi2dof = -1, misfit = 0;
     int params = 0, iterations = 0, reflected = 0;
     double e_phi = 0;
   };
   auto evaluate = [&](Cand& c) {
     c.s = score(d, c.tf);
     c.params = n_params(c.tf, c.free_delay);
-    c.adequate = adequate(d, c.s, c.params, o, &c.chi2dof);
+    c.misfit = misfit(d, c.s, c.params, o, &c.chi2dof);
+    c.adequate = c.misfit <= 1.0;
   };
   // One order loop for a delay hypothesis; returns the lowest adequate candidate or the best.
   // SK error of orders (n, m) with delay tau removed.
@@ -563,29 +586,30 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
       if (n + std::max(0, n - 3) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
+      // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
+      // of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the joint
+      // refinement from several starts finds the basin that one start can miss); every numerator
+      // order of this n starts from them.
+      std::vector<double> starts = {tau0};
+      if (free_delay) {
+        FitOptions quick = o;
+        quick.max_iterations = 6;
+        std::vector<std::pair<double, double>> grid;  // (err, tau)
+        for (int k = -10; k <= 10; ++k) {
+          const double t = tau0 + k * tau_window;
+          if (t >= 0) grid.push_back({sk_err(t, n, n, quick).first, t});
+        }
+        std::sort(grid.begin(), grid.end());
+        starts.clear();
+        for (const auto& [e, t] : grid) {
+          bool far = true;
+          for (double u : starts) far = far && std::abs(u - t) > 1.5 * tau_window;
+          if (far) starts.push_back(t);
+          if (starts.size() == 3) break;
+        }
+      }
       for (int m = n; m >= std::max(0, n - 3); --m) {
         if (n == o.den_order_start && m < o.num_order_start) continue;
-        // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
-        // of SK errors over tau0 +- 10 windows (the SK error is spiky in tau; the joint refinement
-        // from several starts finds the basin that one start can miss).
-        std::vector<double> starts = {tau0};
-        if (free_delay) {
-          FitOptions quick = o;
-          quick.max_iterations = 6;
-          std::vector<std::pair<double, double>> grid;  // (err, tau)
-          for (int k = -10; k <= 10; ++k) {
-            const double t = tau0 + k * tau_window;
-            if (t >= 0) grid.push_back({sk_err(t, n, m, quick).first, t});
-          }
-          std::sort(grid.begin(), grid.end());
-          starts.clear();
-          for (const auto& [e, t] : grid) {
-            bool far = true;
-            for (double u : starts) far = far && std::abs(u - t) > 1.5 * tau_window;
-            if (far) starts.push_back(t);
-            if (starts.size() == 3) break;
-          }
-        }
         Cand c;
         for (double tau : starts) {
           Sk sk = sk_err(tau, n, m, o).second;
@@ -601,12 +625,18 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           evaluate(t);
           // With a free delay the SK result sits at a grid delay: refine every start jointly, so the
           // right order is not beaten by one whose extra roots absorb a delay error.
-          // Without a delay, refine only near-adequate candidates: LM at hopeless orders is wasted.
+          // Without a delay, refine only near-adequate candidates that are inadequate or had a pole
+          // reflected: LM at hopeless orders is wasted.
           const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
-          if (o.refine && (free_delay || t.reflected || (!t.adequate && near))) {
+          if (o.refine && (free_delay || (near && (t.reflected || !t.adequate)))) {
             Cand r = t;
-            r.tf = refine(d, t.tf, free_delay);
+            r.tf = refine(d, t.tf, free_delay, kScreenEvaluations, &r.unfinished);
             evaluate(r);
+            // Stopped by the screening budget while close to adequate: finish it before judging.
+            if (r.unfinished && !r.adequate && r.misfit < 3.0) {
+              r.tf = refine(d, r.tf, free_delay, 0, &r.unfinished);
+              evaluate(r);
+            }
             if (r.s.sse <= t.s.sse) t = r;
           }
           if (!c.ok || t.s.sse < c.s.sse) c = t;
@@ -676,6 +706,14 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     res.message = "no order from " + std::to_string(o.den_order_start) + " to " + std::to_string(max_n) + " could be fitted";
     return res;
   }
+  Cand fin = *pick;
+  if (fin.unfinished) {  // the winner's screening refinement was cut short: finish it
+    Cand r = fin;
+    r.tf = refine(d, fin.tf, fin.free_delay, 0, &r.unfinished);
+    evaluate(r);
+    if (r.s.sse <= fin.s.sse) fin = r;
+  }
+  pick = &fin;
   res.tf = pick->tf;
   res.num_order = pick->tf.num_order();
   res.den_order = pick->tf.den_order();

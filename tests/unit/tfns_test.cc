@@ -2,12 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
+
+#include <unistd.h>
 
 #include "fralab/plant/model.h"
 #include "test_util.h"
@@ -33,8 +36,10 @@ std::vector<std::pair<std::string, Tf>> report_tfs() {
 // Each true root inside the data band has a fitted root of the same kind within
 // max(tol, 3 sigma) relative distance, sigma being the fit's own standard deviation of that root
 // (from the refinement's covariance); the same for the DC gain. Also counts how many are within tol.
+// Misses beyond 3 sigma are counted in *beyond (and printed), not failed here: the caller decides.
 void check_roots(const std::string& name, const std::vector<Root>& truth, const std::vector<Root>& fit,
-                 const std::vector<RootInfo>& info, double lo, double hi, double tol, int* within, int* total) {
+                 const std::vector<RootInfo>& info, double lo, double hi, double tol, int* within, int* total,
+                 int* beyond) {
   for (const Root& t : truth) {
     const double wt = t.pair ? t.wn : std::abs(t.real);
     if (wt < lo || wt > hi) continue;
@@ -47,14 +52,20 @@ void check_roots(const std::string& name, const std::vector<Root>& truth, const 
       const double e = std::abs(lf - lt) / std::abs(lt);
       if (e < best) best = e, sig = k < info.size() ? info[k].rel_sigma : 0;
     }
-    EXPECT_LT(best, std::max(tol, 3 * sig)) << name << " root " << t.str() << " sigma " << sig;
+    if (!(best < std::max(tol, 3 * sig))) {
+      ++*beyond;
+      std::printf("beyond 3 sigma: %s root %s: error %.3g, sigma %.3g\n", name.c_str(), t.str().c_str(), best, sig);
+    }
     ++*total;
     *within += best < tol;
   }
 }
 
-void check_recovery(double noise, double root_tol, uint64_t seed) {
-  int n = 0, within = 0, total = 0;
+// max_beyond: the fraction of in-band roots allowed outside max(root_tol, 3 sigma). At 5 % noise two
+// close real roots (P5/Wf 85 %: 81.7 and 130 rad/s) come back as one pair near zeta = 1, whose
+// location sigma does not describe the split into two reals.
+void check_recovery(double noise, double root_tol, uint64_t seed, double max_beyond = 0.0) {
+  int n = 0, within = 0, total = 0, beyond = 0;
   for (const auto& [name, tf] : report_tfs()) {
     auto pts = tf_points(tf, 0.05, 100, 10, noise, seed);  // 0.05-100 Hz, 10 points per decade
     FitOptions o;
@@ -62,17 +73,20 @@ void check_recovery(double noise, double root_tol, uint64_t seed) {
     FitResult r = fit_tf(pts, o);
     ASSERT_EQ(r.status, FitResult::Status::kConverged) << name << ": " << r.message;
     const double lo = pts.front().w, hi = pts.back().w;  // roots inside the data band
-    check_roots(name, tf.poles, r.tf.poles, r.pole_info, lo, hi, root_tol, &within, &total);
-    check_roots(name, tf.zeros, r.tf.zeros, r.zero_info, lo, hi, root_tol, &within, &total);
+    check_roots(name, tf.poles, r.tf.poles, r.pole_info, lo, hi, root_tol, &within, &total, &beyond);
+    check_roots(name, tf.zeros, r.tf.zeros, r.zero_info, lo, hi, root_tol, &within, &total, &beyond);
     EXPECT_NEAR(r.tf.delay_s, tf.delay_s, 0.5e-3) << name;
     EXPECT_LT(std::abs(r.tf.gain / tf.gain - 1.0), std::max(root_tol, 3 * r.gain_rel_sigma)) << name;
     for (const Root& p : r.tf.poles) EXPECT_TRUE(p.stable()) << name;
     ++n;
   }
   EXPECT_EQ(n, 57);
+  EXPECT_LE(beyond, max_beyond * total) << beyond << " of " << total << " roots beyond max(tol, 3 sigma)";
+  std::printf("noise %.0f %%: %d of %d in-band roots within %.1f %% (%.0f %%), %d beyond 3 sigma\n", 100 * noise, within,
+              total, 100 * root_tol, 100.0 * within / total, beyond);
   // Most roots meet the tolerance outright; the rest are within their own 3-sigma (reported).
   // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 % (README).
-  EXPECT_GE(double(within) / total, noise == 0 ? 1.0 : (noise <= 0.01 ? 0.9 : 0.8)) << within << " of " << total;
+  EXPECT_GE(double(within) / total, noise == 0 ? 1.0 : (noise <= 0.01 ? 0.9 : noise <= 0.02 ? 0.8 : 0.0)) << within << " of " << total;
 }
 
 }  // namespace
@@ -80,6 +94,7 @@ void check_recovery(double noise, double root_tol, uint64_t seed) {
 TEST(Tfns, NoiseFreeRecoversEveryReportTransferFunctionTo0_1Percent) { check_recovery(0.0, 1e-3, 1); }
 TEST(Tfns, OnePercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.01, 0.02, 3); }
 TEST(Tfns, TwoPercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.02, 0.02, 3); }
+TEST(Tfns, FivePercentNoiseRecoversRootsWithinTheirSigma) { check_recovery(0.05, 0.02, 3, 0.01); }
 
 TEST(Tfns, LowestAdequateOrderIsChosenByTheNoise) {
   // A third-order truth whose third pole is far above the band is not identifiable with 2 %
@@ -155,37 +170,61 @@ TEST(Tfns, FailurePathsSayWhy) {
   }
 }
 
-// Octave's invfreqs on the same data, where installed: our fit error is never worse.
+// Octave's invfreqs on the same data (every transfer function of the report, 2 % noise), where
+// installed: our fit's relative error sum |G - G_a|^2 / |G|^2 is never worse. invfreqs gets our
+// fit's orders; it has no delay, so on the delayed paths it is at a disadvantage the comparison
+// keeps (the report's point: a rational in raw powers of s is what breaks).
 TEST(Tfns, NeverWorseThanOctaveInvfreqs) {
   if (std::system("command -v octave-cli >/dev/null 2>&1 && octave-cli --eval 'pkg load signal' >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "octave-cli with the signal package is not installed";
   }
-  Model m = load_model(source_path("models/j85_95.json"));
-  const std::string dir = (std::filesystem::temp_directory_path() / "fralab_invfreqs").string();
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fralab_invfreqs_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  for (const char* path : {"N:Wf", "T5:A8", "P3:BLD"}) {
-    std::string o(path), i(path);
-    o = o.substr(0, o.find(':'));
-    i = i.substr(i.find(':') + 1);
-    const Tf tf = m.path(o, i)->tf;
-    auto pts = tf_points(tf, 0.05, 100, 10, 0.02, 5);
-    FitResult r = fit_tf(pts, FitOptions{});
-    std::ofstream(dir + "/d.txt") << [&] {
-      std::ostringstream s;
-      for (const auto& p : pts) s << p.w << " " << p.value().real() << " " << p.value().imag() << "\n";
-      return s.str();
-    }();
-    const int nb = r.num_order, na = r.den_order;
-    std::string cmd = "octave-cli --eval \"pkg load signal; d = load('" + dir + "/d.txt'); w = d(:,1); h = d(:,2) + 1i*d(:,3); "
-                      "[b,a] = invfreqs(h, w, " + std::to_string(nb) + ", " + std::to_string(na) + "); "
-                      "e = h - freqs(b, a, w); printf('%.17g\\n', sum(abs(e).^2 ./ abs(h).^2));\" > " + dir + "/e.txt";
-    ASSERT_EQ(std::system(cmd.c_str()), 0);
-    double octave_err = 0;
-    std::ifstream(dir + "/e.txt") >> octave_err;
-    double ours = 0;
-    for (const auto& p : pts) ours += std::norm(p.value() - r.tf.at(p.w)) / std::norm(p.value());
-    EXPECT_LE(ours, octave_err * (1 + 1e-9)) << path;
+  struct Case {
+    std::string name;
+    std::vector<FrdPoint> pts;
+    double ours;
+  };
+  std::vector<Case> cases;
+  std::ofstream script(dir / "run.m");
+  script << "pkg load signal; warning('off', 'all');\n";
+  for (const auto& [name, tf] : report_tfs()) {
+    Case c{name, tf_points(tf, 0.05, 100, 10, 0.02, 5), 0};
+    FitResult r = fit_tf(c.pts, FitOptions{});
+    for (const auto& p : c.pts) c.ours += std::norm(p.value() - r.tf.at(p.w)) / std::norm(p.value());
+    const std::string file = (dir / ("d" + std::to_string(cases.size()) + ".txt")).string();
+    std::ofstream f(file);
+    f.precision(17);
+    for (const auto& p : c.pts) f << p.w << " " << p.value().real() << " " << p.value().imag() << "\n";
+    script << "d = load('" << file << "'); w = d(:,1); h = d(:,2) + 1i*d(:,3); "
+           << "[b,a] = invfreqs(h, w, " << r.num_order << ", " << r.den_order << "); e = h - freqs(b, a, w); "
+           << "printf('%.17g\\n', sum(abs(e).^2 ./ abs(h).^2));\n";
+    cases.push_back(std::move(c));
   }
+  script.close();
+  const std::string cmd = "octave-cli --no-gui -q " + (dir / "run.m").string() + " > " + (dir / "e.txt").string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream in(dir / "e.txt");
+  int worse_for_octave = 0, octave_broke = 0;
+  std::vector<double> ratio;  // invfreqs error / ours
+  for (const Case& c : cases) {
+    std::string tok;
+    ASSERT_TRUE(in >> tok) << "octave printed no error for " << c.name;
+    const double octave_err = std::strtod(tok.c_str(), nullptr);  // NaN/Inf when invfreqs broke
+    if (!std::isfinite(octave_err)) {
+      ++octave_broke;
+      continue;
+    }
+    EXPECT_LE(c.ours, octave_err * (1 + 1e-9)) << c.name;
+    worse_for_octave += c.ours < octave_err;
+    ratio.push_back(octave_err / c.ours);
+  }
+  std::sort(ratio.begin(), ratio.end());
+  std::printf("invfreqs: %zu transfer functions; ours better on %d (error ratio invfreqs/ours: min %.3g, median %.3g), "
+              "invfreqs gave no finite fit on %d\n",
+              cases.size(), worse_for_octave, ratio.empty() ? 0.0 : ratio.front(), ratio.empty() ? 0.0 : ratio[ratio.size() / 2],
+              octave_broke);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Tfns, AZeroPathIsReportedAsNoResponse) {
