@@ -28,47 +28,73 @@ std::vector<std::string> pairs_for_input(const std::string& x, const std::vector
 
 namespace {
 
-// Reads the tape back: every command and tape block of the run, without gaps, and the final
-// "done" status. Returns the number of tape blocks, or -1 while incomplete (logger still writing).
-int64_t check_tape(const std::string& path, const std::string& run_id, std::string* problem) {
-  std::map<std::string, std::vector<int64_t>> seqs;
-  bool done = false, final_tape = false;
-  try {
-    read_tape_file(path, [&](const TapeEvent& ev) {
-      lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
-      if (ev.channel == kTapeChannel) {
-        auto m = decode_checked<tape_block_t>(&rb, ev.channel);
-        if (m.run_id == run_id) {
-          seqs["tape"].push_back(m.seq);
-          final_tape |= m.final_block;
+// Reads the tape back as the logger writes it (each call reads only what was added since the last):
+// every command and tape block of the run, without gaps, and the final "done" status.
+class TapeCheck {
+ public:
+  TapeCheck(std::string path, std::string run_id) : path_(std::move(path)), run_id_(std::move(run_id)) {}
+
+  // The number of tape blocks; -1 while incomplete (logger still writing), -2 when a block was lost.
+  int64_t update(std::string* problem) {
+    try {
+      follow_tape_file(path_, &offset_, [&](const TapeEvent& ev) { take(ev); });
+    } catch (const InputError& e) {
+      *problem = e.what();
+      return -1;  // cannot open it (yet): try again
+    }
+    if (!bad_.empty()) {  // a whole event that does not decode: no retry mends that
+      *problem = bad_;
+      return -2;
+    }
+    if (!final_tape_ || !done_) {
+      *problem = "the tape does not yet hold the final block and the done status (read to byte " +
+                 std::to_string(offset_) + ")";
+      return -1;
+    }
+    for (auto& [kind, v] : seqs_) {
+      std::sort(v.begin(), v.end());
+      for (size_t i = 0; i < v.size(); ++i) {
+        if (v[i] != int64_t(i)) {
+          *problem = "the tape lost " + kind + " block seq " + std::to_string(i);
+          return -2;
         }
-      } else if (ev.channel == kCmdChannel) {
-        auto m = decode_checked<command_block_t>(&rb, ev.channel);
-        if (m.run_id == run_id) seqs["command"].push_back(m.seq);
-      } else if (ev.channel == kStatusChannel) {
-        auto m = decode_checked<excitation_status_t>(&rb, ev.channel);
-        done |= (m.run_id == run_id && m.state == "done");
-      }
-    });
-  } catch (const InputError& e) {
-    *problem = e.what();
-    return -1;  // possibly a partly written last event: try again
-  }
-  if (!final_tape || !done) {
-    *problem = "the tape does not yet hold the final block and the done status";
-    return -1;
-  }
-  for (auto& [kind, v] : seqs) {
-    std::sort(v.begin(), v.end());
-    for (size_t i = 0; i < v.size(); ++i) {
-      if (v[i] != int64_t(i)) {
-        *problem = "the tape lost " + kind + " block seq " + std::to_string(i);
-        return -2;
       }
     }
+    return int64_t(seqs_["tape"].size());
   }
-  return int64_t(seqs["tape"].size());
-}
+
+ private:
+  void take(const TapeEvent& ev) {
+    if (!bad_.empty()) return;
+    try {
+      decode(ev);
+    } catch (const InputError& e) {
+      bad_ = "event " + std::to_string(ev.eventnum) + ": " + e.what();
+    }
+  }
+  void decode(const TapeEvent& ev) {
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    if (ev.channel == kTapeChannel) {
+      auto m = decode_checked<tape_block_t>(&rb, ev.channel);
+      if (m.run_id == run_id_) {
+        seqs_["tape"].push_back(m.seq);
+        final_tape_ |= m.final_block;
+      }
+    } else if (ev.channel == kCmdChannel) {
+      auto m = decode_checked<command_block_t>(&rb, ev.channel);
+      if (m.run_id == run_id_) seqs_["command"].push_back(m.seq);
+    } else if (ev.channel == kStatusChannel) {
+      auto m = decode_checked<excitation_status_t>(&rb, ev.channel);
+      done_ |= (m.run_id == run_id_ && m.state == "done");
+    }
+  }
+
+  std::string path_, run_id_;
+  int64_t offset_ = 0;
+  std::map<std::string, std::vector<int64_t>> seqs_;
+  bool done_ = false, final_tape_ = false;
+  std::string bad_;
+};
 
 }  // namespace
 
@@ -169,6 +195,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
   // it writing while the tape is checked (the heartbeats are recorded too; readers ignore them).
   std::string problem;
   int64_t n = -1;
+  TapeCheck check(tape, r.run_id);
   {
     lcm::LCM lcm(url);
     ack_t beat;
@@ -178,7 +205,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
       beat.seq = i;
       lcm.publish("FRALAB_FLUSH", &beat);
       std::this_thread::sleep_for(std::chrono::milliseconds(60));
-      n = check_tape(tape, r.run_id, &problem);
+      n = check.update(&problem);
       if (n == -2) break;
     }
   }

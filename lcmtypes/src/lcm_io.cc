@@ -149,24 +149,45 @@ void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms) {
   if (FD_ISSET(fb, &fds)) b.handle();
 }
 
-int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {
+namespace {
+
+// Reads events from byte `from` on; *end: the offset after the last whole event.
+int64_t read_events(const std::string& path, long from, long* end, const std::function<void(const TapeEvent&)>& fn) {
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such tape file");
-  const auto size = static_cast<long>(std::filesystem::file_size(path));
   lcm::LogFile log(path, "r");
   if (!log.good()) throw InputError(path + ": cannot open as an LCM log");
+  if (from > 0 && std::fseek(log.getFilePtr(), from, SEEK_SET) != 0) {
+    throw InputError(path + ": cannot seek to offset " + std::to_string(from));
+  }
   int64_t n = 0;
-  long last_good = 0;
+  *end = from;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     TapeEvent te{ev->eventnum, ev->timestamp, ev->channel, ev->data, ev->datalen};
     fn(te);
     ++n;
-    last_good = std::ftell(log.getFilePtr());
+    *end = std::ftell(log.getFilePtr());
   }
+  return n;
+}
+
+}  // namespace
+
+int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {
+  long last_good = 0;
+  const int64_t n = read_events(path, 0, &last_good, fn);
+  const auto size = static_cast<long>(std::filesystem::file_size(path));
   if (last_good != size && !(n == 0 && size == 0)) {
     throw InputError(path + ": truncated or corrupt tape: " + std::to_string(n) +
                      " events read, then unreadable bytes from offset " + std::to_string(last_good) +
                      " of " + std::to_string(size));
   }
+  return n;
+}
+
+int64_t follow_tape_file(const std::string& path, int64_t* offset, const std::function<void(const TapeEvent&)>& fn) {
+  long end = 0;
+  const int64_t n = read_events(path, static_cast<long>(*offset), &end, fn);
+  *offset = end;
   return n;
 }
 

@@ -82,4 +82,10 @@ struct TapeEvent {
 /// Returns the number of events read.
 int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn);
 
+/// Follows a tape still being written: reads the whole events from byte *offset on, calling `fn`,
+/// and leaves *offset after the last of them (a partly written last event is read on a later
+/// call). Start with *offset = 0. Returns the number of events read by this call. Throws
+/// InputError when the file cannot be opened.
+int64_t follow_tape_file(const std::string& path, int64_t* offset, const std::function<void(const TapeEvent&)>& fn);
+
 }  // namespace fralab

@@ -18,7 +18,11 @@
 //                       (pairs keep their damping)          from_rad_s, to_rad_s
 //   gain_mismatch       F = k                                    gain_db = 20 log10 k
 //   hysteresis/deadband the actuator's describing function N(A) at the measured amplitude (odd
-//                       harmonics in the position are the trigger)    width (input units)
+//                       harmonics in the position are the trigger)    width (input units);
+//                       fitted first on the points below 0.3 of the simulated actuator's corner,
+//                       then alternately with the linear causes (a gain offset left out of the
+//                       width's fit) until the width moves by < 0.1 %: the simulation's own slow
+//                       actuator otherwise biases it
 //   measurement_coupling  the position channel X records X + g O: u_X:X sees F = 1 + g H_OX, every
 //                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
 // A cause is accepted when it lowers chi2 by more than its parameters' BIC penalty (k ln 2N) and
