@@ -10,15 +10,20 @@
 //    phi_i = W_i / |D^{(k-1)}(s_i)|^2 (B-8), until the equation error
 //    E_phi' = mean_i |1 - D^{(k)}(s_i) / D^{(k-1)}(s_i)| (B-9, D normalised to D(0) = 1) is <= c_phi.
 //    The polynomials are expanded in a basis orthonormal on the data (Arnoldi on the points +-j w_i
-//    with weights phi_i, so coefficients stay real); N is eliminated by QR and D is the smallest
-//    right singular vector (||d|| = 1): never normal equations in raw powers of s.
+//    with weights phi_i, so coefficients stay real); N is eliminated by projecting onto those
+//    orthonormal columns and D is the smallest right singular vector of the QR factor of what
+//    remains (||d|| = 1): never normal equations in raw powers of s. The iterate with the lowest
+//    real error is kept; an iteration that has not lowered it for 8 iterations stops (SK is a
+//    fixed point, not a descent: with noise or a wrong delay it can oscillate).
 // 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
 //    left half plane.
 // 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
 //    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
-//    model wins only with fewer parameters. Output-error refinement (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the
-//    factored parameters (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by
-//    construction) and, with delay auto, tau jointly.
+//    model wins only with fewer parameters. Output-error refinement (Levenberg-Marquardt, Eigen) of
+//    sum_i W_i |G_i - G_a(j w_i)|^2 over the factored parameters (real poles -exp(t), pairs
+//    wn = exp(a), zeta = exp(b): stable by construction) and, with delay auto, tau jointly.
+//    Candidates are screened with at most 60 residual evaluations; the chosen fit (and a screened
+//    candidate within 3x of adequate) is refined to convergence.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <= c_n.
