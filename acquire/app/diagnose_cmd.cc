@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "fralab/analyze/bode_plot.h"
 #include "fralab/identify/diagnose.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -34,43 +35,15 @@ std::vector<MeasuredPair> read_measured(const std::string& dir) {
   return v;
 }
 
-// One PNG per pair: gain (dB) and phase (deg) of measured (with sigma bars), simulation, extended.
+// One PNG per pair: measured (with sigma bars), simulation, extended model, and the residuals.
 bool render_plots(const Diagnosis& d, const std::string& dir) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return false;
-  fs::create_directories(dir + "/plots");
-  std::ostringstream gp;
-  gp << "set terminal pngcairo size 900,900 font 'sans,10'\nset termoption noenhanced\nset logscale x\nset grid\nset key bottom left\n";
+  std::vector<BodePlot> plots;
   for (const auto& p : d.pairs) {
-    const std::string stem = pair_file_stem(p.pair);
-    std::ofstream dat(dir + "/plots/" + stem + ".dat");
-    auto db = [](std::complex<double> v) { return 20 * std::log10(std::max(std::abs(v), 1e-300)); };
-    auto deg = [](std::complex<double> v) { return std::arg(v) * 180 / std::numbers::pi; };
-    double prev_pm = 0.0;
-    for (size_t i = 0; i < p.w.size(); ++i) {
-      const double f = p.w[i] / (2 * std::numbers::pi);
-      const double sdb = 20 / std::log(10.0) * p.sigma[i] / std::abs(p.meas[i]);
-      const double sdeg = p.sigma[i] / std::abs(p.meas[i]) * 180 / std::numbers::pi;
-      // Phases unwrapped relative to the measurement, so the three curves stay comparable.
-      const double pm = prev_pm + std::remainder(deg(p.meas[i]) - prev_pm, 360.0);  // unwrapped along f
-      prev_pm = pm;
-      const double ps = pm + std::remainder(deg(p.sim[i]) - pm, 360.0), pe = pm + std::remainder(deg(p.ext[i]) - pm, 360.0);
-      // Residuals measured / model in dB and degrees (columns 10-13).
-      const auto rs = p.meas[i] / p.sim[i], re = p.meas[i] / p.ext[i];
-      dat << f << " " << db(p.meas[i]) << " " << sdb << " " << pm << " " << sdeg << " " << db(p.sim[i]) << " " << ps
-          << " " << db(p.ext[i]) << " " << pe << " " << db(rs) << " " << deg(rs) << " " << db(re) << " " << deg(re) << "\n";
-    }
-    gp << "set output '" << dir << "/plots/" << stem << ".png'\nset multiplot layout 3,1 title '" << p.pair
-       << " (response " << split_pair(p.pair).second << "/" << split_pair(p.pair).first << ")'\n"
-       << "set ylabel 'gain (dB)'\nunset xlabel\nplot '" << dir << "/plots/" << stem
-       << ".dat' u 1:2:3 w yerrorbars pt 7 ps 0.5 lc rgb 'black' t 'measured', '' u 1:6 w l lw 2 lc rgb '#d62728' t 'simulation', '' u 1:8 w l lw 2 dt 2 lc rgb '#1f77b4' t 'extended model'\n"
-       << "set ylabel 'phase (deg)'\nset xlabel 'frequency (Hz)'\nplot '" << dir << "/plots/" << stem
-       << ".dat' u 1:4:5 w yerrorbars pt 7 ps 0.5 lc rgb 'black' t 'measured', '' u 1:7 w l lw 2 lc rgb '#d62728' t 'simulation', '' u 1:9 w l lw 2 dt 2 lc rgb '#1f77b4' t 'extended model'\n"
-       << "set ylabel 'residual (dB, deg)'\nplot '" << dir << "/plots/" << stem
-       << ".dat' u 1:10 w lp pt 7 ps 0.5 lc rgb '#d62728' t 'measured/simulation dB', '' u 1:11 w lp pt 5 ps 0.5 lc rgb '#ff7f0e' t 'measured/simulation deg', '' u 1:12 w l lw 2 dt 2 lc rgb '#1f77b4' t 'measured/extended dB', '' u 1:13 w l lw 2 dt 3 lc rgb '#17becf' t 'measured/extended deg'\n"
-       << "unset multiplot\n";
+    const auto [x, y] = split_pair(p.pair);
+    plots.push_back({p.pair + " (response " + y + "/" + x + ")", pair_file_stem(p.pair), p.w, p.meas, p.sigma,
+                     {{"simulation", p.sim}, {"extended model", p.ext}}});
   }
-  std::ofstream(dir + "/plots/plots.gp") << gp.str();
-  return std::system(("gnuplot '" + dir + "/plots/plots.gp' >/dev/null 2>&1").c_str()) == 0;
+  return render_bode_plots(plots, dir + "/plots");
 }
 
 void write_report(const Diagnosis& d, const std::string& sim_name, const std::string& data_name, bool plots,

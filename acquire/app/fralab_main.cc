@@ -8,6 +8,7 @@
 
 #include "fralab/plant/embedded_models.h"
 
+#include "fralab/analyze/bode_plot.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
 #include "diagnose_cmd.h"
@@ -124,6 +125,8 @@ int main(int argc, char** argv) {
   fit->add_option("--out", fit_out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")->required();
   fit->add_option("--max-order", max_order, "highest denominator order");
   fit->add_option("--delete", deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)");
+  std::string fit_plot;
+  fit->add_option("--plot", fit_plot, "Bode cross-plot PNG: the data against the fit (and the fit after deletion)");
 
   DiagnoseCommand dc;
   auto* diag = app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
@@ -194,6 +197,32 @@ int main(int argc, char** argv) {
       json_save_file(fit_out, j);
       std::printf("fralab: %s -> %s: %s\n", fit_in.c_str(), fit_out.c_str(), r.message.c_str());
       std::printf("  %s\n", tf_to_text(r.tf).c_str());
+      if (!fit_plot.empty()) {
+        const std::filesystem::path png(fit_plot);
+        if (png.extension() != ".png") throw InputError("--plot " + fit_plot + ": the cross-plot is a PNG: name it *.png");
+        BodePlot bp{(in.frd.pair.empty() ? fit_in : in.frd.pair) + ": data and fit", png.stem().string(), {}, {}, {}, {}};
+        bool sig = true;
+        for (const auto& pt : in.frd.points) sig = sig && pt.valid && pt.sigma > 0;
+        BodeCurve fitted{"fit", {}}, kept{"fit after deletion", {}};
+        const Tf after = del.empty() ? r.tf : delete_roots(r.tf, del);
+        std::vector<FrdPoint> pts = in.frd.points;
+        std::sort(pts.begin(), pts.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+        for (const auto& pt : pts) {
+          if (!pt.valid || !(pt.w > 0)) continue;
+          bp.w.push_back(pt.w);
+          bp.meas.push_back(pt.value());
+          if (sig) bp.sigma.push_back(pt.sigma);
+          fitted.g.push_back(r.tf.at(pt.w));
+          kept.g.push_back(after.at(pt.w));
+        }
+        bp.models.push_back(fitted);
+        if (!del.empty()) bp.models.push_back(kept);
+        const std::string dir = png.has_parent_path() ? png.parent_path().string() : ".";
+        if (!render_bode_plots({bp}, dir, bp.stem + ".gp")) {
+          throw InputError("--plot " + fit_plot + ": gnuplot is not installed or failed (data and script written beside it)");
+        }
+        std::printf("  cross-plot %s\n", fit_plot.c_str());
+      }
     } else if (*tape) {
       std::printf("%s\n", tape_summary(info_log).dump(2).c_str());
     } else if (*analyze) {

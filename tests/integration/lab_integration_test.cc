@@ -124,6 +124,41 @@ TEST(Lab, FitCommandReadsAnFrdAndWritesATf) {
   EXPECT_NE(c.output.find("--delay \"soon\" must be auto, none or a delay in seconds"), std::string::npos) << c.output;
 }
 
+TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
+  // TFNS's cross-plot: the data of a known second-order tf (CSV, noise-free) against its fit.
+  std::string t = tmpdir("crossplot");
+  Tf truth;
+  truth.gain = 2.0;
+  truth.poles = {Root::Real(-3.0), Root::Real(-40.0)};
+  {
+    std::ofstream csv(t + "/d.csv");
+    csv.precision(17);
+    csv << "w,re,im\n";
+    for (const auto& p : fralab::testing::tf_points(truth, 0.05, 50, 10, 0.0, 1)) {
+      csv << p.w << "," << p.value().real() << "," << p.value().imag() << "\n";
+    }
+  }
+  Cmd c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --delay none --out " + t + "/tf.json --plot " + t + "/cross.png");
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_NE(c.output.find("cross-plot " + t + "/cross.png"), std::string::npos) << c.output;
+  EXPECT_GT(fs::file_size(t + "/cross.png"), 10000u);
+  // Columns 8 and 9 of the plot's data: measured / fit in dB and degrees, ~0 for an exact fit.
+  std::ifstream dat(t + "/cross.dat");
+  int rows = 0;
+  for (std::string line; std::getline(dat, line); ++rows) {
+    std::istringstream s(line);
+    std::vector<double> v;
+    for (double x; s >> x;) v.push_back(x);
+    ASSERT_EQ(v.size(), 9u) << line;
+    EXPECT_NEAR(v[7], 0.0, 1e-6) << line;
+    EXPECT_NEAR(v[8], 0.0, 1e-6) << line;
+  }
+  EXPECT_EQ(rows, 31);  // 0.05-50 Hz, 10 per decade
+  c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --out " + t + "/tf2.json --plot " + t + "/cross.svg");
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("--plot " + t + "/cross.svg: the cross-plot is a PNG: name it *.png"), std::string::npos) << c.output;
+}
+
 TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
   const std::string& d = measured();
   // Offline: the tape read directly.
