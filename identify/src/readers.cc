@@ -181,7 +181,11 @@ FitInput read_fit_input(const std::string& file) {
   std::string first;
   while (std::getline(in, first) && trim(first).empty()) {}
   std::string t = trim(first);
-  if (!t.empty() && t[0] == '{') {
+  if (t.empty()) {
+    throw InputError(file + ": empty: expected fralab-frd/1 JSON, a CSV with a header (w or f_hz, and mag/phase_deg or "
+                     "re/im), or a TFNS card deck");
+  }
+  if (t[0] == '{') {
     FitInput r;
     r.frd = load_frd(file);
     return r;

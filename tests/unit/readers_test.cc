@@ -55,6 +55,10 @@ TEST(Readers, CsvErrorsNameFileAndLine) {
   EXPECT_NE(error_of(f).find(f + ":3: \"x\" is not a number"), std::string::npos) << error_of(f);
   f = write("d.csv", "w,gain,phase\n1,2,3\n");
   EXPECT_NE(error_of(f).find("the header needs mag or mag_db with phase_deg, or re and im"), std::string::npos);
+  f = write("e.csv", "w,re,im\n1,1,0\n2,nan,0\n");  // a NaN sample is refused, not fitted around
+  EXPECT_NE(error_of(f).find(f + ":3: \"nan\" is not a number"), std::string::npos) << error_of(f);
+  f = write("empty.csv", "\n  \n");
+  EXPECT_NE(error_of(f).find(f + ": empty: expected fralab-frd/1 JSON, a CSV with a header"), std::string::npos) << error_of(f);
 }
 
 TEST(Readers, TfnsDeckWithUnitOverrides) {
