@@ -22,9 +22,12 @@ bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& di
   gp << "set terminal pngcairo size 900,900 font 'sans,10'\nset termoption noenhanced\nset logscale x\nset grid\nset key bottom left\n";
   for (const auto& p : plots) {
     const size_t N = p.w.size();
-    bool ok = p.meas.size() == N && (p.sigma.empty() || p.sigma.size() == N) && p.models.size() <= 4;
+    bool ok = p.meas.size() == N && (p.sigma.empty() || p.sigma.size() == N);
     for (const auto& m : p.models) ok = ok && m.g.size() == N;
     if (!ok) throw InputError("bode plot " + p.stem + ": frequencies, measurements, sigmas and model curves differ in length");
+    if (p.models.size() > 4) {
+      throw InputError("bode plot " + p.stem + ": " + std::to_string(p.models.size()) + " model curves, at most 4 are drawn");
+    }
     const std::string dat = dir + "/" + p.stem + ".dat";
     std::ofstream out(dat);
     out.precision(12);

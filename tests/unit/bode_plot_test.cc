@@ -74,14 +74,21 @@ TEST(BodePlot, ColumnsHoldGainUnwrappedPhaseAndResiduals) {
   fs::remove_all(dir);
 }
 
-TEST(BodePlot, ArraysOfDifferentLengthsAreRefusedByName) {
+TEST(BodePlot, BadPlotsAreRefusedByName) {
+  auto error_of = [](const BodePlot& p) {
+    try {
+      render_bode_plots({p}, (fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid()))).string());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
   BodePlot p{"x", "bad", {1, 2, 3}, {1, 1, 1}, {}, {{"model", {1, 1}}}};
-  try {
-    render_bode_plots({p}, (fs::temp_directory_path() / "fralab_bode_bad").string());
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("bode plot bad: frequencies, measurements, sigmas and model curves differ in length"),
-              std::string::npos)
-        << e.what();
-  }
+  EXPECT_NE(error_of(p).find("bode plot bad: frequencies, measurements, sigmas and model curves differ in length"),
+            std::string::npos)
+      << error_of(p);
+  BodeCurve c{"m", {1, 1, 1}};
+  BodePlot q{"x", "many", {1, 2, 3}, {1, 1, 1}, {}, {c, c, c, c, c}};
+  EXPECT_NE(error_of(q).find("bode plot many: 5 model curves, at most 4 are drawn"), std::string::npos) << error_of(q);
+  fs::remove_all(fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid())));
 }

@@ -32,7 +32,7 @@ struct BodePlot {
 /// Writes dir/STEM.dat for every plot and one gnuplot script dir/SCRIPT, and renders dir/STEM.png
 /// with a single gnuplot run. Returns false (nothing rendered) when gnuplot is not installed or
 /// fails; the .dat files and the script are written either way. Throws InputError when a plot's
-/// arrays disagree in length.
+/// arrays disagree in length or it has more than 4 model curves.
 bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& dir, const std::string& script = "plots.gp");
 
 }  // namespace fralab
