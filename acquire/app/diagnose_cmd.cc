@@ -1,10 +1,8 @@
 #include "diagnose_cmd.h"
 
-#include <cmath>
-#include <cstdio>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <numbers>
 #include <iomanip>
 #include <sstream>
 
