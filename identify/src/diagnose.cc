@@ -471,11 +471,14 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
         // The simulation's own actuator, still wrong, lags at 0.3 of its corner and biases a width
         // fitted against it alone (the J85's A8: 8.3 instead of 9.2, and a spurious -0.4 dB gain):
         // alternate, the width with the linear causes in place, then the linear causes again.
+        // Each round fits the linear causes on the current width; the last one follows a width that
+        // moved by less than 0.1 %, or is the kNlRounds-th.
         std::vector<Cause> lin;
-        for (int round = 0; round < kNlRounds; ++round) {
+        bool settled = false;
+        for (int round = 0;; ++round) {
           for (size_t q = 0; q < N; ++q) p.factor[q] = base[q] * nl.F[q];
           lin = linear_causes();
-          if (round == kNlRounds - 1) break;
+          if (settled || round == kNlRounds - 1) break;
           std::vector<C> L(N, 1.0);
           // A gain offset is left out: at low frequency it trades against the width's gain and
           // would keep itself alive; it must earn its place again against the new width.
@@ -486,13 +489,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
           double c0_again = 0;
           Cause again = fit_nl(L, &c0_again);
           if (!std::isfinite(again.chi2) || again.cause != nl.cause) break;
-          const double moved = std::abs(again.params["width"] / nl.params["width"] - 1);
+          settled = std::abs(again.params["width"] / nl.params["width"] - 1) < 1e-3;
           nl = again;
-          if (moved < 1e-3) {
-            for (size_t q = 0; q < N; ++q) p.factor[q] = base[q] * nl.F[q];
-            lin = linear_causes();
-            break;
-          }
         }
         std::ostringstream ex;
         const double mh3 = h3 / low.size();
