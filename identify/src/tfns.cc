@@ -569,6 +569,12 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     c.misfit = misfit(d, c.s, c.params, o, &c.chi2dof);
     c.adequate = c.misfit <= 1.0;
   };
+  // Output-error refinement of a candidate in place: `budget` residual evaluations (0: the full
+  // budget); c.unfinished tells whether the budget stopped it.
+  auto refine_cand = [&](Cand& c, int budget) {
+    c.tf = refine(d, c.tf, c.free_delay, budget, &c.unfinished);
+    evaluate(c);
+  };
   // One order loop for a delay hypothesis; returns the lowest adequate candidate or the best.
   // SK error of orders (n, m) with delay tau removed.
   auto sk_err = [&](double tau, int n, int m, FitOptions oo) {
@@ -630,13 +636,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
           if (o.refine && (free_delay || (near && (t.reflected || !t.adequate)))) {
             Cand r = t;
-            r.tf = refine(d, t.tf, free_delay, kScreenEvaluations, &r.unfinished);
-            evaluate(r);
+            refine_cand(r, kScreenEvaluations);
             // Stopped by the screening budget while close to adequate: finish it before judging.
-            if (r.unfinished && !r.adequate && r.misfit < 3.0) {
-              r.tf = refine(d, r.tf, free_delay, 0, &r.unfinished);
-              evaluate(r);
-            }
+            if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
             if (r.s.sse <= t.s.sse) t = r;
           }
           if (!c.ok || t.s.sse < c.s.sse) c = t;
@@ -709,8 +711,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   Cand fin = *pick;
   if (fin.unfinished) {  // the winner's screening refinement was cut short: finish it
     Cand r = fin;
-    r.tf = refine(d, fin.tf, fin.free_delay, 0, &r.unfinished);
-    evaluate(r);
+    refine_cand(r, 0);
     if (r.s.sse <= fin.s.sse) fin = r;
   }
   pick = &fin;
