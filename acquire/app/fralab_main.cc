@@ -8,7 +8,6 @@
 
 #include "fralab/plant/embedded_models.h"
 
-#include "fralab/analyze/bode_plot.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
 #include "diagnose_cmd.h"
@@ -188,8 +187,8 @@ int main(int argc, char** argv) {
         a = b + 1;
       }
       Json j = fit_to_json(r, in.frd.pair);
+      const Tf kept = del.empty() ? r.tf : delete_roots(r.tf, del);
       if (!del.empty()) {
-        Tf kept = delete_roots(r.tf, del);
         j["deleted"] = del;
         j["zeros"] = tf_to_json(kept)["zeros"];
         j["poles"] = tf_to_json(kept)["poles"];
@@ -200,23 +199,7 @@ int main(int argc, char** argv) {
       if (!fit_plot.empty()) {
         const std::filesystem::path png(fit_plot);
         if (png.extension() != ".png") throw InputError("--plot " + fit_plot + ": the cross-plot is a PNG: name it *.png");
-        BodePlot bp{(in.frd.pair.empty() ? fit_in : in.frd.pair) + ": data and fit", png.stem().string(), {}, {}, {}, {}};
-        bool sig = true;
-        for (const auto& pt : in.frd.points) sig = sig && pt.valid && pt.sigma > 0;
-        BodeCurve fitted{"fit", {}}, kept{"fit after deletion", {}};
-        const Tf after = del.empty() ? r.tf : delete_roots(r.tf, del);
-        std::vector<FrdPoint> pts = in.frd.points;
-        std::sort(pts.begin(), pts.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
-        for (const auto& pt : pts) {
-          if (!pt.valid || !(pt.w > 0)) continue;
-          bp.w.push_back(pt.w);
-          bp.meas.push_back(pt.value());
-          if (sig) bp.sigma.push_back(pt.sigma);
-          fitted.g.push_back(r.tf.at(pt.w));
-          kept.g.push_back(after.at(pt.w));
-        }
-        bp.models.push_back(fitted);
-        if (!del.empty()) bp.models.push_back(kept);
+        const BodePlot bp = fit_cross_plot(in.frd, fit_in, r.tf, del.empty() ? nullptr : &kept, png.stem().string());
         const std::string dir = png.has_parent_path() ? png.parent_path().string() : ".";
         if (!render_bode_plots({bp}, dir, bp.stem + ".gp")) {
           throw InputError("--plot " + fit_plot + ": gnuplot is not installed or failed (data and script written beside it)");

@@ -1,9 +1,10 @@
 #include "fralab/identify/fit_io.h"
 
-#include "fralab/identify/state_model.h"
-
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+
+#include "fralab/identify/state_model.h"
 
 namespace fralab {
 
@@ -65,6 +66,25 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
        << a["fit"]["status"].get<std::string>() << " |\n";
   }
   return fits;
+}
+
+BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit, const Tf* after_deletion,
+                        const std::string& stem) {
+  std::vector<FrdPoint> pts;
+  for (const auto& pt : data.points) if (pt.valid && pt.w > 0) pts.push_back(pt);
+  std::sort(pts.begin(), pts.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  bool sig = true;
+  for (const auto& pt : pts) sig = sig && pt.sigma > 0;
+  BodePlot bp{(data.pair.empty() ? source : data.pair) + ": data and fit", stem, {}, {}, {}, {{"fit", {}}}};
+  if (after_deletion) bp.models.push_back({"fit after deletion", {}});
+  for (const auto& pt : pts) {
+    bp.w.push_back(pt.w);
+    bp.meas.push_back(pt.value());
+    if (sig) bp.sigma.push_back(pt.sigma);
+    bp.models[0].g.push_back(fit.at(pt.w));
+    if (after_deletion) bp.models[1].g.push_back(after_deletion->at(pt.w));
+  }
+  return bp;
 }
 
 }  // namespace fralab

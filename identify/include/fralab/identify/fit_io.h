@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/analyze/bode_plot.h"
 #include "fralab/identify/transfer_matrix.h"
 
 namespace fralab {
@@ -17,5 +18,11 @@ void parse_delay_option(const std::string& text, FitOptions* o);
 /// fits in the order of `curves`.
 std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o, const std::string& dir,
                                      const std::string& title);
+
+/// TFNS's cross-plot of `data` against `fit` (and against `after_deletion` when given): the valid
+/// points sorted by frequency, sigma bars when every valid point carries sigma > 0. Titled
+/// "<pair or source>: data and fit"; `stem` names its files.
+BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit, const Tf* after_deletion,
+                        const std::string& stem);
 
 }  // namespace fralab
