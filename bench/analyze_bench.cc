@@ -63,7 +63,8 @@ static void BM_OfflineTape(benchmark::State& state) {
     fs = b.sample_rate_hz;
   });
   engine_s = samples / fs;
-  state.counters["x_realtime"] = benchmark::Counter(engine_s * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["x_realtime"] =
+      benchmark::Counter(engine_s * state.iterations(), benchmark::Counter::kIsRate);
   state.counters["channels"] = 15;
 }
 BENCHMARK(BM_OfflineTape)->Unit(benchmark::kMillisecond);

@@ -12,9 +12,12 @@ using namespace fralab;
 static void BM_ReportCampaignFits(benchmark::State& state) {
   std::vector<std::vector<FrdPoint>> data;
   for (int op : {70, 85, 95}) {
-    Model m = load_model(std::string(FRALAB_SOURCE_DIR) + "/models/j85_" + std::to_string(op) + ".json");
-    for (const auto& in : m.inputs) data.push_back(fralab::testing::tf_points(*in.actuator, 0.05, 100, 10, 0.02, 3));
-    for (const auto& p : m.paths) data.push_back(fralab::testing::tf_points(p.tf, 0.05, 100, 10, 0.02, 3));
+    Model m =
+        load_model(std::string(FRALAB_SOURCE_DIR) + "/models/j85_" + std::to_string(op) + ".json");
+    for (const auto& in : m.inputs)
+      data.push_back(fralab::testing::tf_points(*in.actuator, 0.05, 100, 10, 0.02, 3));
+    for (const auto& p : m.paths)
+      data.push_back(fralab::testing::tf_points(p.tf, 0.05, 100, 10, 0.02, 3));
   }
   for (auto _ : state) {
     for (const auto& d : data) benchmark::DoNotOptimize(fit_tf(d, FitOptions{}).tf.gain);

@@ -23,8 +23,8 @@ static void BM_J85_95_Plant(benchmark::State& state) {
     ++k;
   }
   state.SetItemsProcessed(state.iterations());
-  state.counters["x_realtime"] =
-      benchmark::Counter(double(state.iterations()) / opt.sample_rate_hz, benchmark::Counter::kIsRate);
+  state.counters["x_realtime"] = benchmark::Counter(double(state.iterations()) / opt.sample_rate_hz,
+                                                    benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_J85_95_Plant);
 

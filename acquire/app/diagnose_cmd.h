@@ -11,7 +11,7 @@ namespace fralab {
 
 struct DiagnoseCommand {
   std::string simulation;
-  std::string engine;    // measure this first (and once more, other seed, 1.5x amplitude: validation)
+  std::string engine;  // measure this first (and once more, other seed, 1.5x amplitude: validation)
   std::string measured;  // or read this measure folder (its validation/ subfolder when present)
   std::string out;
   MeasureOptions measure;  // flags of `measure`

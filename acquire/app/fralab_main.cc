@@ -6,11 +6,10 @@
 #include <filesystem>
 #include <iostream>
 
-#include "fralab/plant/embedded_models.h"
-
+#include "diagnose_cmd.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
-#include "diagnose_cmd.h"
+#include "fralab/plant/embedded_models.h"
 #include "lab.h"
 #include "tape_analysis.h"
 
@@ -21,14 +20,18 @@ namespace {
 void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--input", m.inputs, "input(s) NAME[,NAME...] (default: all)");
   c->add_option("--band", m.band, "LO_HZ:HI_HZ")->capture_default_str();
-  c->add_option("--excitation", m.excitation, "stepped, sweep or multisine (all inputs at once)")->capture_default_str();
-  c->add_option("--multisine-phases", m.multisine_phases, "schroeder or random")->capture_default_str();
+  c->add_option("--excitation", m.excitation, "stepped, sweep or multisine (all inputs at once)")
+      ->capture_default_str();
+  c->add_option("--multisine-phases", m.multisine_phases, "schroeder or random")
+      ->capture_default_str();
   c->add_flag("--odd-lines", m.odd_lines, "multisine: odd harmonics only");
   c->add_option("--points-per-decade", m.points_per_decade)->capture_default_str();
   c->add_option("--amplitude-pct", m.amplitude_pct, "% of full scale (default: per input, 2)");
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
-  c->add_option("--amplitude-scale", m.amplitude_scale, "multiplies every input's amplitude")->capture_default_str();
-  c->add_option("--speed", m.speed, "1 = real time, 0 = as fast as possible")->capture_default_str();
+  c->add_option("--amplitude-scale", m.amplitude_scale, "multiplies every input's amplitude")
+      ->capture_default_str();
+  c->add_option("--speed", m.speed, "1 = real time, 0 = as fast as possible")
+      ->capture_default_str();
   c->add_option("--sample-rate", m.sample_rate_hz, "Hz")->capture_default_str();
   c->add_option("--min-cycles", m.min_cycles)->capture_default_str();
   c->add_option("--min-integrate-s", m.min_integrate_s)->capture_default_str();
@@ -81,9 +84,12 @@ Json tape_summary(const std::string& path) {
 }
 
 void print_measure(const MeasureResult& r, const std::string& out) {
-  std::printf("fralab: %zu pairs measured; engine time %.0f s (%.2f h), wall time %.1f s (%.0fx); tape %s/tape.lcmlog (%lld blocks); frd in %s/frd\n",
-              r.pairs.size(), r.engine_time_s, r.engine_time_s / 3600, r.wall_time_s,
-              r.engine_time_s / std::max(r.wall_time_s, 1e-9), out.c_str(), (long long)r.tape_blocks, out.c_str());
+  std::printf(
+      "fralab: %zu pairs measured; engine time %.0f s (%.2f h), wall time %.1f s (%.0fx); tape "
+      "%s/tape.lcmlog (%lld blocks); frd in %s/frd\n",
+      r.pairs.size(), r.engine_time_s, r.engine_time_s / 3600, r.wall_time_s,
+      r.engine_time_s / std::max(r.wall_time_s, 1e-9), out.c_str(), (long long)r.tape_blocks,
+      out.c_str());
 }
 
 }  // namespace
@@ -94,15 +100,20 @@ int main(int argc, char** argv) {
 
   MeasureOptions run_opt;
   run_opt.out = "out/lab";
-  auto* run = app.add_subcommand("run", "the lab end to end on an engine (default: embedded J85 95 %)");
-  run->add_option("--engine", run_opt.engine, "engine model file or embedded name")->capture_default_str();
+  auto* run =
+      app.add_subcommand("run", "the lab end to end on an engine (default: embedded J85 95 %)");
+  run->add_option("--engine", run_opt.engine, "engine model file or embedded name")
+      ->capture_default_str();
   run->add_option("--out", run_opt.out)->capture_default_str();
   std::string run_sim;
-  run->add_option("--simulation", run_sim, "diagnose against this simulation (default: the engine's _sim model when embedded)");
+  run->add_option(
+      "--simulation", run_sim,
+      "diagnose against this simulation (default: the engine's _sim model when embedded)");
   add_measure_flags(run, run_opt);
 
   MeasureOptions mo;
-  auto* measure = app.add_subcommand("measure", "plant, acquisition, analysers: tape and frd files");
+  auto* measure =
+      app.add_subcommand("measure", "plant, acquisition, analysers: tape and frd files");
   measure->add_option("--engine", mo.engine, "engine model file or embedded name")->required();
   measure->add_option("--out", mo.out)->required();
   add_measure_flags(measure, mo);
@@ -110,7 +121,8 @@ int main(int argc, char** argv) {
   std::string log, out;
   std::vector<std::string> pairs;
   AnalyzerOptions aopt;
-  auto* analyze = app.add_subcommand("analyze", "tape mode, offline: analyse pairs from a tape file");
+  auto* analyze =
+      app.add_subcommand("analyze", "tape mode, offline: analyse pairs from a tape file");
   analyze->add_option("--log", log, "tape (LCM log)")->required();
   analyze->add_option("--pair", pairs, "E1:E2, repeatable")->required();
   analyze->add_option("--out", out, "writes OUT/frd/<E1>_<E2>.json")->required();
@@ -118,26 +130,36 @@ int main(int argc, char** argv) {
 
   std::string fit_in, fit_out, fit_delay = "auto", deletions;
   int max_order = -1;
-  auto* fit = app.add_subcommand("fit", "identification alone: a transfer function from frequency-response data");
-  fit->add_option("--frd", fit_in, "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck")->required();
-  fit->add_option("--delay", fit_delay, "auto, none or SECONDS (subtracted)")->capture_default_str();
-  fit->add_option("--out", fit_out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")->required();
+  auto* fit = app.add_subcommand(
+      "fit", "identification alone: a transfer function from frequency-response data");
+  fit->add_option("--frd", fit_in, "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck")
+      ->required();
+  fit->add_option("--delay", fit_delay, "auto, none or SECONDS (subtracted)")
+      ->capture_default_str();
+  fit->add_option("--out", fit_out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")
+      ->required();
   fit->add_option("--max-order", max_order, "highest denominator order");
   fit->add_option("--delete", deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)");
   std::string fit_plot;
-  fit->add_option("--plot", fit_plot, "Bode cross-plot PNG: the data against the fit (and the fit after deletion)");
+  fit->add_option("--plot", fit_plot,
+                  "Bode cross-plot PNG: the data against the fit (and the fit after deletion)");
 
   DiagnoseCommand dc;
-  auto* diag = app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
-  diag->add_option("--simulation", dc.simulation, "the simulation (fralab-model/1 file or embedded name)")->required();
-  diag->add_option("--engine", dc.engine, "measure this engine model first (every flag of measure applies)");
+  auto* diag =
+      app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
+  diag->add_option("--simulation", dc.simulation,
+                   "the simulation (fralab-model/1 file or embedded name)")
+      ->required();
+  diag->add_option("--engine", dc.engine,
+                   "measure this engine model first (every flag of measure applies)");
   diag->add_option("--measured", dc.measured, "or: a measure output folder");
   diag->add_option("--out", dc.out)->required();
   diag->add_flag("!--no-plots", dc.plots, "skip the gnuplot figures");
   add_measure_flags(diag, dc.measure);
 
   std::string info_log;
-  auto* tape = app.add_subcommand("tape", "summarise a tape: channels, blocks, gaps, excitation states (JSON)");
+  auto* tape = app.add_subcommand(
+      "tape", "summarise a tape: channels, blocks, gaps, excitation states (JSON)");
   tape->add_option("--log", info_log, "tape (LCM log)")->required();
 
   CLI11_PARSE(app, argc, argv);
@@ -148,7 +170,8 @@ int main(int argc, char** argv) {
       std::string sim = run_sim;
       if (sim.empty()) {
         std::string base = std::filesystem::path(run_opt.engine).stem().string();
-        for (const auto& e : embedded_models()) if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
+        for (const auto& e : embedded_models())
+          if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
       }
       if (sim.empty()) {
         MeasureResult r = run_measure(run_opt);
@@ -159,12 +182,16 @@ int main(int argc, char** argv) {
         d.engine = run_opt.engine;
         d.out = run_opt.out;
         d.measure = run_opt;
-        std::printf("fralab: measuring %s and diagnosing %s ...\n", run_opt.engine.c_str(), sim.c_str());
+        std::printf("fralab: measuring %s and diagnosing %s ...\n", run_opt.engine.c_str(),
+                    sim.c_str());
         std::string summary = run_diagnose(d);
         Json rj = json_load_file(run_opt.out + "/measure/run.json");
-        std::printf("fralab: engine time %.0f s (%.2f h) measured in %.1f s (%.0fx), tape %s/measure/tape.lcmlog, transfer matrix %s/measure/transfer_matrix.md\n",
-                    rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600, rj["wall_time_s"].get<double>(),
-                    rj["speedup"].get<double>(), run_opt.out.c_str(), run_opt.out.c_str());
+        std::printf(
+            "fralab: engine time %.0f s (%.2f h) measured in %.1f s (%.0fx), tape "
+            "%s/measure/tape.lcmlog, transfer matrix %s/measure/transfer_matrix.md\n",
+            rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600,
+            rj["wall_time_s"].get<double>(), rj["speedup"].get<double>(), run_opt.out.c_str(),
+            run_opt.out.c_str());
         std::printf("fralab: %s\n", summary.c_str());
       }
     } else if (*measure) {
@@ -198,11 +225,15 @@ int main(int argc, char** argv) {
       std::printf("  %s\n", tf_to_text(r.tf).c_str());
       if (!fit_plot.empty()) {
         const std::filesystem::path png(fit_plot);
-        if (png.extension() != ".png") throw InputError("--plot " + fit_plot + ": the cross-plot is a PNG: name it *.png");
-        const BodePlot bp = fit_cross_plot(in.frd, fit_in, r.tf, del.empty() ? nullptr : &kept, png.stem().string());
+        if (png.extension() != ".png")
+          throw InputError("--plot " + fit_plot + ": the cross-plot is a PNG: name it *.png");
+        const BodePlot bp = fit_cross_plot(in.frd, fit_in, r.tf, del.empty() ? nullptr : &kept,
+                                           png.stem().string());
         const std::string dir = png.has_parent_path() ? png.parent_path().string() : ".";
         if (!render_bode_plots({bp}, dir, bp.stem + ".gp")) {
-          throw InputError("--plot " + fit_plot + ": gnuplot is not installed or failed (data and script written beside it)");
+          throw InputError(
+              "--plot " + fit_plot +
+              ": gnuplot is not installed or failed (data and script written beside it)");
         }
         std::printf("  cross-plot %s\n", fit_plot.c_str());
       }
@@ -212,7 +243,8 @@ int main(int argc, char** argv) {
       auto frds = analyze_tape_file(log, pairs, aopt);
       std::filesystem::create_directories(out + "/frd");
       for (const Frd& f : frds) save_frd(out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
-      std::printf("fralab: analysed %zu pairs from %s into %s/frd\n", frds.size(), log.c_str(), out.c_str());
+      std::printf("fralab: analysed %zu pairs from %s into %s/frd\n", frds.size(), log.c_str(),
+                  out.c_str());
     }
     return 0;
   } catch (const std::exception& e) {

@@ -1,12 +1,13 @@
 #include "lab.h"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <thread>
-#include <unistd.h>
 
 #include "fralab/acquire/model_info.h"
 #include "fralab/acquire/supervisor.h"
@@ -18,7 +19,8 @@ namespace fralab {
 
 namespace fs = std::filesystem;
 
-std::vector<std::string> pairs_for_input(const std::string& x, const std::vector<std::string>& outs) {
+std::vector<std::string> pairs_for_input(const std::string& x,
+                                         const std::vector<std::string>& outs) {
   std::vector<std::string> p;
   for (const auto& o : outs) p.push_back(x + ":" + o);
   p.push_back("u_" + x + ":" + x);
@@ -32,9 +34,11 @@ namespace {
 // every command and tape block of the run, without gaps, and the final "done" status.
 class TapeCheck {
  public:
-  TapeCheck(std::string path, std::string run_id) : path_(std::move(path)), run_id_(std::move(run_id)) {}
+  TapeCheck(std::string path, std::string run_id)
+      : path_(std::move(path)), run_id_(std::move(run_id)) {}
 
-  // The number of tape blocks; -1 while incomplete (logger still writing), -2 when a block was lost.
+  // The number of tape blocks; -1 while incomplete (logger still writing), -2 when a block was
+  // lost.
   int64_t update(std::string* problem) {
     try {
       follow_tape_file(path_, &offset_, [&](const TapeEvent& ev) { take(ev); });
@@ -118,14 +122,26 @@ MeasureResult run_measure(const MeasureOptions& o) {
   auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
 
   Supervisor sup;
-  sup.start({"logger", {"lcm-logger", "--lcm-url=" + url, "-f", "--flush-interval=50", "-v", "-c", "FRALAB_ACK", tape}, log("logger")});
-  for (int i = 0; i < 100 && !fs::exists(tape); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  sup.start({"logger",
+             {"lcm-logger", "--lcm-url=" + url, "-f", "--flush-interval=50", "-v", "-c",
+              "FRALAB_ACK", tape},
+             log("logger")});
+  for (int i = 0; i < 100 && !fs::exists(tape); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
   if (!fs::exists(tape)) sup.wait_for({"logger"}, 0.1);  // surfaces its error
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
 
-  std::vector<std::string> plant_args = {module_path("fralab-plant"), "--model", engine_file, "--lcm-url", url,
-                                         "--seed", std::to_string(o.seed), "--run-id", r.run_id,
-                                         "--sample-rate", std::to_string(o.sample_rate_hz)};
+  std::vector<std::string> plant_args = {module_path("fralab-plant"),
+                                         "--model",
+                                         engine_file,
+                                         "--lcm-url",
+                                         url,
+                                         "--seed",
+                                         std::to_string(o.seed),
+                                         "--run-id",
+                                         r.run_id,
+                                         "--sample-rate",
+                                         std::to_string(o.sample_rate_hz)};
   if (o.no_noise) plant_args.push_back("--no-noise");
   sup.start({"plant", plant_args, log("plant")});
 
@@ -143,8 +159,9 @@ MeasureResult run_measure(const MeasureOptions& o) {
     for (const auto& g : groups) {
       std::string name = "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
       // Analysers run at lower priority: they are flow-controlled, the logger and plant are not.
-      std::vector<std::string> args = {"nice", "-n", "5", module_path("fralab-analyze"), "--lcm-url", url, "--run-id", r.run_id,
-                                       "--name", name, "--out", o.out};
+      std::vector<std::string> args = {"nice",      "-n", "5",        module_path("fralab-analyze"),
+                                       "--lcm-url", url,  "--run-id", r.run_id,
+                                       "--name",    name, "--out",    o.out};
       for (const auto& p : g) {
         args.push_back("--pair");
         args.push_back(p);
@@ -164,15 +181,35 @@ MeasureResult run_measure(const MeasureOptions& o) {
   for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
   std::string inputs_csv;
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
-  std::vector<std::string> acq = {module_path("fralab-acquire"), "--engine", engine_file, "--lcm-url", url,
-                                  "--run-id", r.run_id, "--input", inputs_csv, "--band", o.band,
-                                  "--excitation", o.excitation, "--multisine-phases", o.multisine_phases,
-                                  "--points-per-decade", std::to_string(o.points_per_decade),
-                                  "--speed", std::to_string(o.speed), "--consumers", consumers_csv,
-                                  "--sample-rate", std::to_string(o.sample_rate_hz),
-                                  "--min-cycles", std::to_string(o.min_cycles),
-                                  "--min-integrate-s", std::to_string(o.min_integrate_s),
-                                  "--summary", o.out + "/acquire.json"};
+  std::vector<std::string> acq = {module_path("fralab-acquire"),
+                                  "--engine",
+                                  engine_file,
+                                  "--lcm-url",
+                                  url,
+                                  "--run-id",
+                                  r.run_id,
+                                  "--input",
+                                  inputs_csv,
+                                  "--band",
+                                  o.band,
+                                  "--excitation",
+                                  o.excitation,
+                                  "--multisine-phases",
+                                  o.multisine_phases,
+                                  "--points-per-decade",
+                                  std::to_string(o.points_per_decade),
+                                  "--speed",
+                                  std::to_string(o.speed),
+                                  "--consumers",
+                                  consumers_csv,
+                                  "--sample-rate",
+                                  std::to_string(o.sample_rate_hz),
+                                  "--min-cycles",
+                                  std::to_string(o.min_cycles),
+                                  "--min-integrate-s",
+                                  std::to_string(o.min_integrate_s),
+                                  "--summary",
+                                  o.out + "/acquire.json"};
   if (o.odd_lines) acq.push_back("--odd-lines");
   acq.push_back("--amplitude-scale");
   acq.push_back(std::to_string(o.amplitude_scale));
@@ -214,9 +251,15 @@ MeasureResult run_measure(const MeasureOptions& o) {
   r.tape_blocks = n;
   Json acq_summary = json_load_file(o.out + "/acquire.json");
   r.engine_time_s = acq_summary.value("engine_time_s", 0.0);
-  Json summary{{"run_id", r.run_id}, {"engine", model.name}, {"lcm_url", url}, {"inputs", inputs_csv},
-               {"pairs", r.pairs}, {"engine_time_s", r.engine_time_s}, {"wall_time_s", r.wall_time_s},
-               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)}, {"tape_blocks", n},
+  Json summary{{"run_id", r.run_id},
+               {"engine", model.name},
+               {"lcm_url", url},
+               {"inputs", inputs_csv},
+               {"pairs", r.pairs},
+               {"engine_time_s", r.engine_time_s},
+               {"wall_time_s", r.wall_time_s},
+               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)},
+               {"tape_blocks", n},
                {"fit_time_s", r.fit_time_s}};
   json_save_file(o.out + "/run.json", summary);
   return r;

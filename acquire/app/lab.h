@@ -17,7 +17,7 @@ struct MeasureOptions {
   std::string multisine_phases = "schroeder";
   bool odd_lines = false;
   int points_per_decade = 10;
-  double amplitude_pct = -1;  // < 0: each input's default
+  double amplitude_pct = -1;     // < 0: each input's default
   double amplitude_scale = 1.0;  // multiplies every input's amplitude
   uint64_t seed = 1;
   std::string out;
@@ -42,7 +42,8 @@ struct MeasureResult {
 
 /// The pairs measured for an input X of a model with outputs O: X:O for every output, u_X:X, and
 /// u_X:O for every output.
-std::vector<std::string> pairs_for_input(const std::string& input, const std::vector<std::string>& outputs);
+std::vector<std::string> pairs_for_input(const std::string& input,
+                                         const std::vector<std::string>& outputs);
 
 MeasureResult run_measure(const MeasureOptions& opt);
 

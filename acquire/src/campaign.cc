@@ -13,15 +13,17 @@ void SteppedSineOptions::validate() const {
   auto bad = [](const std::string& m) { throw InputError(m); };
   if (!(sample_rate_hz > 0)) bad("sample rate must be > 0 Hz");
   if (!(f_lo_hz > 0) || !(f_hi_hz >= f_lo_hz)) {
-    bad("band " + std::to_string(f_lo_hz) + ":" + std::to_string(f_hi_hz) + " Hz must satisfy 0 < LO <= HI");
+    bad("band " + std::to_string(f_lo_hz) + ":" + std::to_string(f_hi_hz) +
+        " Hz must satisfy 0 < LO <= HI");
   }
   if (f_hi_hz > sample_rate_hz / 4) {
-    bad("band top " + std::to_string(f_hi_hz) + " Hz is above fs/4 = " + std::to_string(sample_rate_hz / 4) +
-        " Hz: lower --band or raise the sample rate");
+    bad("band top " + std::to_string(f_hi_hz) + " Hz is above fs/4 = " +
+        std::to_string(sample_rate_hz / 4) + " Hz: lower --band or raise the sample rate");
   }
   if (points_per_decade < 1) bad("points per decade must be >= 1");
   if (min_cycles < 2) bad("min_cycles must be >= 2 (the noise estimate needs two blocks)");
-  if (min_integrate_s < 0 || settle_cycles < 0 || settle_time_constants < 0 || slowest_time_constant_s < 0) {
+  if (min_integrate_s < 0 || settle_cycles < 0 || settle_time_constants < 0 ||
+      slowest_time_constant_s < 0) {
     bad("settle and integration times must be >= 0");
   }
 }
@@ -38,7 +40,8 @@ std::vector<SineStep> plan_stepped_sine(const SteppedSineOptions& o) {
     s.n_cycles = std::max(o.min_cycles, int(std::ceil(o.min_integrate_s * f)));
     s.integrate_samples = std::llround(s.n_cycles * o.sample_rate_hz / f);
     s.f_hz = s.n_cycles * o.sample_rate_hz / double(s.integrate_samples);
-    double settle_s = std::max(o.settle_cycles / f, o.settle_time_constants * o.slowest_time_constant_s);
+    double settle_s =
+        std::max(o.settle_cycles / f, o.settle_time_constants * o.slowest_time_constant_s);
     s.settle_samples = std::llround(settle_s * o.sample_rate_hz);
     steps.push_back(s);
   }
@@ -51,8 +54,10 @@ double plan_duration_s(const std::vector<SineStep>& steps, double fs) {
   return n / fs;
 }
 
-double SegmentCampaign::add_segment(int input, int64_t length, double fa, double beta, double phi0) {
-  if (input < 0 || input >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+double SegmentCampaign::add_segment(int input, int64_t length, double fa, double beta,
+                                    double phi0) {
+  if (input < 0 || input >= int(inputs_.size()))
+    throw InputError("campaign: input index out of range");
   segs_.push_back({input, total_, length, fa, beta, phi0});
   total_ += length;
   const double t = double(length) / fs_;
@@ -72,7 +77,8 @@ std::vector<double> SegmentCampaign::only(int i) const {
   return a;
 }
 
-void SegmentCampaign::finish(const std::string& run_id, int64_t seq, int n_steps, const std::string& excitation) {
+void SegmentCampaign::finish(const std::string& run_id, int64_t seq, int n_steps,
+                             const std::string& excitation) {
   StatusEvent done;
   done.run_id = run_id;
   done.seq = seq;
@@ -87,14 +93,16 @@ void SegmentCampaign::finish(const std::string& run_id, int64_t seq, int n_steps
   events_.push_back(done);
 }
 
-void SegmentCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-                           std::vector<double>& ref_freq) const {
+void SegmentCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+                           std::vector<double>& ref_phase, std::vector<double>& ref_freq) const {
   cmd.assign(inputs_.size(), std::vector<double>(n));
   ref_phase.assign(n, 0.0);
   ref_freq.assign(n, 0.0);
-  for (size_t i = 0; i < inputs_.size(); ++i) std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
+  for (size_t i = 0; i < inputs_.size(); ++i)
+    std::fill(cmd[i].begin(), cmd[i].end(), inputs_[i].dc);
   // The segment of the first sample, then walk.
-  auto it = std::upper_bound(segs_.begin(), segs_.end(), start, [](int64_t v, const Segment& s) { return v < s.start; });
+  auto it = std::upper_bound(segs_.begin(), segs_.end(), start,
+                             [](int64_t v, const Segment& s) { return v < s.start; });
   size_t si = it == segs_.begin() ? 0 : size_t(it - segs_.begin() - 1);
   for (int k = 0; k < n; ++k) {
     const int64_t m = start + k;
@@ -102,8 +110,9 @@ void SegmentCampaign::fill(int64_t start, int n, std::vector<std::vector<double>
     while (si + 1 < segs_.size() && segs_[si + 1].start <= m) ++si;
     const Segment& s = segs_[si];
     const double t = double(m - s.start) / fs_;
-    const double phi = s.beta == 0.0 ? s.phi0 + 2 * std::numbers::pi * s.fa * t
-                                     : s.phi0 + 2 * std::numbers::pi * s.fa * std::expm1(s.beta * t) / s.beta;
+    const double phi = s.beta == 0.0
+                           ? s.phi0 + 2 * std::numbers::pi * s.fa * t
+                           : s.phi0 + 2 * std::numbers::pi * s.fa * std::expm1(s.beta * t) / s.beta;
     ref_phase[k] = phi;
     ref_freq[k] = s.fa * std::exp(s.beta * t);
     cmd[s.input][k] = inputs_[s.input].dc + inputs_[s.input].amplitude * std::sin(phi);
@@ -150,12 +159,13 @@ SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std:
   finish(run_id, seq, n_steps, "stepped_sine");
 }
 
-SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& o,
-                             std::string run_id)
+SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                             const SteppedSineOptions& o, std::string run_id)
     : SegmentCampaign(std::move(inputs), o.sample_rate_hz) {
   const auto steps = plan_stepped_sine(o);  // validates; gives the centres and cycle counts
   if (excite.empty()) throw InputError("campaign: no input to excite");
-  const double r = steps.size() > 1 ? steps[1].f_hz / steps[0].f_hz : std::pow(10.0, 1.0 / o.points_per_decade);
+  const double r =
+      steps.size() > 1 ? steps[1].f_hz / steps[0].f_hz : std::pow(10.0, 1.0 / o.points_per_decade);
   int64_t seq = 0;
   double phi = 0.0;
   const int n_steps = int(steps.size() * excite.size());
@@ -201,11 +211,15 @@ SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int>
 
 void MultisineOptions::validate() const {
   if (!(sample_rate_hz > 0)) throw InputError("sample rate must be > 0 Hz");
-  if (!(f_lo_hz > 0) || !(f_hi_hz > f_lo_hz)) throw InputError("multisine band must satisfy 0 < LO < HI");
-  if (f_hi_hz > sample_rate_hz / 4) throw InputError("multisine band top is above fs/4: lower --band");
+  if (!(f_lo_hz > 0) || !(f_hi_hz > f_lo_hz))
+    throw InputError("multisine band must satisfy 0 < LO < HI");
+  if (f_hi_hz > sample_rate_hz / 4)
+    throw InputError("multisine band top is above fs/4: lower --band");
   if (points_per_decade < 1) throw InputError("points per decade must be >= 1");
-  if (periods < 2) throw InputError("a multisine needs >= 2 measured periods (noise from their spread)");
-  if (phases != "schroeder" && phases != "random") throw InputError("--multisine-phases must be schroeder or random");
+  if (periods < 2)
+    throw InputError("a multisine needs >= 2 measured periods (noise from their spread)");
+  if (phases != "schroeder" && phases != "random")
+    throw InputError("--multisine-phases must be schroeder or random");
 }
 
 MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
@@ -217,7 +231,8 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   const double df = fs_ / P_;
   // Lines near log-spaced targets, unique, optionally odd.
   std::vector<int> lines;
-  const int n_targets = int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
+  const int n_targets =
+      int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
   for (int j = 0; j < n_targets; ++j) {
     int k = int(std::llround(o.f_lo_hz * std::pow(10.0, double(j) / o.points_per_decade) / df));
     if (o.odd_lines && k % 2 == 0) ++k;
@@ -225,7 +240,8 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
     if (lines.empty() || k > lines.back()) lines.push_back(k);
   }
   const int ni = int(excite.size());
-  if (int(lines.size()) < ni) throw InputError("multisine: fewer lines than excited inputs; widen the band");
+  if (int(lines.size()) < ni)
+    throw InputError("multisine: fewer lines than excited inputs; widen the band");
   std::vector<int> line_input;
   std::vector<std::vector<int>> per(inputs_.size());
   for (size_t j = 0; j < lines.size(); ++j) {
@@ -242,8 +258,10 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
     std::vector<double> x(P_, 0.0);
     const double nk = double(per[i].size());
     for (size_t j = 0; j < per[i].size(); ++j) {
-      const double ph = o.phases == "schroeder" ? -std::numbers::pi * double(j) * double(j + 1) / nk : uni(rng);
-      for (int n = 0; n < P_; ++n) x[n] += std::sin(2 * std::numbers::pi * double(per[i][j]) * n / P_ + ph);
+      const double ph =
+          o.phases == "schroeder" ? -std::numbers::pi * double(j) * double(j + 1) / nk : uni(rng);
+      for (int n = 0; n < P_; ++n)
+        x[n] += std::sin(2 * std::numbers::pi * double(per[i][j]) * n / P_ + ph);
     }
     double peak = 0;
     for (double v : x) peak = std::max(peak, std::abs(v));
@@ -251,7 +269,8 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
     period_[i] = std::move(x);
     amps[i] = inputs_[i].amplitude;
   }
-  const int settle = std::max(1, int(std::ceil(o.settle_time_constants * o.slowest_time_constant_s * df)));
+  const int settle =
+      std::max(1, int(std::ceil(o.settle_time_constants * o.slowest_time_constant_s * df)));
   StatusEvent e;
   e.run_id = run_id;
   e.sample_rate_hz = fs_;
@@ -284,8 +303,8 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   events_.push_back(e);
 }
 
-void MultisineCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-                             std::vector<double>& ref_freq) const {
+void MultisineCampaign::fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+                             std::vector<double>& ref_phase, std::vector<double>& ref_freq) const {
   cmd.assign(inputs_.size(), std::vector<double>(n));
   ref_phase.assign(n, 0.0);
   ref_freq.assign(n, 0.0);
@@ -293,7 +312,8 @@ void MultisineCampaign::fill(int64_t start, int n, std::vector<std::vector<doubl
   for (size_t i = 0; i < inputs_.size(); ++i) {
     for (int k = 0; k < n; ++k) {
       const int64_t m = start + k;
-      cmd[i][k] = inputs_[i].dc + (period_[i].empty() || m >= total_ ? 0.0 : period_[i][size_t(m % P_)]);
+      cmd[i][k] =
+          inputs_[i].dc + (period_[i].empty() || m >= total_ ? 0.0 : period_[i][size_t(m % P_)]);
     }
   }
   for (int k = 0; k < n; ++k) {

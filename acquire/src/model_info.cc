@@ -21,10 +21,13 @@ std::pair<double, double> parse_band(const std::string& band) {
 double slowest_time_constant_s(const Model& m) {
   double t = 0.0;
   auto scan = [&](const Tf& tf) {
-    for (const Root& p : tf.poles) t = std::max(t, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
+    for (const Root& p : tf.poles)
+      t = std::max(t, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
   };
-  for (const auto& in : m.inputs) if (in.actuator) scan(*in.actuator);
-  for (const auto& out : m.outputs) if (out.sensor) scan(*out.sensor);
+  for (const auto& in : m.inputs)
+    if (in.actuator) scan(*in.actuator);
+  for (const auto& out : m.outputs)
+    if (out.sensor) scan(*out.sensor);
   for (const auto& p : m.paths) scan(p.tf);
   return t;
 }
@@ -45,7 +48,8 @@ std::vector<int> select_inputs(const Model& m, const std::string& csv) {
       if (i < 0) {
         std::string known;
         for (const auto& in : m.inputs) known += (known.empty() ? "" : ", ") + in.name;
-        throw InputError("--input " + name + ": the model has no such input (inputs: " + known + ")");
+        throw InputError("--input " + name + ": the model has no such input (inputs: " + known +
+                         ")");
       }
       if (std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
     }
@@ -59,8 +63,11 @@ std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct,
   if (!(scale > 0)) throw InputError("--amplitude-scale must be > 0");
   std::vector<CampaignInput> v;
   for (const auto& in : m.inputs) {
-    double pct = scale * (amplitude_pct >= 0 ? amplitude_pct : (in.test_amplitude_pct > 0 ? in.test_amplitude_pct : 2.0));
-    if (!(pct > 0) || pct > 50) throw InputError("amplitude " + std::to_string(pct) + " % of full scale must be in (0, 50]");
+    double pct =
+        scale * (amplitude_pct >= 0 ? amplitude_pct
+                                    : (in.test_amplitude_pct > 0 ? in.test_amplitude_pct : 2.0));
+    if (!(pct > 0) || pct > 50)
+      throw InputError("amplitude " + std::to_string(pct) + " % of full scale must be in (0, 50]");
     v.push_back({in.name, m.dc(in.name), pct / 100.0 * in.full_scale});
   }
   return v;

@@ -1,15 +1,16 @@
 #include "fralab/acquire/supervisor.h"
 
-#include <chrono>
-#include <cstring>
-#include <csignal>
 #include <fcntl.h>
-#include <filesystem>
-#include <fstream>
 #include <spawn.h>
 #include <sys/wait.h>
-#include <thread>
 #include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <thread>
 
 #include "fralab/plant/json_util.h"
 
@@ -31,7 +32,8 @@ void Supervisor::start(const ProcessSpec& spec) {
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
   if (!spec.log_file.empty()) {
-    posix_spawn_file_actions_addopen(&fa, 1, spec.log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 1, spec.log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_adddup2(&fa, 1, 2);
   }
   posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
@@ -60,8 +62,9 @@ void Supervisor::reap(bool block) {
 }
 
 std::string Supervisor::reason(const Proc& p) const {
-  std::string why = WIFEXITED(p.status) ? "exited with status " + std::to_string(WEXITSTATUS(p.status))
-                                        : "was killed by signal " + std::to_string(WTERMSIG(p.status));
+  std::string why = WIFEXITED(p.status)
+                        ? "exited with status " + std::to_string(WEXITSTATUS(p.status))
+                        : "was killed by signal " + std::to_string(WTERMSIG(p.status));
   std::string last;
   std::ifstream in(p.spec.log_file);
   for (std::string line; std::getline(in, line);) {
@@ -76,7 +79,8 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
   for (;;) {
     reap(false);
     for (auto& [n, p] : procs_) {
-      if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0)) throw InputError(reason(p));
+      if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0))
+        throw InputError(reason(p));
     }
     bool all = true;
     for (const auto& n : names) {
@@ -87,8 +91,10 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
     if (all) return;
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) {
       std::string who;
-      for (const auto& n : names) if (!procs_[n].exited) who += (who.empty() ? "" : ", ") + n;
-      throw InputError("timed out after " + std::to_string(int(timeout_s)) + " s waiting for " + who);
+      for (const auto& n : names)
+        if (!procs_[n].exited) who += (who.empty() ? "" : ", ") + n;
+      throw InputError("timed out after " + std::to_string(int(timeout_s)) + " s waiting for " +
+                       who);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }

@@ -1,7 +1,8 @@
-// fralab-analyze: live two-channel servoanalyser, one process per pair (or several pairs). Subscribes
-// to tape blocks and excitation status, publishes each pair's curve point by point (FRALAB_FRD),
-// acknowledges every tape block (FRALAB_ACK, for the acquisition's flow control), and writes
-// DIR/frd/<E1>_<E2>.json when the run is done. `--log TAPE` reads a tape file directly instead.
+// fralab-analyze: live two-channel servoanalyser, one process per pair (or several pairs).
+// Subscribes to tape blocks and excitation status, publishes each pair's curve point by point
+// (FRALAB_FRD), acknowledges every tape block (FRALAB_ACK, for the acquisition's flow control), and
+// writes DIR/frd/<E1>_<E2>.json when the run is done. `--log TAPE` reads a tape file directly
+// instead.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <filesystem>
@@ -61,7 +62,8 @@ int main(int argc, char** argv) {
   AnalyzerOptions opt;
   app.add_option("--pair", pairs, "pair E1:E2 (response E2/E1); repeatable")->required();
   app.add_option("--lcm-url", url, "LCM URL");
-  app.add_option("--control-url", ctl_url, "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
+  app.add_option("--control-url", ctl_url,
+                 "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--out", out, "write OUT/frd/<E1>_<E2>.json when done");
   app.add_option("--name", name, "consumer name for flow control (default: first pair)");
   app.add_option("--run-id", run_id, "only this run");
@@ -78,7 +80,8 @@ int main(int argc, char** argv) {
     TapeFeeder feeder(pairs, opt, run_id);
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url));
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
+                                 : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
     Live live{&feeder, &lcm, &ctl, name.empty() ? pairs.front() : name, false, 0, ""};
     for (const char* ch : {kTapeChannel, kStatusChannel}) {
@@ -86,7 +89,8 @@ int main(int argc, char** argv) {
     }
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (!feeder.all_done()) {
-      if (!live.started && std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+      if (!live.started &&
+          std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
         live.ack(-1);  // ready
         last_ready = std::chrono::steady_clock::now();
       }

@@ -4,7 +4,8 @@
 
 namespace fralab {
 
-TapeFeeder::TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOptions& opt, std::string run_id)
+TapeFeeder::TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOptions& opt,
+                       std::string run_id)
     : run_id_(std::move(run_id)) {
   if (pairs.empty()) throw InputError("no --pair given: name at least one pair E1:E2");
   for (const auto& p : pairs) an_.push_back(std::make_unique<PairAnalyzer>(p, opt));
@@ -100,7 +101,8 @@ Frd from_frd_msg(const frd_t& m) {
     p.note = q.note;
     f.points.push_back(p);
   }
-  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  std::stable_sort(f.points.begin(), f.points.end(),
+                   [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   return f;
 }
 

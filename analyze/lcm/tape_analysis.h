@@ -16,7 +16,8 @@ namespace fralab {
 /// run id is known (the first record fixes it unless one is given).
 class TapeFeeder {
  public:
-  TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOptions& opt, std::string run_id = "");
+  TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOptions& opt,
+             std::string run_id = "");
   /// Decodes and dispatches one record; InputError names the channel for a wrong message type.
   /// Returns the tape seq for a tape block (else -1).
   int64_t feed(const std::string& channel, const void* data, int size);

@@ -12,8 +12,10 @@ std::complex<double> FrdPoint::value() const {
 
 std::pair<std::string, std::string> split_pair(const std::string& pair) {
   auto c = pair.find(':');
-  if (c == std::string::npos || c == 0 || c + 1 == pair.size() || pair.find(':', c + 1) != std::string::npos) {
-    throw InputError("pair \"" + pair + "\" must be written E1:E2 (the response E2/E1), e.g. Wf:P3");
+  if (c == std::string::npos || c == 0 || c + 1 == pair.size() ||
+      pair.find(':', c + 1) != std::string::npos) {
+    throw InputError("pair \"" + pair +
+                     "\" must be written E1:E2 (the response E2/E1), e.g. Wf:P3");
   }
   return {pair.substr(0, c), pair.substr(c + 1)};
 }
@@ -26,7 +28,10 @@ std::string pair_file_stem(const std::string& pair) {
 Json frd_to_json(const Frd& frd) {
   Json j{{"format", kFrdFormat}, {"pair", frd.pair}, {"points", Json::array()}};
   for (const FrdPoint& p : frd.points) {
-    Json jp{{"w", p.w}, {"f_hz", p.w / (2 * std::numbers::pi)}, {"mag", p.mag}, {"phase_deg", p.phase_deg}};
+    Json jp{{"w", p.w},
+            {"f_hz", p.w / (2 * std::numbers::pi)},
+            {"mag", p.mag},
+            {"phase_deg", p.phase_deg}};
     if (p.sigma >= 0) jp["sigma"] = p.sigma;
     if (p.coherence >= 0) jp["coherence"] = p.coherence;
     jp["h2_rel"] = p.h2_rel;
@@ -47,7 +52,9 @@ Frd frd_from_json(const Json& j, const std::string& source) {
   JsonWhere root{source, ""};
   json_require_object(j, root);
   const std::string fmt = json_string_member(j, root, "format");
-  if (fmt != kFrdFormat) json_fail(root / "format", "expected \"" + std::string(kFrdFormat) + "\", found \"" + fmt + "\"");
+  if (fmt != kFrdFormat)
+    json_fail(root / "format",
+              "expected \"" + std::string(kFrdFormat) + "\", found \"" + fmt + "\"");
   Frd f;
   f.source = source;
   f.pair = json_string_member(j, root, "pair");

@@ -1,17 +1,18 @@
 #include "fralab/analyze/pair_analyzer.h"
 
+#include <fftw3.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include <fftw3.h>
 
 #include "fralab/analyze/fourier_filter.h"
 
 namespace fralab {
 
 void AnalyzerOptions::validate() const {
-  if (max_blocks < 2) throw InputError("analyzer: max_blocks must be >= 2 (sigma needs two blocks)");
+  if (max_blocks < 2)
+    throw InputError("analyzer: max_blocks must be >= 2 (sigma needs two blocks)");
   if (reorder_slack_samples < 0) throw InputError("analyzer: reorder_slack_samples must be >= 0");
 }
 
@@ -50,7 +51,8 @@ static std::pair<std::string, double> first_excited(const StatusEvent& st) {
 void PairAnalyzer::on_status(const StatusEvent& st) {
   if (st.state == "integrate") {
     if (!wants(st)) return;
-    if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) || !(st.sample_rate_hz > 0)) {
+    if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
+        !(st.sample_rate_hz > 0)) {
       FrdPoint p;
       p.step = st.step;
       p.valid = false;
@@ -116,14 +118,16 @@ std::string PairAnalyzer::describe_gaps(int64_t a, int64_t b) const {
     }
     int64_t s = n;
     while (n < b && !(n >= base_ && n - base_ < int64_t(have_.size()) && have_[n - base_])) ++n;
-    out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(s) + "-" + std::to_string(n - 1);
+    out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(s) + "-" +
+           std::to_string(n - 1);
   }
   // Name the sequence numbers that are absent between the lowest and highest seen.
   if (!seqs_.empty()) {
     std::string missing;
     int64_t prev = seqs_.begin()->first;
     for (auto it = std::next(seqs_.begin()); it != seqs_.end(); ++it) {
-      for (int64_t q = prev + 1; q < it->first; ++q) missing += (missing.empty() ? "" : ",") + std::to_string(q);
+      for (int64_t q = prev + 1; q < it->first; ++q)
+        missing += (missing.empty() ? "" : ",") + std::to_string(q);
       prev = it->first;
     }
     if (!missing.empty()) out += " (tape block seq " + missing + " missing)";
@@ -172,7 +176,8 @@ void PairAnalyzer::flush() { try_complete(true); }
 
 void PairAnalyzer::trim() {
   // Keep samples from the earliest pending window (or the newest data if none is pending).
-  int64_t keep = pending_.empty() ? max_seen_ - opt_.reorder_slack_samples : pending_.begin()->first;
+  int64_t keep =
+      pending_.empty() ? max_seen_ - opt_.reorder_slack_samples : pending_.begin()->first;
   keep = std::min(keep, max_seen_);
   if (keep - base_ > 1 << 20) {  // trim in large chunks
     const int64_t drop = keep - base_;
@@ -206,7 +211,9 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
       }
     }
   }
-  auto reference = [&](int h) { return sweep ? make_reference(rp, L, h) : make_reference(L, st.ref_phase_rad, dphi, h); };
+  auto reference = [&](int h) {
+    return sweep ? make_reference(rp, L, h) : make_reference(L, st.ref_phase_rad, dphi, h);
+  };
   Reference ref = reference(1);
   // Window means (exactly DC + noise mean: the window holds whole cycles), removed for the blocks.
   double m1 = 0, m2 = 0;
@@ -221,7 +228,8 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
     d1[k] = a[k] - m1;
     d2[k] = b[k] - m2;
   }
-  const Complex p1 = fourier_phasor(d1.data(), ref, 0, L), p2 = fourier_phasor(d2.data(), ref, 0, L);
+  const Complex p1 = fourier_phasor(d1.data(), ref, 0, L),
+                p2 = fourier_phasor(d2.data(), ref, 0, L);
   FrdPoint p;
   p.w = 2 * std::numbers::pi * st.frequency_hz;
   p.step = st.step;
@@ -273,7 +281,8 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     p.note = why;
     return std::vector<FrdPoint>{p};
   };
-  if (P < 4 || M < 2 || st.lines.size() != st.line_input.size()) return invalid("multisine status without periods or lines");
+  if (P < 4 || M < 2 || st.lines.size() != st.line_input.size())
+    return invalid("multisine status without periods or lines");
   // The pair's input: the one named by E1 or E2 (u_X or X); none: every line.
   int want = -1;
   for (size_t i = 0; i < st.inputs.size(); ++i) {
@@ -284,7 +293,8 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
   // Spectra of every period of both channels (window mean removed: DC does not touch lines k >= 1).
   std::vector<double> buf(P);
   std::vector<std::complex<double>> spec(P / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()), FFTW_ESTIMATE);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()),
+                                        FFTW_ESTIMATE);
   std::vector<std::vector<std::complex<double>>> X1(M), X2(M);
   const double* a = x1_.data() + (st.sample - base_);
   const double* b = x2_.data() + (st.sample - base_);
@@ -298,7 +308,8 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
   }
   fftw_destroy_plan(plan);
   std::vector<bool> excited(P / 2 + 1, false);
-  for (int k : st.lines) if (k >= 0 && k <= P / 2) excited[k] = true;
+  for (int k : st.lines)
+    if (k >= 0 && k <= P / 2) excited[k] = true;
   const double df = st.sample_rate_hz / P;
   for (size_t j = 0; j < st.lines.size(); ++j) {
     const int k = st.lines[j];
@@ -315,7 +326,8 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     q.step = st.step;
     q.n_cycles = M;
     q.input = st.inputs[st.line_input[j]];
-    q.amplitude = st.amplitudes.size() > size_t(st.line_input[j]) ? st.amplitudes[st.line_input[j]] : 0.0;
+    q.amplitude =
+        st.amplitudes.size() > size_t(st.line_input[j]) ? st.amplitudes[st.line_input[j]] : 0.0;
     if (std::abs(m1) == 0.0 || !std::isfinite(std::abs(m1)) || !std::isfinite(std::abs(m2))) {
       q.valid = false;
       q.note = "channel " + e1_ + " has no component at line " + std::to_string(k);
@@ -364,7 +376,8 @@ Frd PairAnalyzer::frd() const {
   Frd f;
   f.pair = pair_;
   f.points = points_;
-  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });
+  std::stable_sort(f.points.begin(), f.points.end(),
+                   [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });
   return f;
 }
 

@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", url);
   app.add_option("--run-id", run_id);
   app.add_option("--expect", expect, "number of pairs to wait for")->required();
-  app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")->required();
+  app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")
+      ->required();
   app.add_option("--delay", delay, "auto, none or seconds")->capture_default_str();
   app.add_option("--title", title);
   app.add_option("--timeout", timeout, "seconds")->capture_default_str();
@@ -78,7 +79,8 @@ int main(int argc, char** argv) {
       lcm.handleTimeout(100);
       if (!c.error.empty()) throw InputError(c.error);
       if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) {
-        throw InputError("only " + std::to_string(c.complete.size()) + " of " + std::to_string(expect) + " curves arrived");
+        throw InputError("only " + std::to_string(c.complete.size()) + " of " +
+                         std::to_string(expect) + " curves arrived");
       }
     }
     std::vector<Frd> curves;

@@ -42,7 +42,8 @@ struct PairFit {
 
 double chi2(const PairFit& p, const std::vector<C>& F) {
   double c = 0;
-  for (size_t i = 0; i < p.w.size(); ++i) c += std::norm(p.meas[i] - p.sim[i] * p.factor[i] * F[i]) / (p.sig[i] * p.sig[i]);
+  for (size_t i = 0; i < p.w.size(); ++i)
+    c += std::norm(p.meas[i] - p.sim[i] * p.factor[i] * F[i]) / (p.sig[i] * p.sig[i]);
   return c;
 }
 
@@ -88,7 +89,8 @@ C nl_df(const std::string& type, double width, double y) {
     (out_amp(m) < y ? lo : hi) = m;
   }
   const double a = (lo + hi) / 2;
-  return type == "hysteresis" ? backlash_describing_function(a, width) : C(deadband_describing_function(a, width), 0);
+  return type == "hysteresis" ? backlash_describing_function(a, width)
+                              : C(deadband_describing_function(a, width), 0);
 }
 
 // The simulated chain's poles for a pair (for pole_shift candidates).
@@ -101,7 +103,8 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
   }
   if (const ModelPath* mp = m.path(p.output, p.input)) v = mp->tf.poles;
   const int o = m.output_index(p.output);
-  if (m.outputs[o].sensor) v.insert(v.end(), m.outputs[o].sensor->poles.begin(), m.outputs[o].sensor->poles.end());
+  if (m.outputs[o].sensor)
+    v.insert(v.end(), m.outputs[o].sensor->poles.begin(), m.outputs[o].sensor->poles.end());
   return v;
 }
 
@@ -122,7 +125,13 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
       den += v * std::norm(s);
     }
     const double k = num / den;
-    if (k > 0) add({"gain_mismatch", {{"gain_db", 20 * std::log10(k)}}, std::vector<C>(p.w.size(), C(k, 0)), 0, 1, ""});
+    if (k > 0)
+      add({"gain_mismatch",
+           {{"gain_db", 20 * std::log10(k)}},
+           std::vector<C>(p.w.size(), C(k, 0)),
+           0,
+           1,
+           ""});
   }
   // time_delay
   {
@@ -136,7 +145,8 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
       const double a = std::exp(la);
       return factor_of(p.w, [&](C s) { return lead ? 1.0 + s / a : 1.0 / (1.0 + s / a); });
     };
-    double la = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(wlo / 10), std::log(whi * 10), 80);
+    double la = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(wlo / 10),
+                            std::log(whi * 10), 80);
     add({lead ? "missing_lead" : "missing_lag", {{"corner_rad_s", std::exp(la)}}, F(la), 0, 1, ""});
   }
   // missing_resonance: a peak (pole pair) or a notch (zero pair); grid in wn and zeta, then
@@ -159,9 +169,11 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
     }
     for (int it = 0; it < 4; ++it) {
       blw = golden([&](double x) { return chi2(p, F(x, bz)); }, blw - 0.1, blw + 0.1, 30);
-      bz = golden([&](double z) { return chi2(p, F(blw, z)); }, std::max(0.002, bz * 0.5), std::min(1.0, bz * 2), 30);
+      bz = golden([&](double z) { return chi2(p, F(blw, z)); }, std::max(0.002, bz * 0.5),
+                  std::min(1.0, bz * 2), 30);
     }
-    Cause c{"missing_resonance", {{"wn_rad_s", std::exp(blw)}, {"zeta", bz}}, F(blw, bz), 0, 2, notch ? "notch" : "peak"};
+    Cause c{"missing_resonance",     {{"wn_rad_s", std::exp(blw)}, {"zeta", bz}}, F(blw, bz), 0, 2,
+            notch ? "notch" : "peak"};
     if (notch) c.params["notch"] = 1;
     add(c);
   }
@@ -171,10 +183,14 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
     auto F = [&](double lto) {
       const double to = std::exp(lto);
       Root q = r;
-      if (q.pair) q.wn = to; else q.real = -to;
+      if (q.pair)
+        q.wn = to;
+      else
+        q.real = -to;
       return factor_of(p.w, [&](C s) { return r.factor(s) / q.factor(s); });
     };
-    double lto = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(from / 30), std::log(from * 30), 120);
+    double lto = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(from / 30),
+                             std::log(from * 30), 120);
     Cause c{"pole_shift", {{"from_rad_s", from}, {"to_rad_s", std::exp(lto)}}, F(lto), 0, 1, ""};
     if (r.pair) c.params["zeta"] = r.zeta;
     add(c);
@@ -183,7 +199,8 @@ std::vector<Cause> candidates(const Model& m, const PairFit& p) {
 }
 
 // The error metric for one pair under a response function (no response: the point is skipped).
-double pair_error(const std::vector<double>& w, const std::vector<C>& meas, const std::function<std::optional<C>(double, size_t)>& model) {
+double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
+                  const std::function<std::optional<C>(double, size_t)>& model) {
   std::vector<C> g;
   for (size_t i = 0; i < w.size(); ++i) g.push_back(model(w[i], i).value_or(0.0));
   return detail::rms_log_error(g, meas);
@@ -197,7 +214,9 @@ bool consistent(const Cause& a, const Cause& b) {
     const double u = it->second;
     if (k == "delay_s" && std::abs(v - u) > std::max(0.5e-3, 0.1 * std::abs(v))) return false;
     if (k == "gain_db" && std::abs(v - u) > 0.3) return false;
-    if ((k == "corner_rad_s" || k == "wn_rad_s" || k == "to_rad_s" || k == "from_rad_s") && std::abs(v - u) > 0.1 * std::abs(v)) return false;
+    if ((k == "corner_rad_s" || k == "wn_rad_s" || k == "to_rad_s" || k == "from_rad_s") &&
+        std::abs(v - u) > 0.1 * std::abs(v))
+      return false;
   }
   return true;
 }
@@ -218,10 +237,14 @@ void apply_tf(Tf& t, const Finding& f) {
     Root* best = nullptr;
     for (Root& r : t.poles) {
       const double v = r.pair ? r.wn : -r.real;
-      if (!best || std::abs(v - from) < std::abs((best->pair ? best->wn : -best->real) - from)) best = &r;
+      if (!best || std::abs(v - from) < std::abs((best->pair ? best->wn : -best->real) - from))
+        best = &r;
     }
     if (best) {
-      if (best->pair) best->wn = to; else best->real = -to;
+      if (best->pair)
+        best->wn = to;
+      else
+        best->real = -to;
     }
   }
 }
@@ -230,10 +253,12 @@ void apply_tf(Tf& t, const Finding& f) {
 // (a finding of the actuator pair u_X:X), the output's sensor, or the paths its scope covers.
 void apply_finding(Model& m, const Finding& f) {
   if (f.cause == "measurement_coupling") {
-    m.inputs[m.input_index(f.input)].measurement_coupling.push_back({f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
+    m.inputs[m.input_index(f.input)].measurement_coupling.push_back(
+        {f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
   } else if (f.cause == "hysteresis" || f.cause == "deadband") {
     m.inputs[m.input_index(f.input)].nonlinearity.push_back({f.cause, f.parameters.at("width")});
-  } else if (f.scope == "input" && f.output.empty() && f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input) {
+  } else if (f.scope == "input" && f.output.empty() && f.pairs.size() == 1 &&
+             split_pair(f.pairs[0]).first == "u_" + f.input) {
     ModelInput& in = m.inputs[m.input_index(f.input)];
     if (!in.actuator) in.actuator = Tf{};
     apply_tf(*in.actuator, f);
@@ -255,12 +280,14 @@ void apply_finding(Model& m, const Finding& f) {
 
 void DiagnoseOptions::validate() const {
   if (!(sigma_floor >= 0)) throw InputError("diagnose: sigma_floor must be >= 0");
-  if (!(min_improvement > 0 && min_improvement < 1)) throw InputError("diagnose: min_improvement must be in (0, 1)");
+  if (!(min_improvement > 0 && min_improvement < 1))
+    throw InputError("diagnose: min_improvement must be in (0, 1)");
   if (max_causes_per_path < 1) throw InputError("diagnose: max_causes_per_path must be >= 1");
   if (!(max_rel_sigma > 0)) throw InputError("diagnose: max_rel_sigma must be > 0");
 }
 
-std::optional<C> model_pair_response(const Model& m, const std::string& pair, double w, double amplitude) {
+std::optional<C> model_pair_response(const Model& m, const std::string& pair, double w,
+                                     double amplitude) {
   auto [e1, e2] = split_pair(pair);
   const bool cmd = e1.rfind("u_", 0) == 0;
   const std::string x = cmd ? e1.substr(2) : e1;
@@ -269,13 +296,16 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   const ModelInput& in = m.inputs[i];
   // The recorded position channel sees its couplings: pos (1 + sum g H_O).
   C coupling = 1.0;
-  for (const auto& c : in.measurement_coupling) coupling += c.gain * m.position_to_output(m.output_index(c.output), i, w);
+  for (const auto& c : in.measurement_coupling)
+    coupling += c.gain * m.position_to_output(m.output_index(c.output), i, w);
   // The actuator's describing function at the command amplitude (linear part first).
   C act = m.actuator_response(i, w);
   for (const auto& nl : in.nonlinearity) {
     if (amplitude <= 0) break;
-    if (nl.type == "hysteresis") act *= backlash_describing_function(amplitude * std::abs(act), nl.width);
-    if (nl.type == "deadband") act *= deadband_describing_function(amplitude * std::abs(act), nl.width);
+    if (nl.type == "hysteresis")
+      act *= backlash_describing_function(amplitude * std::abs(act), nl.width);
+    if (nl.type == "deadband")
+      act *= deadband_describing_function(amplitude * std::abs(act), nl.width);
   }
   if (e2 == x) return cmd ? std::optional<C>(act * coupling) : std::nullopt;
   const int o = m.output_index(e2);
@@ -284,7 +314,8 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   return cmd ? act * h : h / coupling;
 }
 
-Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, const DiagnoseOptions& opt) {
+Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
+                   const DiagnoseOptions& opt) {
   opt.validate();
   Diagnosis d;
   d.extended = sim;
@@ -304,7 +335,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     } else {
       continue;  // command-relative pairs repeat what X:O and u_X:X say
     }
-    if (sim.input_index(p.input) < 0 || (!p.output.empty() && sim.output_index(p.output) < 0)) continue;
+    if (sim.input_index(p.input) < 0 || (!p.output.empty() && sim.output_index(p.output) < 0))
+      continue;
     for (const auto& pt : mp.frd.points) {
       if (!usable(pt, opt)) continue;
       auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude);
@@ -347,7 +379,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       const int o = sim.output_index(out.name);
       if (!sim.path(out.name, in.name)) continue;
       double hmax = 0;
-      for (double w : pairs[act].w) hmax = std::max(hmax, std::abs(sim.position_to_output(o, i, w)));
+      for (double w : pairs[act].w)
+        hmax = std::max(hmax, std::abs(sim.position_to_output(o, i, w)));
       if (hmax == 0) continue;
       auto F = [&](const PairFit& p, double g) {
         return factor_of(p.w, [&](C s) {
@@ -367,17 +400,21 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     double n = 0;
     for (size_t k : idx) n += pairs[k].w.size();
     // The signature must be in the channel's own actuator response (1 + g H): that pair has to be
-    // beyond its uncertainty and be explained by the coupling (a path gain error is not a coupling).
+    // beyond its uncertainty and be explained by the coupling (a path gain error is not a
+    // coupling).
     bool act_signature = false;
     if (!best_o.empty()) {
       const PairFit& a = pairs[act];
       const double na = double(a.w.size());
       const double ca0 = chi2(a, std::vector<C>(a.w.size(), 1.0));
       const int o = sim.output_index(best_o);
-      const double ca1 = chi2(a, factor_of(a.w, [&](C s) { return 1.0 + best_g * sim.position_to_output(o, i, s.imag()); }));
+      const double ca1 = chi2(a, factor_of(a.w, [&](C s) {
+                                return 1.0 + best_g * sim.position_to_output(o, i, s.imag());
+                              }));
       act_signature = ca0 > na + 4 * std::sqrt(na) && ca0 - ca1 > opt.min_improvement * ca0;
     }
-    if (act_signature && base - best_c > std::max(std::log(2 * n), opt.min_improvement * base) && base > n + 4 * std::sqrt(n)) {
+    if (act_signature && base - best_c > std::max(std::log(2 * n), opt.min_improvement * base) &&
+        base > n + 4 * std::sqrt(n)) {
       // Accept only if no single-path cause explains it as well (coupling touches every path).
       const int o = sim.output_index(best_o);
       Finding f;
@@ -386,9 +423,11 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       f.input = in.name;
       f.text_parameters = {{"channel", in.name}, {"coupled_to", best_o}};
       f.parameters = {{"gain", best_g}};
-      f.explanation = "the " + in.name + " channel records " + in.name + " + " + fmt(best_g) + " * " + best_o +
-                      ": its actuator response carries the " + best_o + " response (1 + g H) and every " + in.name +
-                      " path divides by it; chi2 " + fmt(base) + " -> " + fmt(best_c) + " over " + std::to_string(idx.size()) + " pairs";
+      f.explanation = "the " + in.name + " channel records " + in.name + " + " + fmt(best_g) +
+                      " * " + best_o + ": its actuator response carries the " + best_o +
+                      " response (1 + g H) and every " + in.name + " path divides by it; chi2 " +
+                      fmt(base) + " -> " + fmt(best_c) + " over " + std::to_string(idx.size()) +
+                      " pairs";
       for (size_t k : idx) {
         f.pairs.push_back(pairs[k].pair);
         for (size_t q = 0; q < pairs[k].w.size(); ++q) {
@@ -420,7 +459,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
           double bic = c.chi2 + c.k * std::log(2.0 * N);
           if (bic < best_bic) best_bic = bic, best = &c;
         }
-        if (!best || c0 - best->chi2 < std::max(best->k * std::log(2.0 * N), opt.min_improvement * c0)) break;
+        if (!best ||
+            c0 - best->chi2 < std::max(best->k * std::log(2.0 * N), opt.min_improvement * c0))
+          break;
         found.push_back(*best);
         for (size_t q = 0; q < N; ++q) p.factor[q] *= best->F[q];
       }
@@ -431,7 +472,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       const int i = sim.input_index(p.input);
       double corner = INFINITY;
       if (sim.inputs[i].actuator) {
-        for (const Root& r : sim.inputs[i].actuator->poles) corner = std::min(corner, r.pair ? r.wn : -r.real);
+        for (const Root& r : sim.inputs[i].actuator->poles)
+          corner = std::min(corner, r.pair ? r.wn : -r.real);
       }
       std::vector<size_t> low;
       double h3 = 0;
@@ -447,17 +489,20 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
         Cause best;
         auto low_chi2 = [&](const std::vector<C>& f) {
           double c = 0;
-          for (size_t q : low) c += std::norm(p.meas[q] - p.sim[q] * base[q] * lin[q] * f[q]) / (p.sig[q] * p.sig[q]);
+          for (size_t q : low)
+            c += std::norm(p.meas[q] - p.sim[q] * base[q] * lin[q] * f[q]) / (p.sig[q] * p.sig[q]);
           return c;
         };
         for (const char* type : {"hysteresis", "deadband"}) {
           auto F = [&](double width) {
             std::vector<C> F(N, 1.0);
-            for (size_t q = 0; q < N; ++q) F[q] = nl_df(type, width, p.amp[q] * std::abs(p.meas[q]));
+            for (size_t q = 0; q < N; ++q)
+              F[q] = nl_df(type, width, p.amp[q] * std::abs(p.meas[q]));
             return F;
           };
           const double a = p.amp[low[0]];
-          double width = minimise_1d([&](double x) { return low_chi2(F(x)); }, 1e-4 * a, 1.9 * a, 200);
+          double width =
+              minimise_1d([&](double x) { return low_chi2(F(x)); }, 1e-4 * a, 1.9 * a, 200);
           double c = low_chi2(F(width));
           if (c < best.chi2) best = Cause{type, {{"width", width}}, F(width), c, 1, ""};
         }
@@ -466,7 +511,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       };
       double c0 = 0;
       Cause nl;
-      if (low.size() >= 2 && h3 / low.size() > 0.01 && p.amp[low[0]] > 0) nl = fit_nl(std::vector<C>(N, 1.0), &c0);
+      if (low.size() >= 2 && h3 / low.size() > 0.01 && p.amp[low[0]] > 0)
+        nl = fit_nl(std::vector<C>(N, 1.0), &c0);
       if (std::isfinite(nl.chi2) && c0 - nl.chi2 > opt.min_improvement * c0) {
         // The simulation's own actuator, still wrong, lags at 0.3 of its corner and biases a width
         // fitted against it alone (the J85's A8: 8.3 instead of 9.2, and a spurious -0.4 dB gain):
@@ -495,10 +541,12 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
         std::ostringstream ex;
         const double mh3 = h3 / low.size();
         const C n0 = nl.F[low[0]];
-        ex << "odd harmonics in the position (3rd at " << fmt(100 * mh3, 2) << " % of the fundamental); below "
-           << fmt(0.3 * corner / (2 * kPi), 2) << " Hz the actuator lags " << fmt(-std::arg(n0) * 180 / kPi, 3)
-           << " deg with gain " << fmt(std::abs(n0), 3) << " at +-" << fmt(p.amp[low[0]], 3)
-           << " (describing function of a " << nl.cause << " of width " << fmt(nl.params["width"], 3) << ")";
+        ex << "odd harmonics in the position (3rd at " << fmt(100 * mh3, 2)
+           << " % of the fundamental); below " << fmt(0.3 * corner / (2 * kPi), 2)
+           << " Hz the actuator lags " << fmt(-std::arg(n0) * 180 / kPi, 3) << " deg with gain "
+           << fmt(std::abs(n0), 3) << " at +-" << fmt(p.amp[low[0]], 3)
+           << " (describing function of a " << nl.cause << " of width "
+           << fmt(nl.params["width"], 3) << ")";
         raw.push_back({k, nl});
         raw.back().c.detail = ex.str();
         for (const Cause& c : lin) raw.push_back({k, c});
@@ -511,8 +559,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
   // 3. Scope: group consistent findings of the same cause.
   std::vector<bool> used(raw.size(), false);
   std::vector<Finding> findings = coupling_findings;
-  auto make = [&](const Cause& c, const std::string& scope, const std::string& in, const std::string& out,
-                  const std::vector<size_t>& members) {
+  auto make = [&](const Cause& c, const std::string& scope, const std::string& in,
+                  const std::string& out, const std::vector<size_t>& members) {
     Finding f;
     f.cause = c.cause;
     f.scope = scope;
@@ -530,16 +578,18 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     return f;
   };
   // plant / output / input (position pairs); actuator pairs are the input's own.
-  auto group = [&](const std::function<bool(const PairFit&)>& sel, const std::string& scope, const std::string& in,
-                   const std::string& out, size_t min_pairs) {
+  auto group = [&](const std::function<bool(const PairFit&)>& sel, const std::string& scope,
+                   const std::string& in, const std::string& out, size_t min_pairs) {
     std::vector<size_t> members_pairs;
-    for (size_t k = 0; k < pairs.size(); ++k) if (!pairs[k].output.empty() && sel(pairs[k])) members_pairs.push_back(k);
+    for (size_t k = 0; k < pairs.size(); ++k)
+      if (!pairs[k].output.empty() && sel(pairs[k])) members_pairs.push_back(k);
     if (members_pairs.size() < min_pairs) return;
     for (size_t a = 0; a < raw.size(); ++a) {
       if (used[a] || pairs[raw[a].pair].output.empty() || !sel(pairs[raw[a].pair])) continue;
       std::vector<size_t> m{a};
       for (size_t b = 0; b < raw.size(); ++b) {
-        if (b == a || used[b] || pairs[raw[b].pair].output.empty() || !sel(pairs[raw[b].pair])) continue;
+        if (b == a || used[b] || pairs[raw[b].pair].output.empty() || !sel(pairs[raw[b].pair]))
+          continue;
         if (!consistent(raw[a].c, raw[b].c)) continue;
         bool dup = false;
         for (size_t x : m) dup |= raw[x].pair == raw[b].pair;
@@ -551,8 +601,10 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     }
   };
   group([](const PairFit&) { return true; }, "plant", "", "", 3);
-  for (const auto& o : sim.outputs) group([&](const PairFit& p) { return p.output == o.name; }, "output", "", o.name, 2);
-  for (const auto& i : sim.inputs) group([&](const PairFit& p) { return p.input == i.name; }, "input", i.name, "", 2);
+  for (const auto& o : sim.outputs)
+    group([&](const PairFit& p) { return p.output == o.name; }, "output", "", o.name, 2);
+  for (const auto& i : sim.inputs)
+    group([&](const PairFit& p) { return p.input == i.name; }, "input", i.name, "", 2);
   for (size_t a = 0; a < raw.size(); ++a) {
     if (used[a]) continue;
     const PairFit& p = pairs[raw[a].pair];
@@ -583,7 +635,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
         meas.push_back(pt.value());
         amp.push_back(pt.amplitude);
       }
-      double e = pair_error(w, meas, [&](double x, size_t i) { return model_pair_response(m, mp.pair, x, amp[i]); });
+      double e = pair_error(
+          w, meas, [&](double x, size_t i) { return model_pair_response(m, mp.pair, x, amp[i]); });
       s += e * e * w.size();
       n += int(w.size());
     }
@@ -596,21 +649,35 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
     f.error_after = err_over(one, f.pairs, false);
     if (f.explanation.empty()) {
       std::ostringstream ex;
-      if (f.cause == "time_delay") ex << "phase residual linear in w (" << fmt(-f.parameters["delay_s"] * 1e3) << " ms slope), gain residual flat";
-      if (f.cause == "missing_lag") ex << "a -20 dB/decade corner at " << fmt(f.parameters["corner_rad_s"]) << " rad/s with its -90 deg phase, absent from the simulation";
-      if (f.cause == "missing_lead") ex << "a +20 dB/decade corner at " << fmt(f.parameters["corner_rad_s"]) << " rad/s with its +90 deg phase";
-      if (f.cause == "missing_resonance") ex << "a resonance at " << fmt(f.parameters["wn_rad_s"]) << " rad/s, damping " << fmt(f.parameters["zeta"]);
-      if (f.cause == "pole_shift") ex << "the simulated pole at " << fmt(f.parameters["from_rad_s"]) << " rad/s sits at " << fmt(f.parameters["to_rad_s"]) << " rad/s in the data";
-      if (f.cause == "gain_mismatch") ex << "flat gain offset of " << fmt(f.parameters["gain_db"]) << " dB, no phase";
+      if (f.cause == "time_delay")
+        ex << "phase residual linear in w (" << fmt(-f.parameters["delay_s"] * 1e3)
+           << " ms slope), gain residual flat";
+      if (f.cause == "missing_lag")
+        ex << "a -20 dB/decade corner at " << fmt(f.parameters["corner_rad_s"])
+           << " rad/s with its -90 deg phase, absent from the simulation";
+      if (f.cause == "missing_lead")
+        ex << "a +20 dB/decade corner at " << fmt(f.parameters["corner_rad_s"])
+           << " rad/s with its +90 deg phase";
+      if (f.cause == "missing_resonance")
+        ex << "a resonance at " << fmt(f.parameters["wn_rad_s"]) << " rad/s, damping "
+           << fmt(f.parameters["zeta"]);
+      if (f.cause == "pole_shift")
+        ex << "the simulated pole at " << fmt(f.parameters["from_rad_s"]) << " rad/s sits at "
+           << fmt(f.parameters["to_rad_s"]) << " rad/s in the data";
+      if (f.cause == "gain_mismatch")
+        ex << "flat gain offset of " << fmt(f.parameters["gain_db"]) << " dB, no phase";
       if (f.scope == "output") ex << "; common to every path into " << f.output << ": its sensor";
       const bool own = f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input;
-      if (f.scope == "input") ex << (own ? "; in the actuator's own response " + f.pairs[0]
-                                         : "; common to every path from " + f.input + ": its actuator or calibration");
+      if (f.scope == "input")
+        ex << (own ? "; in the actuator's own response " + f.pairs[0]
+                   : "; common to every path from " + f.input + ": its actuator or calibration");
       if (f.scope == "plant") ex << "; common to every path: a plant state";
       f.explanation = ex.str();
     }
   }
-  std::sort(findings.begin(), findings.end(), [](const Finding& a, const Finding& b) { return a.error_before - a.error_after > b.error_before - b.error_after; });
+  std::sort(findings.begin(), findings.end(), [](const Finding& a, const Finding& b) {
+    return a.error_before - a.error_after > b.error_before - b.error_after;
+  });
   d.findings = findings;
   d.error_before = err_over(sim, {}, false);
   d.error_after = err_over(ext, {}, false);
@@ -634,8 +701,10 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data, cons
       r.chi2_ext += std::norm(p.meas[q] - r.ext.back()) / (p.sig[q] * p.sig[q]);
     }
     r.beyond = r.chi2_sim > p.w.size() + 4 * std::sqrt(double(p.w.size()));
-    r.error_sim = pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(p.sim[i]); });
-    r.error_ext = pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(r.ext[i]); });
+    r.error_sim =
+        pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(p.sim[i]); });
+    r.error_ext =
+        pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(r.ext[i]); });
     d.pairs.push_back(r);
   }
   return d;
@@ -647,21 +716,30 @@ Json diagnosis_to_json(const Diagnosis& d) {
     Json p = Json::object();
     for (const auto& [k, v] : f.parameters) p[k] = v;
     for (const auto& [k, v] : f.text_parameters) p[k] = v;
-    j["findings"].push_back({{"cause", f.cause}, {"scope", f.scope},
+    j["findings"].push_back({{"cause", f.cause},
+                             {"scope", f.scope},
                              {"output", f.output.empty() ? Json(nullptr) : Json(f.output)},
                              {"input", f.input.empty() ? Json(nullptr) : Json(f.input)},
-                             {"parameters", p}, {"explanation", f.explanation}, {"error_before", f.error_before},
-                             {"error_after", f.error_after}, {"pairs", f.pairs}});
+                             {"parameters", p},
+                             {"explanation", f.explanation},
+                             {"error_before", f.error_before},
+                             {"error_after", f.error_after},
+                             {"pairs", f.pairs}});
   }
-  j["summary"] = {{"metric", d.metric}, {"error_before", d.error_before}, {"error_after", d.error_after}};
+  j["summary"] = {
+      {"metric", d.metric}, {"error_before", d.error_before}, {"error_after", d.error_after}};
   if (d.validation_before >= 0) {
     j["summary"]["validation_error_before"] = d.validation_before;
     j["summary"]["validation_error_after"] = d.validation_after;
   }
   j["pairs"] = Json::array();
   for (const auto& p : d.pairs) {
-    j["pairs"].push_back({{"pair", p.pair}, {"beyond_uncertainty", p.beyond}, {"chi2_simulation", p.chi2_sim},
-                          {"chi2_extended", p.chi2_ext}, {"n_points", p.w.size()}, {"error_before", p.error_sim},
+    j["pairs"].push_back({{"pair", p.pair},
+                          {"beyond_uncertainty", p.beyond},
+                          {"chi2_simulation", p.chi2_sim},
+                          {"chi2_extended", p.chi2_ext},
+                          {"n_points", p.w.size()},
+                          {"error_before", p.error_sim},
                           {"error_after", p.error_ext}});
   }
   return j;

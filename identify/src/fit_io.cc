@@ -26,8 +26,8 @@ void parse_delay_option(const std::string& text, FitOptions* o) {
   }
 }
 
-std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o, const std::string& dir,
-                                     const std::string& title) {
+std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o,
+                                     const std::string& dir, const std::string& title) {
   std::filesystem::create_directories(dir + "/tf");
   std::vector<FitResult> fits;
   std::vector<MatrixEntry> entries;
@@ -56,8 +56,10 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   json_save_file(dir + "/transfer_matrix.json", j);
   std::ofstream md(dir + "/transfer_matrix.md");
   md << transfer_matrix_markdown(m, title);
-  md << "\n## State model\n\nOrder " << sm.order << " (one state per distinct real pole, two per pair; "
-     << "residue matrices reduced to rank one); error against the data (rms |ln(G_model/G_measured)|): "
+  md << "\n## State model\n\nOrder " << sm.order
+     << " (one state per distinct real pole, two per pair; "
+     << "residue matrices reduced to rank one); error against the data (rms "
+        "|ln(G_model/G_measured)|): "
      << sm.error << " in total.\n\n| path | error |\n|---|---|\n";
   for (const auto& [k, e] : sm.path_error) md << "| " << k << " | " << e << " |\n";
   md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";
@@ -68,14 +70,16 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   return fits;
 }
 
-BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit, const Tf* after_deletion,
-                        const std::string& stem) {
+BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit,
+                        const Tf* after_deletion, const std::string& stem) {
   std::vector<FrdPoint> pts;
-  for (const auto& pt : data.points) if (pt.valid && pt.w > 0) pts.push_back(pt);
+  for (const auto& pt : data.points)
+    if (pt.valid && pt.w > 0) pts.push_back(pt);
   std::sort(pts.begin(), pts.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   bool sig = true;
   for (const auto& pt : pts) sig = sig && pt.sigma > 0;
-  BodePlot bp{(data.pair.empty() ? source : data.pair) + ": data and fit", stem, {}, {}, {}, {{"fit", {}}}};
+  BodePlot bp{
+      (data.pair.empty() ? source : data.pair) + ": data and fit", stem, {}, {}, {}, {{"fit", {}}}};
   if (after_deletion) bp.models.push_back({"fit after deletion", {}});
   for (const auto& pt : pts) {
     bp.w.push_back(pt.w);

@@ -62,12 +62,15 @@ Frd read_frd_csv(const std::string& file) {
     auto it = std::find(cols.begin(), cols.end(), n);
     return it == cols.end() ? -1 : int(it - cols.begin());
   };
-  const int iw = idx("w"), if_ = idx("f_hz"), im = idx("mag"), idb = idx("mag_db"), ip = idx("phase_deg"),
-            ire = idx("re"), iim = idx("im"), is = idx("sigma");
-  if (iw < 0 && if_ < 0) throw InputError(file + ":" + std::to_string(ln) + ": the header names no frequency column (w or f_hz)");
+  const int iw = idx("w"), if_ = idx("f_hz"), im = idx("mag"), idb = idx("mag_db"),
+            ip = idx("phase_deg"), ire = idx("re"), iim = idx("im"), is = idx("sigma");
+  if (iw < 0 && if_ < 0)
+    throw InputError(file + ":" + std::to_string(ln) +
+                     ": the header names no frequency column (w or f_hz)");
   const bool rect = ire >= 0 && iim >= 0;
   if (!rect && ((im < 0 && idb < 0) || ip < 0)) {
-    throw InputError(file + ":" + std::to_string(ln) + ": the header needs mag or mag_db with phase_deg, or re and im");
+    throw InputError(file + ":" + std::to_string(ln) +
+                     ": the header needs mag or mag_db with phase_deg, or re and im");
   }
   Frd f;
   f.source = file;
@@ -79,22 +82,27 @@ Frd read_frd_csv(const std::string& file) {
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) v.push_back(c);
     const std::string where = file + ":" + std::to_string(ln);
-    if (v.size() < cols.size()) throw InputError(where + ": " + std::to_string(v.size()) + " fields, the header has " + std::to_string(cols.size()));
-    const double w = iw >= 0 ? to_number(v[iw], where) : 2 * std::numbers::pi * to_number(v[if_], where);
+    if (v.size() < cols.size())
+      throw InputError(where + ": " + std::to_string(v.size()) + " fields, the header has " +
+                       std::to_string(cols.size()));
+    const double w =
+        iw >= 0 ? to_number(v[iw], where) : 2 * std::numbers::pi * to_number(v[if_], where);
     if (!(w > 0)) throw InputError(where + ": frequency must be > 0");
     FrdPoint p;
     if (rect) {
       std::complex<double> g(to_number(v[ire], where), to_number(v[iim], where));
       p = from_polar(w, std::abs(g), std::arg(g));
     } else {
-      double mag = im >= 0 ? to_number(v[im], where) : std::pow(10.0, to_number(v[idb], where) / 20);
+      double mag =
+          im >= 0 ? to_number(v[im], where) : std::pow(10.0, to_number(v[idb], where) / 20);
       p = from_polar(w, mag, to_number(v[ip], where) * std::numbers::pi / 180);
     }
     if (is >= 0) p.sigma = to_number(v[is], where);
     f.points.push_back(p);
   }
   if (f.points.empty()) throw InputError(file + ": no data rows");
-  std::stable_sort(f.points.begin(), f.points.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  std::stable_sort(f.points.begin(), f.points.end(),
+                   [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   return f;
 }
 
@@ -120,8 +128,10 @@ FitInput read_tfns_deck(const std::string& file) {
       if (flag == 'C') {
         r.has_control = true;
         std::string nd = trim(field(line, 2, 9)), nn = trim(field(line, 11, 10));
-        if (!nd.empty()) r.options.den_order_start = int(to_number(nd, where + " (C card, columns 2-10)"));
-        if (!nn.empty()) r.options.num_order_start = int(to_number(nn, where + " (C card, columns 11-20)"));
+        if (!nd.empty())
+          r.options.den_order_start = int(to_number(nd, where + " (C card, columns 2-10)"));
+        if (!nn.empty())
+          r.options.num_order_start = int(to_number(nn, where + " (C card, columns 11-20)"));
         std::string cs = trim(field(line, 21, 10)), ct = trim(field(line, 31, 10));
         if (!cs.empty()) r.options.c_phi = to_number(cs, where + " (C card, columns 21-30)");
         if (!ct.empty()) r.options.c_n = to_number(ct, where + " (C card, columns 31-40)");
@@ -130,17 +140,20 @@ FitInput read_tfns_deck(const std::string& file) {
         for (size_t c = 1; c + 2 <= line.size(); c += 4) {
           std::string f = trim(field(line, c, 4));
           if (f.empty()) break;
-          if ((f[0] != 'P' && f[0] != 'Z') || f.size() != 3) throw InputError(where + ": root deletion field \"" + f + "\" must be like P03 or Z02");
+          if ((f[0] != 'P' && f[0] != 'Z') || f.size() != 3)
+            throw InputError(where + ": root deletion field \"" + f + "\" must be like P03 or Z02");
           r.deletions.push_back(f);
         }
       } else if (flag != 'O' && !trim(line).empty()) {
-        throw InputError(where + ": unknown control card '" + std::string(1, flag) + "' (C, O, P, Z or *)");
+        throw InputError(where + ": unknown control card '" + std::string(1, flag) +
+                         "' (C, O, P, Z or *)");
       }
       continue;
     }
     if (trim(line).empty()) continue;
     if (flag != ' ' && flag != 'B' && flag != 'P' && flag != 'R') {
-      throw InputError(where + ": data card type '" + std::string(1, flag) + "' must be blank, B, P or R");
+      throw InputError(where + ": data card type '" + std::string(1, flag) +
+                       "' must be blank, B, P or R");
     }
     std::string ff = field(line, 15, 15), f1 = field(line, 30, 15), f2 = field(line, 45, 15);
     double w = 0;
@@ -151,7 +164,9 @@ FitInput read_tfns_deck(const std::string& file) {
       w = to_number(ff, where + " (frequency, columns 15-29)");
     }
     if (!(w > 0)) throw InputError(where + ": frequency must be > 0");
-    if (w <= last_w) throw InputError(where + ": cards must be in ascending frequency (" + std::to_string(w) + " rad/s after " + std::to_string(last_w) + ")");
+    if (w <= last_w)
+      throw InputError(where + ": cards must be in ascending frequency (" + std::to_string(w) +
+                       " rad/s after " + std::to_string(last_w) + ")");
     last_w = w;
     auto val = [&](const std::string& f, const char* cols, char* unit) {
       *unit = (f[0] == 'D' || f[0] == 'M' || f[0] == 'R') ? f[0] : ' ';
@@ -170,7 +185,9 @@ FitInput read_tfns_deck(const std::string& file) {
     }
     r.frd.points.push_back(p);
   }
-  if (group < 2) throw InputError(file + ": the deck needs two groups each ended by a '*' card (control, then data)");
+  if (group < 2)
+    throw InputError(file +
+                     ": the deck needs two groups each ended by a '*' card (control, then data)");
   if (r.frd.points.empty()) throw InputError(file + ": no frequency-response cards");
   return r;
 }
@@ -179,18 +196,22 @@ FitInput read_fit_input(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError(file + ": cannot open for reading");
   std::string first;
-  while (std::getline(in, first) && trim(first).empty()) {}
+  while (std::getline(in, first) && trim(first).empty()) {
+  }
   std::string t = trim(first);
   if (t.empty()) {
-    throw InputError(file + ": empty: expected fralab-frd/1 JSON, a CSV with a header (w or f_hz, and mag/phase_deg or "
-                     "re/im), or a TFNS card deck");
+    throw InputError(
+        file +
+        ": empty: expected fralab-frd/1 JSON, a CSV with a header (w or f_hz, and mag/phase_deg or "
+        "re/im), or a TFNS card deck");
   }
   if (t[0] == '{') {
     FitInput r;
     r.frd = load_frd(file);
     return r;
   }
-  if (t.find(',') != std::string::npos && (t.find("w") != std::string::npos || t.find("f_hz") != std::string::npos)) {
+  if (t.find(',') != std::string::npos &&
+      (t.find("w") != std::string::npos || t.find("f_hz") != std::string::npos)) {
     FitInput r;
     r.frd = read_frd_csv(file);
     return r;
@@ -211,7 +232,8 @@ Tf delete_roots(const Tf& tf, const std::vector<std::string>& which) {
     auto& list = w[0] == 'P' ? pdel : zdel;
     const size_t n = w[0] == 'P' ? tf.poles.size() : tf.zeros.size();
     if ((w[0] != 'P' && w[0] != 'Z') || k < 1 || size_t(k) > n) {
-      throw InputError("root deletion \"" + w + "\": the fit has " + std::to_string(n) + (w[0] == 'P' ? " poles" : " zeros"));
+      throw InputError("root deletion \"" + w + "\": the fit has " + std::to_string(n) +
+                       (w[0] == 'P' ? " poles" : " zeros"));
     }
     list.push_back(k - 1);
   }

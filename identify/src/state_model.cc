@@ -1,9 +1,9 @@
 #include "fralab/identify/state_model.h"
 
-#include "line_search.h"
-
 #include <cmath>
 #include <functional>
+
+#include "line_search.h"
 
 namespace fralab {
 namespace {
@@ -38,7 +38,8 @@ Cx StateModel::at(int o, int i, double w) const {
   return g * std::polar(1.0, -w * delay_s(o, i));
 }
 
-StateModel build_state_model(const TransferMatrix& m, const std::map<std::string, std::vector<FrdPoint>>& data) {
+StateModel build_state_model(const TransferMatrix& m,
+                             const std::map<std::string, std::vector<FrdPoint>>& data) {
   StateModel s;
   s.inputs = m.inputs;
   s.outputs = m.outputs;
@@ -51,7 +52,9 @@ StateModel build_state_model(const TransferMatrix& m, const std::map<std::string
       auto it = m.fits.find({m.outputs[o], m.inputs[i]});
       const std::string key = m.inputs[i] + ":" + m.outputs[o];
       auto dit = data.find(key);
-      if (it == m.fits.end() || it->second.status != FitResult::Status::kConverged || dit == data.end()) continue;
+      if (it == m.fits.end() || it->second.status != FitResult::Status::kConverged ||
+          dit == data.end())
+        continue;
       const Tf& tf = it->second.tf;
       s.delay_s(o, i) = tf.delay_s;
       // The clusters of this path's poles.
@@ -71,7 +74,8 @@ StateModel build_state_model(const TransferMatrix& m, const std::map<std::string
       int nu = has_d ? 1 : 0;
       for (int k : ks) nu += m.clusters[k].mean.pair ? 2 : 1;
       std::vector<FrdPoint> pts;
-      for (const auto& p : dit->second) if (p.valid && p.mag > 0) pts.push_back(p);
+      for (const auto& p : dit->second)
+        if (p.valid && p.mag > 0) pts.push_back(p);
       if (pts.empty() || nu == 0) continue;
       Eigen::MatrixXd A(2 * pts.size(), nu);
       Eigen::VectorXd b(2 * pts.size());
@@ -135,8 +139,8 @@ StateModel build_state_model(const TransferMatrix& m, const std::map<std::string
       s.C.col(x0) = rs.matrixU().col(0) * std::sqrt(s1);
       x0 += 1;
     } else {
-      // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b; Im b] u,
-      // y = 2 (Re c) x1 - 2 (Im c) x2.
+      // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b; Im
+      // b] u, y = 2 (Re c) x1 - 2 (Im c) x2.
       s.A(x0, x0) = p.real();
       s.A(x0, x0 + 1) = -p.imag();
       s.A(x0 + 1, x0) = p.imag();
@@ -176,9 +180,17 @@ Json state_model_json(const StateModel& s) {
     }
     return a;
   };
-  return Json{{"order", s.order}, {"inputs", s.inputs}, {"outputs", s.outputs}, {"A", mat(s.A)}, {"B", mat(s.B)},
-              {"C", mat(s.C)}, {"D", mat(s.D)}, {"delay_s", mat(s.delay_s)}, {"path_error", s.path_error},
-              {"error", s.error}, {"rank1_loss", s.rank1_loss},
+  return Json{{"order", s.order},
+              {"inputs", s.inputs},
+              {"outputs", s.outputs},
+              {"A", mat(s.A)},
+              {"B", mat(s.B)},
+              {"C", mat(s.C)},
+              {"D", mat(s.D)},
+              {"delay_s", mat(s.delay_s)},
+              {"path_error", s.path_error},
+              {"error", s.error},
+              {"rank1_loss", s.rank1_loss},
               {"metric", "rms over points of |ln(G_model/G_measured)|"}};
 }
 

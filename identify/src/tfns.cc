@@ -1,10 +1,9 @@
 #include "fralab/identify/tfns.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include <Eigen/Dense>
 #include <unsupported/Eigen/NonLinearOptimization>
 
 #include "line_search.h"
@@ -18,17 +17,17 @@ using VecR = Eigen::VectorXd;
 using MatC = Eigen::MatrixXcd;
 
 struct Data {
-  std::vector<double> w;   // rad/s
-  std::vector<C> g;        // measured ratio
-  std::vector<double> W;   // weights
+  std::vector<double> w;  // rad/s
+  std::vector<C> g;       // measured ratio
+  std::vector<double> W;  // weights
   std::vector<double> sigma;
   bool has_sigma = false;
 };
 
 // An orthonormal polynomial basis on the weighted points (Arnoldi); see tfns.h.
 struct Basis {
-  MatC Qw;   // weighted values, P x (order + 1): columns orthonormal
-  MatR H;    // (order + 1) x order, real
+  MatC Qw;  // weighted values, P x (order + 1): columns orthonormal
+  MatR H;   // (order + 1) x order, real
   double nu0 = 1;
   int order = 0;
 };
@@ -222,10 +221,20 @@ struct Param {
     int k = 0;
     x(k++) = t.gain / g0;
     for (const Root& z : t.zeros) {
-      if (z.pair) { x(k++) = std::log(z.wn); x(k++) = z.zeta; } else { x(k++) = 1.0 / z.real; }
+      if (z.pair) {
+        x(k++) = std::log(z.wn);
+        x(k++) = z.zeta;
+      } else {
+        x(k++) = 1.0 / z.real;
+      }
     }
     for (const Root& p : t.poles) {
-      if (p.pair) { x(k++) = std::log(p.wn); x(k++) = std::log(p.zeta); } else { x(k++) = std::log(-p.real); }
+      if (p.pair) {
+        x(k++) = std::log(p.wn);
+        x(k++) = std::log(p.zeta);
+      } else {
+        x(k++) = std::log(-p.real);
+      }
     }
     if (free_delay) x(k++) = t.delay_s;
     return x;
@@ -235,12 +244,21 @@ struct Param {
     int k = 0;
     t.gain = x(k++) * g0;
     for (Root& z : t.zeros) {
-      if (z.pair) { z.wn = std::exp(x(k++)); z.zeta = x(k++); } else { z.real = 1.0 / x(k++); }
+      if (z.pair) {
+        z.wn = std::exp(x(k++));
+        z.zeta = x(k++);
+      } else {
+        z.real = 1.0 / x(k++);
+      }
     }
     for (Root& p : t.poles) {
       // Bounded away from the imaginary axis: exp() of a runaway parameter must not underflow to 0.
-      if (p.pair) { p.wn = std::exp(x(k++)); p.zeta = std::max(std::exp(x(k++)), 1e-9); }
-      else { p.real = -std::max(std::exp(x(k++)), 1e-12); }
+      if (p.pair) {
+        p.wn = std::exp(x(k++));
+        p.zeta = std::max(std::exp(x(k++)), 1e-9);
+      } else {
+        p.real = -std::max(std::exp(x(k++)), 1e-12);
+      }
     }
     t.delay_s = free_delay ? std::abs(x(k++)) : fixed_delay;
     return t;
@@ -312,10 +330,12 @@ struct OeFunctor {
 // LM from `start`. max_evaluations > 0 caps the residual evaluations (a screening refinement of a
 // candidate: most converge within a few tens; a start that wanders is continued only if it wins);
 // 0: the full budget, 200 (p + 1). *budget_hit tells whether the cap stopped it.
-Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations = 0, bool* budget_hit = nullptr) {
+Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations = 0,
+          bool* budget_hit = nullptr) {
   if (budget_hit) *budget_hit = false;
   // A zero at exactly s = 0 cannot be packed; such starts are returned unrefined.
-  for (const Root& z : start.zeros) if (!z.pair && z.real == 0) return start;
+  for (const Root& z : start.zeros)
+    if (!z.pair && z.real == 0) return start;
   Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s};
   OeFunctor f{&d, &p};
   Eigen::LevenbergMarquardt<OeFunctor> lm(f);
@@ -326,7 +346,8 @@ Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations =
   const auto status = lm.minimize(x);
   if (budget_hit) *budget_hit = status == Eigen::LevenbergMarquardtSpace::TooManyFunctionEvaluation;
   Tf out = p.unpack(x);
-  for (const Root& q : out.poles) if (!std::isfinite(q.wn) || !std::isfinite(q.real)) return start;
+  for (const Root& q : out.poles)
+    if (!std::isfinite(q.wn) || !std::isfinite(q.real)) return start;
   if (!std::isfinite(out.gain)) return start;
   split_overdamped(out.zeros);
   split_overdamped(out.poles);
@@ -334,9 +355,9 @@ Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations =
 }
 
 struct Score {
-  double sse = 0;        // sum W |e|^2
-  double e_n = 0;        // sse / sum W |G|^2
-  double chi2 = -1;      // with sigma: sum |e|^2/sigma^2
+  double sse = 0;    // sum W |e|^2
+  double e_n = 0;    // sse / sum W |G|^2
+  double chi2 = -1;  // with sigma: sum |e|^2/sigma^2
   double rms_rel = 0, max_rel = 0;
 };
 
@@ -387,7 +408,8 @@ struct Sigmas {
 Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse) {
   Sigmas out;
   Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s};
-  for (const Root& z : t.zeros) if (!z.pair && z.real == 0) return out;
+  for (const Root& z : t.zeros)
+    if (!z.pair && z.real == 0) return out;
   OeFunctor f{&d, &p};
   VecR x = p.pack(t);
   MatR J(f.values(), f.inputs());
@@ -400,29 +422,43 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
   std::vector<bool> unidentified(J.cols(), false);
   for (int i = 0; i < sv.size(); ++i) {
     if (sv(i) <= 1e-12 * sv(0)) {
-      for (int k = 0; k < J.cols(); ++k) if (std::abs(svd.matrixV()(k, i)) > 1e-6) unidentified[k] = true;
+      for (int k = 0; k < J.cols(); ++k)
+        if (std::abs(svd.matrixV()(k, i)) > 1e-6) unidentified[k] = true;
       continue;
     }
     cov += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (sv(i) * sv(i));
   }
-  for (int k = 0; k < J.cols(); ++k) if (unidentified[k]) cov(k, k) = INFINITY;
+  for (int k = 0; k < J.cols(); ++k)
+    if (unidentified[k]) cov(k, k) = INFINITY;
   if (!d.has_sigma) cov *= sse / std::max(1.0, double(f.values() - f.inputs()));
   auto sd = [&](int k) { return std::sqrt(std::max(0.0, cov(k, k))); };
   int k = 0;
   out.gain = sd(k++);  // x0 = gain / g0 ~ 1: relative
   for (const Root& z : t.zeros) {
-    if (z.pair) { out.zeros.push_back(std::hypot(sd(k), sd(k + 1))); k += 2; }
-    else { out.zeros.push_back(sd(k) * std::abs(z.real)); ++k; }
+    if (z.pair) {
+      out.zeros.push_back(std::hypot(sd(k), sd(k + 1)));
+      k += 2;
+    } else {
+      out.zeros.push_back(sd(k) * std::abs(z.real));
+      ++k;
+    }
   }
   for (const Root& q : t.poles) {
-    if (q.pair) { out.poles.push_back(std::hypot(sd(k), q.zeta * sd(k + 1))); k += 2; }
-    else { out.poles.push_back(sd(k)); ++k; }
+    if (q.pair) {
+      out.poles.push_back(std::hypot(sd(k), q.zeta * sd(k + 1)));
+      k += 2;
+    } else {
+      out.poles.push_back(sd(k));
+      ++k;
+    }
   }
   if (free_delay) out.delay = sd(k);
   return out;
 }
 
-int n_params(const Tf& t, bool free_delay) { return 1 + t.num_order() + t.den_order() + (free_delay ? 1 : 0); }
+int n_params(const Tf& t, bool free_delay) {
+  return 1 + t.num_order() + t.den_order() + (free_delay ? 1 : 0);
+}
 
 // The misfit relative to the adequacy threshold (<= 1: adequate): chi2/dof over 1 + 3/sqrt(N) with
 // sigma, else E_N over c_N.
@@ -443,8 +479,14 @@ constexpr int kScreenEvaluations = 60;
 int reflect_unstable(Tf& t) {
   int k = 0;
   for (Root& p : t.poles) {
-    if (p.pair && p.zeta <= 0) { p.zeta = std::max(-p.zeta, 1e-6); ++k; }
-    if (!p.pair && p.real >= 0) { p.real = -std::max(p.real, 1e-9); ++k; }
+    if (p.pair && p.zeta <= 0) {
+      p.zeta = std::max(-p.zeta, 1e-6);
+      ++k;
+    }
+    if (!p.pair && p.real >= 0) {
+      p.real = -std::max(p.real, 1e-9);
+      ++k;
+    }
   }
   return k;
 }
@@ -460,8 +502,10 @@ std::vector<C> remove_delay(const Data& d, double tau) {
 void FitOptions::validate() const {
   auto bad = [](const std::string& m) { throw InputError("fit: " + m); };
   if (den_order_start < 0 || num_order_start < 0) bad("starting orders must be >= 0");
-  if (num_order_start > den_order_start) bad("numerator starting order must be <= denominator starting order");
-  if (max_den_order < den_order_start || max_den_order > 30) bad("max order must be in [start, 30]");
+  if (num_order_start > den_order_start)
+    bad("numerator starting order must be <= denominator starting order");
+  if (max_den_order < den_order_start || max_den_order > 30)
+    bad("max order must be in [start, 30]");
   if (!(c_phi > 0) || !(c_n > 0)) bad("tolerances c_phi and c_n must be > 0");
   if (max_iterations < 2) bad("max_iterations must be >= 2");
   if (delay == Delay::kFixed && !(delay_s >= 0)) bad("a fixed delay must be >= 0 s");
@@ -470,10 +514,14 @@ void FitOptions::validate() const {
 
 std::string FitResult::status_str() const {
   switch (status) {
-    case Status::kConverged: return "converged";
-    case Status::kMaxOrderReached: return "max_order_reached";
-    case Status::kNoResponse: return "no_response";
-    default: return "failed";
+    case Status::kConverged:
+      return "converged";
+    case Status::kMaxOrderReached:
+      return "max_order_reached";
+    case Status::kNoResponse:
+      return "no_response";
+    default:
+      return "failed";
   }
 }
 
@@ -524,7 +572,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   o.validate();
   Data d;
   std::vector<FrdPoint> v;
-  for (const auto& p : pts) if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
+  for (const auto& p : pts)
+    if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
   std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   FitResult res;
   res.n_points = int(v.size());
@@ -546,8 +595,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
     if (clear < 3) {
       res.status = FitResult::Status::kNoResponse;
-      res.message = "no response above the noise: " + std::to_string(clear) + " of " + std::to_string(v.size()) +
-                    " points measured to better than 30 %";
+      res.message = "no response above the noise: " + std::to_string(clear) + " of " +
+                    std::to_string(v.size()) + " points measured to better than 30 %";
       return res;
     }
   }
@@ -629,9 +678,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           t.e_phi = sk.e_phi;
           t.ok = true;
           evaluate(t);
-          // With a free delay the SK result sits at a grid delay: refine every start jointly, so the
-          // right order is not beaten by one whose extra roots absorb a delay error.
-          // Without a delay, refine only near-adequate candidates that are inadequate or had a pole
+          // With a free delay the SK result sits at a grid delay: refine every start jointly, so
+          // the right order is not beaten by one whose extra roots absorb a delay error. Without a
+          // delay, refine only near-adequate candidates that are inadequate or had a pole
           // reflected: LM at hopeless orders is wasted.
           const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
           if (o.refine && (free_delay || (near && (t.reflected || !t.adequate)))) {
@@ -646,7 +695,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         }
         if (!c.ok) continue;
         if (!best_n.ok || (c.adequate && !best_n.adequate) ||
-            (c.adequate == best_n.adequate && (c.adequate ? c.params < best_n.params : c.s.sse < best_n.s.sse))) {
+            (c.adequate == best_n.adequate &&
+             (c.adequate ? c.params < best_n.params : c.s.sse < best_n.s.sse))) {
           best_n = c;
         }
       }
@@ -699,13 +749,16 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   for (const Cand& c : cands) {
     if (!c.ok) continue;
     if (!pick || (c.adequate && !pick->adequate) ||
-        (c.adequate == pick->adequate && (c.adequate ? (c.params < pick->params || (c.params == pick->params && c.s.sse < pick->s.sse))
-                                                     : c.s.sse < pick->s.sse))) {
+        (c.adequate == pick->adequate &&
+         (c.adequate
+              ? (c.params < pick->params || (c.params == pick->params && c.s.sse < pick->s.sse))
+              : c.s.sse < pick->s.sse))) {
       pick = &c;
     }
   }
   if (!pick) {
-    res.message = "no order from " + std::to_string(o.den_order_start) + " to " + std::to_string(max_n) + " could be fitted";
+    res.message = "no order from " + std::to_string(o.den_order_start) + " to " +
+                  std::to_string(max_n) + " could be fitted";
     return res;
   }
   Cand fin = *pick;
@@ -731,16 +784,19 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   res.pole_info = root_info(res.tf.poles);
   {
     Sigmas sg = parameter_sigmas(d, res.tf, pick->free_delay, pick->s.sse);
-    for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i) res.zero_info[i].rel_sigma = sg.zeros[i];
-    for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i) res.pole_info[i].rel_sigma = sg.poles[i];
+    for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i)
+      res.zero_info[i].rel_sigma = sg.zeros[i];
+    for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i)
+      res.pole_info[i].rel_sigma = sg.poles[i];
     res.gain_rel_sigma = sg.gain;
     res.delay_sigma_s = sg.delay;
   }
   res.status = pick->adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
   char buf[256];
   std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
-                res.status_str().c_str(), res.num_order, res.den_order, d.has_sigma ? "chi2/dof" : "E_N",
-                d.has_sigma ? res.chi2_per_dof : res.e_n, res.tf.delay_s, res.iterations);
+                res.status_str().c_str(), res.num_order, res.den_order,
+                d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
+                res.tf.delay_s, res.iterations);
   res.message = buf;
   return res;
 }
@@ -749,9 +805,16 @@ Json fit_to_json(const FitResult& r, const std::string& pair) {
   Json j = tf_to_json(r.tf);
   j["delay_s"] = r.tf.delay_s;
   if (!pair.empty()) j["pair"] = pair;
-  j["fit"] = {{"status", r.status_str()}, {"message", r.message}, {"num_order", r.num_order},
-              {"den_order", r.den_order}, {"iterations", r.iterations}, {"e_phi", r.e_phi}, {"e_n", r.e_n},
-              {"rms_rel_error", r.rms_rel_error}, {"max_rel_error", r.max_rel_error}, {"n_points", r.n_points},
+  j["fit"] = {{"status", r.status_str()},
+              {"message", r.message},
+              {"num_order", r.num_order},
+              {"den_order", r.den_order},
+              {"iterations", r.iterations},
+              {"e_phi", r.e_phi},
+              {"e_n", r.e_n},
+              {"rms_rel_error", r.rms_rel_error},
+              {"max_rel_error", r.max_rel_error},
+              {"n_points", r.n_points},
               {"unstable_reflected", r.unstable_reflected}};
   if (r.chi2_per_dof >= 0) j["fit"]["chi2_per_dof"] = r.chi2_per_dof;
   if (r.gain_rel_sigma >= 0) j["fit"]["gain_rel_sigma"] = r.gain_rel_sigma;
@@ -759,7 +822,11 @@ Json fit_to_json(const FitResult& r, const std::string& pair) {
   auto roots = [](const std::vector<RootInfo>& v) {
     Json a = Json::array();
     for (const auto& i : v) {
-      Json r{{"real", i.real}, {"imag", i.imag}, {"wn", i.wn}, {"zeta", i.zeta}, {"f_hz", i.wn / (2 * std::numbers::pi)}};
+      Json r{{"real", i.real},
+             {"imag", i.imag},
+             {"wn", i.wn},
+             {"zeta", i.zeta},
+             {"f_hz", i.wn / (2 * std::numbers::pi)}};
       if (i.rel_sigma >= 0) r["rel_sigma"] = i.rel_sigma;
       a.push_back(r);
     }
@@ -767,7 +834,9 @@ Json fit_to_json(const FitResult& r, const std::string& pair) {
   };
   j["roots"] = {{"zeros", roots(r.zero_info)}, {"poles", roots(r.pole_info)}};
   j["pade"] = Json::array();
-  for (const auto& s : r.pade) j["pade"].push_back({{"zero", root_to_json(s.zero)}, {"pole", root_to_json(s.pole)}, {"delay_s", s.delay_s}});
+  for (const auto& s : r.pade)
+    j["pade"].push_back(
+        {{"zero", root_to_json(s.zero)}, {"pole", root_to_json(s.pole)}, {"delay_s", s.delay_s}});
   j["pade_delay_s"] = r.pade_delay_s;
   return j;
 }

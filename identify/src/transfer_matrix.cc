@@ -45,8 +45,10 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
   TransferMatrix m;
   std::set<std::string> ins, outs;
   for (const auto& e : entries) {
-    if (std::find(m.inputs.begin(), m.inputs.end(), e.input) == m.inputs.end()) m.inputs.push_back(e.input);
-    if (std::find(m.outputs.begin(), m.outputs.end(), e.output) == m.outputs.end()) m.outputs.push_back(e.output);
+    if (std::find(m.inputs.begin(), m.inputs.end(), e.input) == m.inputs.end())
+      m.inputs.push_back(e.input);
+    if (std::find(m.outputs.begin(), m.outputs.end(), e.output) == m.outputs.end())
+      m.outputs.push_back(e.output);
     m.fits[{e.output, e.input}] = e.fit;
   }
   // Cluster the poles of converged fits.
@@ -72,7 +74,8 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
       } else {
         best->mean.real = (best->mean.real * k + p.real) / (k + 1);
       }
-      if (std::find(best->pairs.begin(), best->pairs.end(), name) == best->pairs.end()) best->pairs.push_back(name);
+      if (std::find(best->pairs.begin(), best->pairs.end(), name) == best->pairs.end())
+        best->pairs.push_back(name);
     }
   }
   // Scope of each cluster.
@@ -86,7 +89,8 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
     all.push_back(name);
   }
   auto covers = [](const std::vector<std::string>& members, const std::vector<std::string>& need) {
-    for (const auto& n : need) if (std::find(members.begin(), members.end(), n) == members.end()) return false;
+    for (const auto& n : need)
+      if (std::find(members.begin(), members.end(), n) == members.end()) return false;
     return need.size() >= 2;
   };
   for (auto& c : m.clusters) {
@@ -95,9 +99,11 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
       c.scope = "plant";
       continue;
     }
-    for (const auto& [o, v] : by_out) if (covers(c.pairs, v)) c.scope = "output", c.where = o;
+    for (const auto& [o, v] : by_out)
+      if (covers(c.pairs, v)) c.scope = "output", c.where = o;
     if (c.scope != "path") continue;
-    for (const auto& [i, v] : by_in) if (covers(c.pairs, v)) c.scope = "input", c.where = i;
+    for (const auto& [i, v] : by_in)
+      if (covers(c.pairs, v)) c.scope = "input", c.where = i;
   }
   for (const auto& c : m.clusters) m.state_count += c.mean.order();
   std::sort(m.clusters.begin(), m.clusters.end(), [](const PoleCluster& a, const PoleCluster& b) {
@@ -107,7 +113,10 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
 }
 
 Json transfer_matrix_json(const TransferMatrix& m) {
-  Json j{{"inputs", m.inputs}, {"outputs", m.outputs}, {"paths", Json::array()}, {"common_poles", Json::array()},
+  Json j{{"inputs", m.inputs},
+         {"outputs", m.outputs},
+         {"paths", Json::array()},
+         {"common_poles", Json::array()},
          {"state_count", m.state_count}};
   for (const auto& [k, f] : m.fits) {
     Json e = fit_to_json(f, k.second + ":" + k.first);
@@ -117,15 +126,20 @@ Json transfer_matrix_json(const TransferMatrix& m) {
     j["paths"].push_back(e);
   }
   for (const auto& c : m.clusters) {
-    j["common_poles"].push_back({{"pole", root_to_json(c.mean)}, {"pairs", c.pairs}, {"scope", c.scope}, {"where", c.where}});
+    j["common_poles"].push_back({{"pole", root_to_json(c.mean)},
+                                 {"pairs", c.pairs},
+                                 {"scope", c.scope},
+                                 {"where", c.where}});
   }
   return j;
 }
 
 std::string transfer_matrix_markdown(const TransferMatrix& m, const std::string& title) {
   std::ostringstream s;
-  s << "# " << title << "\n\nTransfer matrix (response output / input; factors as in the report: [s/a + 1] "
-    << "a stable real root, [1 - s/a] a right-half-plane zero, [(s/w)^2 + 2(z)s/w + 1] a pair).\n\n| |";
+  s << "# " << title
+    << "\n\nTransfer matrix (response output / input; factors as in the report: [s/a + 1] "
+    << "a stable real root, [1 - s/a] a right-half-plane zero, [(s/w)^2 + 2(z)s/w + 1] a "
+       "pair).\n\n| |";
   for (const auto& i : m.inputs) s << " " << i << " |";
   s << "\n|---|";
   for (size_t k = 0; k < m.inputs.size(); ++k) s << "---|";
@@ -143,15 +157,18 @@ std::string transfer_matrix_markdown(const TransferMatrix& m, const std::string&
         s << " 0<br>*no response above the noise* |";
         continue;
       }
-      s << " " << tf_to_text(f.tf) << "<br>*" << f.status_str() << ", order " << f.num_order << "/" << f.den_order;
+      s << " " << tf_to_text(f.tf) << "<br>*" << f.status_str() << ", order " << f.num_order << "/"
+        << f.den_order;
       if (f.chi2_per_dof >= 0) s << ", chi2/dof " << num(f.chi2_per_dof);
       s << "* |";
     }
     s << "\n";
   }
-  s << "\n## Common poles (" << m.state_count << " states)\n\n| pole | scope | paths |\n|---|---|---|\n";
+  s << "\n## Common poles (" << m.state_count
+    << " states)\n\n| pole | scope | paths |\n|---|---|---|\n";
   for (const auto& c : m.clusters) {
-    s << "| " << factor_text(c.mean) << " | " << c.scope << (c.where.empty() ? "" : " " + c.where) << " | ";
+    s << "| " << factor_text(c.mean) << " | " << c.scope << (c.where.empty() ? "" : " " + c.where)
+      << " | ";
     for (size_t k = 0; k < c.pairs.size(); ++k) s << (k ? ", " : "") << c.pairs[k];
     s << " |\n";
   }

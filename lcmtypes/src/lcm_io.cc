@@ -1,8 +1,9 @@
 #include "fralab/lcm_io.h"
 
+#include <sys/select.h>
+
 #include <algorithm>
 #include <cstdio>
-#include <sys/select.h>
 #include <cstdlib>
 #include <filesystem>
 
@@ -110,7 +111,8 @@ std::string resolve_lcm_url(const std::string& flag) {
     url = env && *env ? env : "udpm://239.255.76.67:7667?ttl=0";
   }
   if (url.rfind("udpm://", 0) == 0 && url.find("ttl=0") == std::string::npos) {
-    throw InputError("LCM URL \"" + url + "\" has no ttl=0: fralab traffic must stay on this host; append ?ttl=0");
+    throw InputError("LCM URL \"" + url +
+                     "\" has no ttl=0: fralab traffic must stay on this host; append ?ttl=0");
   }
   return url;
 }
@@ -152,7 +154,8 @@ void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms) {
 namespace {
 
 // Reads events from byte `from` on; *end: the offset after the last whole event.
-int64_t read_events(const std::string& path, long from, long* end, const std::function<void(const TapeEvent&)>& fn) {
+int64_t read_events(const std::string& path, long from, long* end,
+                    const std::function<void(const TapeEvent&)>& fn) {
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such tape file");
   lcm::LogFile log(path, "r");
   if (!log.good()) throw InputError(path + ": cannot open as an LCM log");
@@ -178,13 +181,14 @@ int64_t read_tape_file(const std::string& path, const std::function<void(const T
   const auto size = static_cast<long>(std::filesystem::file_size(path));
   if (last_good != size && !(n == 0 && size == 0)) {
     throw InputError(path + ": truncated or corrupt tape: " + std::to_string(n) +
-                     " events read, then unreadable bytes from offset " + std::to_string(last_good) +
-                     " of " + std::to_string(size));
+                     " events read, then unreadable bytes from offset " +
+                     std::to_string(last_good) + " of " + std::to_string(size));
   }
   return n;
 }
 
-int64_t follow_tape_file(const std::string& path, int64_t* offset, const std::function<void(const TapeEvent&)>& fn) {
+int64_t follow_tape_file(const std::string& path, int64_t* offset,
+                         const std::function<void(const TapeEvent&)>& fn) {
   long end = 0;
   const int64_t n = read_events(path, static_cast<long>(*offset), &end, fn);
   *offset = end;

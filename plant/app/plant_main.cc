@@ -78,7 +78,8 @@ struct Plant {
         sim.step(u.data(), y.data());
         for (int i = 0; i < ni; ++i) tape.at(i, k) = u[i];
         for (size_t c = 0; c < y.size(); ++c) tape.at(ni + int(c), k) = y[c];
-        for (size_t e = 0; e < echo.size(); ++e) tape.at(ni + int(y.size() + e), k) = cmd.at(echo[e], k);
+        for (size_t e = 0; e < echo.size(); ++e)
+          tape.at(ni + int(y.size() + e), k) = cmd.at(echo[e], k);
       }
       started = true;
       tape_block_t msg = to_tape_msg(tape);
@@ -101,12 +102,14 @@ int main(int argc, char** argv) {
   bool no_noise = false, keep_running = false;
   app.add_option("--model", model_file, "model file (or embedded name, e.g. j85_95)")->required();
   app.add_option("--lcm-url", url, "LCM URL (default $LCM_DEFAULT_URL or udpm ...?ttl=0)");
-  app.add_option("--sample-rate", opt.sample_rate_hz, "plant sample rate, Hz")->capture_default_str();
+  app.add_option("--sample-rate", opt.sample_rate_hz, "plant sample rate, Hz")
+      ->capture_default_str();
   app.add_option("--seed", opt.seed, "noise seed")->capture_default_str();
   app.add_flag("--no-noise", no_noise, "turn every noise source off");
   app.add_flag("--keep-running", keep_running, "do not exit after the final block");
   std::string run_id, ctl_url;
-  app.add_option("--control-url", ctl_url, "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
+  app.add_option("--control-url", ctl_url,
+                 "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--run-id", run_id, "only this run (default: the first command's)");
   CLI11_PARSE(app, argc, argv);
   opt.noise = !no_noise;
@@ -115,7 +118,8 @@ int main(int argc, char** argv) {
     for (const auto& w : model.warnings) std::cerr << "fralab-plant: warning: " << w << "\n";
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url));
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
+                                 : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
     Plant plant{Simulator(model, opt), &lcm, &ctl, {}, 0, run_id, false, false, ""};
     for (const auto& in : model.inputs) plant.input_names.push_back(in.name);
@@ -123,7 +127,8 @@ int main(int argc, char** argv) {
     sub->setQueueCapacity(100000);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (keep_running || !plant.done) {
-      if (!plant.started && std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+      if (!plant.started &&
+          std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
         plant.ack(-1);  // ready: the acquisition waits for this before the first command
         last_ready = std::chrono::steady_clock::now();
       }

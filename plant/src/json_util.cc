@@ -28,7 +28,8 @@ void json_save_file(const std::string& file, const Json& j) {
 }
 
 void json_require_object(const Json& obj, const JsonWhere& where) {
-  if (!obj.is_object()) json_fail(where, "expected a JSON object, found " + std::string(obj.type_name()));
+  if (!obj.is_object())
+    json_fail(where, "expected a JSON object, found " + std::string(obj.type_name()));
 }
 
 const Json& json_member(const Json& obj, const JsonWhere& where, const std::string& key) {
@@ -87,7 +88,8 @@ Json json_unknown_members(const Json& obj, const JsonWhere& where,
     for (const char* k : known) ok = ok || it.key() == k;
     if (!ok) {
       extra[it.key()] = it.value();
-      if (warnings) warnings->push_back((where / it.key()).str() + ": unknown key, kept and ignored");
+      if (warnings)
+        warnings->push_back((where / it.key()).str() + ": unknown key, kept and ignored");
     }
   }
   return extra;

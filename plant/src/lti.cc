@@ -4,7 +4,6 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
-
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace fralab {
@@ -162,7 +161,9 @@ void FohLti::build_cascade(const Tf& tf) {
   // Sections: real poles grouped in twos, pairs alone; zero pairs first, then real zeros, fill the
   // sections' numerator capacity. Each section N_k(s)/D_k(s) in controllable canonical form, in
   // monic-denominator coefficients, connected in series; the DC gain sits on the first section.
-  struct Poly { std::vector<double> c; };  // ascending powers
+  struct Poly {
+    std::vector<double> c;
+  };  // ascending powers
   auto mul = [](const std::vector<double>& a, const std::vector<double>& b) {
     std::vector<double> r(a.size() + b.size() - 1, 0.0);
     for (size_t i = 0; i < a.size(); ++i)
@@ -176,9 +177,13 @@ void FohLti::build_cascade(const Tf& tf) {
   std::vector<std::vector<double>> dens;
   std::vector<const Root*> reals;
   for (const Root& p : tf.poles) {
-    if (p.pair) dens.push_back(poly_of(p)); else reals.push_back(&p);
+    if (p.pair)
+      dens.push_back(poly_of(p));
+    else
+      reals.push_back(&p);
   }
-  for (size_t i = 0; i + 1 < reals.size(); i += 2) dens.push_back(mul(poly_of(*reals[i]), poly_of(*reals[i + 1])));
+  for (size_t i = 0; i + 1 < reals.size(); i += 2)
+    dens.push_back(mul(poly_of(*reals[i]), poly_of(*reals[i + 1])));
   if (reals.size() % 2) dens.push_back(poly_of(*reals.back()));
   std::vector<std::vector<double>> nums(dens.size(), std::vector<double>{1.0});
   std::vector<int> cap(dens.size());
@@ -187,13 +192,23 @@ void FohLti::build_cascade(const Tf& tf) {
   for (const Root& z : tf.zeros) (z.pair ? zp : zr).push_back(&z);
   for (const Root* z : zp) {
     for (size_t k = 0; k < dens.size(); ++k) {
-      if (cap[k] >= 2) { nums[k] = mul(nums[k], poly_of(*z)); cap[k] -= 2; z = nullptr; break; }
+      if (cap[k] >= 2) {
+        nums[k] = mul(nums[k], poly_of(*z));
+        cap[k] -= 2;
+        z = nullptr;
+        break;
+      }
     }
     if (z) throw InputError("cascade realisation: cannot place zero " + z->str());
   }
   for (const Root* z : zr) {
     for (size_t k = 0; k < dens.size(); ++k) {
-      if (cap[k] >= 1) { nums[k] = mul(nums[k], poly_of(*z)); cap[k] -= 1; z = nullptr; break; }
+      if (cap[k] >= 1) {
+        nums[k] = mul(nums[k], poly_of(*z));
+        cap[k] -= 1;
+        z = nullptr;
+        break;
+      }
     }
     if (z) throw InputError("cascade realisation: cannot place zero " + z->str());
   }
@@ -208,7 +223,8 @@ void FohLti::build_cascade(const Tf& tf) {
   int off = 0;
   for (size_t k = 0; k < dens.size(); ++k) {
     std::vector<double> den = dens[k], num = nums[k];
-    if (k == 0) for (double& c : num) c *= tf.gain;
+    if (k == 0)
+      for (double& c : num) c *= tf.gain;
     const int q = static_cast<int>(den.size()) - 1;
     num.resize(q + 1, 0.0);
     const double lead = den[q];

@@ -5,24 +5,37 @@
 namespace fralab {
 
 std::string unit_kind(const std::string& u) {
-  static const std::map<std::string, std::string> kinds = {
-      {"lb/hr", "mass_flow"},   {"lb/h", "mass_flow"},      {"kg/s", "mass_flow"},
-      {"in^2", "area"},         {"in2", "area"},            {"m^2", "area"},
-      {"rpm", "speed"},         {"rad/s", "speed"},         {"psi", "pressure"},
-      {"psia", "pressure"},     {"kPa", "pressure"},        {"Pa", "pressure"},
-      {"degR", "temperature"},  {"R", "temperature"},       {"K", "temperature"},
-      {"psi/psi", "dimensionless"}, {"1", "dimensionless"}, {"", "dimensionless"},
-      {"nondimensional", "dimensionless"}, {"fraction", "dimensionless"},
-      {"%", "dimensionless"},   {"pct", "dimensionless"}};
+  static const std::map<std::string, std::string> kinds = {{"lb/hr", "mass_flow"},
+                                                           {"lb/h", "mass_flow"},
+                                                           {"kg/s", "mass_flow"},
+                                                           {"in^2", "area"},
+                                                           {"in2", "area"},
+                                                           {"m^2", "area"},
+                                                           {"rpm", "speed"},
+                                                           {"rad/s", "speed"},
+                                                           {"psi", "pressure"},
+                                                           {"psia", "pressure"},
+                                                           {"kPa", "pressure"},
+                                                           {"Pa", "pressure"},
+                                                           {"degR", "temperature"},
+                                                           {"R", "temperature"},
+                                                           {"K", "temperature"},
+                                                           {"psi/psi", "dimensionless"},
+                                                           {"1", "dimensionless"},
+                                                           {"", "dimensionless"},
+                                                           {"nondimensional", "dimensionless"},
+                                                           {"fraction", "dimensionless"},
+                                                           {"%", "dimensionless"},
+                                                           {"pct", "dimensionless"}};
   auto it = kinds.find(u);
   return it == kinds.end() ? std::string("unknown") : it->second;
 }
 
 std::string channel_kind(const std::string& n) {
   static const std::map<std::string, std::string> kinds = {
-      {"Wf", "mass_flow"}, {"A8", "area"},          {"BLD", "dimensionless"},
-      {"IGV", "dimensionless"}, {"N", "speed"},     {"P3", "pressure"},
-      {"P5", "pressure"},  {"PBLD", "pressure"},    {"dPfn", "pressure"},
+      {"Wf", "mass_flow"},       {"A8", "area"},        {"BLD", "dimensionless"},
+      {"IGV", "dimensionless"},  {"N", "speed"},        {"P3", "pressure"},
+      {"P5", "pressure"},        {"PBLD", "pressure"},  {"dPfn", "pressure"},
       {"DPP3", "dimensionless"}, {"T4", "temperature"}, {"T5", "temperature"}};
   auto it = kinds.find(n);
   return it == kinds.end() ? std::string() : it->second;
@@ -33,7 +46,8 @@ static void check_units(const std::string& name, const std::string& units, const
   if (want.empty()) return;
   const std::string got = unit_kind(units);
   if (got == "unknown") {
-    json_fail(w, "unknown units \"" + units + "\" for " + name + " (expected units of " + want + ")");
+    json_fail(w,
+              "unknown units \"" + units + "\" for " + name + " (expected units of " + want + ")");
   }
   if (got != want) {
     json_fail(w, "units \"" + units + "\" are " + got + ", but " + name + " is a " + want +
@@ -49,7 +63,8 @@ static void check_name(const std::string& name, const JsonWhere& w) {
     }
   }
   if (name.rfind("u_", 0) == 0 || name.rfind("ref_", 0) == 0) {
-    json_fail(w, "channel name \"" + name + "\" is reserved (u_* are commands, ref_* the reference)");
+    json_fail(w,
+              "channel name \"" + name + "\" is reserved (u_* are commands, ref_* the reference)");
   }
 }
 
@@ -83,12 +98,12 @@ Model parse_model(const Json& doc, const std::string& source) {
   Model m;
   m.source = source;
   auto* warn = &m.warnings;
-  m.extra = json_unknown_members(doc, root,
-                                 {"format", "name", "operating_point", "inputs", "outputs", "paths"},
-                                 warn);
+  m.extra = json_unknown_members(
+      doc, root, {"format", "name", "operating_point", "inputs", "outputs", "paths"}, warn);
   const std::string format = json_string_member(doc, root, "format");
   if (format != kModelFormat) {
-    json_fail(root / "format", "expected \"" + std::string(kModelFormat) + "\", found \"" + format + "\"");
+    json_fail(root / "format",
+              "expected \"" + std::string(kModelFormat) + "\", found \"" + format + "\"");
   }
   if (doc.contains("name")) m.name = json_string_member(doc, root, "name");
   if (doc.contains("operating_point")) {
@@ -119,7 +134,8 @@ Model parse_model(const Json& doc, const std::string& source) {
                                     warn);
     in.name = json_string_member(j, w, "name");
     check_name(in.name, w / "name");
-    if (!names.insert(in.name).second) json_fail(w / "name", "duplicate channel name \"" + in.name + "\"");
+    if (!names.insert(in.name).second)
+      json_fail(w / "name", "duplicate channel name \"" + in.name + "\"");
     in.units = json_string_member(j, w, "units");
     check_units(in.name, in.units, w / "units");
     in.full_scale = json_number_member(j, w, "full_scale");
@@ -160,7 +176,8 @@ Model parse_model(const Json& doc, const std::string& source) {
     out.extra = json_unknown_members(j, w, {"name", "units", "noise_rms", "sensor"}, warn);
     out.name = json_string_member(j, w, "name");
     check_name(out.name, w / "name");
-    if (!names.insert(out.name).second) json_fail(w / "name", "duplicate channel name \"" + out.name + "\"");
+    if (!names.insert(out.name).second)
+      json_fail(w / "name", "duplicate channel name \"" + out.name + "\"");
     out.units = json_string_member(j, w, "units");
     check_units(out.name, out.units, w / "units");
     out.noise_rms = json_number_member(j, w, "noise_rms", 0.0);
@@ -182,7 +199,8 @@ Model parse_model(const Json& doc, const std::string& source) {
     p.extra = json_unknown_members(j, w, {"output", "input", "tf"}, warn);
     p.output = json_string_member(j, w, "output");
     p.input = json_string_member(j, w, "input");
-    if (m.output_index(p.output) < 0) json_fail(w / "output", "no output named \"" + p.output + "\"");
+    if (m.output_index(p.output) < 0)
+      json_fail(w / "output", "no output named \"" + p.output + "\"");
     if (m.input_index(p.input) < 0) json_fail(w / "input", "no input named \"" + p.input + "\"");
     if (m.path(p.output, p.input)) {
       json_fail(w, "a second path " + p.input + " -> " + p.output + " (one path per pair)");
@@ -358,8 +376,8 @@ Model load_model_or_embedded(const std::string& spec) {
     }
     names += (names.empty() ? "" : ", ") + n.substr(0, n.size() - 5);
   }
-  throw InputError(spec + ": no such model file, and no embedded model of that name (embedded: " +
-                   names + ")");
+  throw InputError(
+      spec + ": no such model file, and no embedded model of that name (embedded: " + names + ")");
 }
 
 }  // namespace fralab

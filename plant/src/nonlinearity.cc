@@ -16,6 +16,7 @@ class Deadband : public Nonlinearity {
     return 0.0;
   }
   void reset() override {}
+
  private:
   double half_;
 };
@@ -28,6 +29,7 @@ class Backlash : public Nonlinearity {
     return y_;
   }
   void reset() override { y_ = 0.0; }
+
  private:
   double half_;
   double y_ = 0.0;
@@ -41,6 +43,7 @@ class RateLimit : public Nonlinearity {
     return y_;
   }
   void reset() override { y_ = 0.0; }
+
  private:
   double step_;
   double y_ = 0.0;
@@ -51,6 +54,7 @@ class Saturation : public Nonlinearity {
   Saturation(double lo, double hi) : lo_(lo), hi_(hi) {}
   double apply(double x) override { return std::clamp(x, lo_, hi_); }
   void reset() override {}
+
  private:
   double lo_, hi_;
 };

@@ -6,7 +6,8 @@ namespace fralab {
 
 void SimulatorOptions::validate() const {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw InputError("sample rate must be a positive number of Hz, got " + std::to_string(sample_rate_hz));
+    throw InputError("sample rate must be a positive number of Hz, got " +
+                     std::to_string(sample_rate_hz));
   }
 }
 
@@ -25,7 +26,8 @@ Simulator::Simulator(const Model& model, const SimulatorOptions& options)
       throw InputError(where("actuator of " + in.name) + e.what());
     }
     c.noise = opt_.noise ? in.noise_rms : 0.0;
-    for (const auto& m : in.measurement_coupling) c.coupling.emplace_back(model_.output_index(m.output), m.gain);
+    for (const auto& m : in.measurement_coupling)
+      c.coupling.emplace_back(model_.output_index(m.output), m.gain);
     names_.push_back(in.name);
     inputs_.push_back(std::move(c));
   }

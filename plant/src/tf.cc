@@ -34,9 +34,7 @@ Complex Tf::rational(Complex s) const {
   return v;
 }
 
-Complex Tf::at(double w) const {
-  return rational(Complex(0.0, w)) * std::polar(1.0, -w * delay_s);
-}
+Complex Tf::at(double w) const { return rational(Complex(0.0, w)) * std::polar(1.0, -w * delay_s); }
 
 int Tf::num_order() const {
   int n = 0;
@@ -76,7 +74,8 @@ static Root root_from_json(const Json& j, const JsonWhere& where, bool is_pole, 
   const bool has_real = j.contains("real");
   const bool has_pair = j.contains("wn") || j.contains("zeta");
   if (has_real == has_pair) {
-    json_fail(where, "a root is either {\"real\": r} or {\"wn\": w, \"zeta\": z}, found " + j.dump());
+    json_fail(where,
+              "a root is either {\"real\": r} or {\"wn\": w, \"zeta\": z}, found " + j.dump());
   }
   Root r;
   if (has_real) {
@@ -94,7 +93,8 @@ static Root root_from_json(const Json& j, const JsonWhere& where, bool is_pole, 
     std::string fix = r.pair ? "zeta must be > 0 for a pole pair"
                              : "a stable real pole has real < 0, e.g. {\"real\": " +
                                    std::to_string(-std::abs(r.real)) + "}";
-    json_fail(where, "unstable pole (" + r.str() + "): poles must lie in the open left half plane; " + fix);
+    json_fail(where, "unstable pole (" + r.str() +
+                         "): poles must lie in the open left half plane; " + fix);
   }
   return r;
 }

@@ -4,12 +4,12 @@
 // requires diagnosis.json to name the cause, the scope and place, and the parameter within
 // tolerance, with error_after well below error_before. ctest runs it through scripts/isolated.sh.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <sys/wait.h>
 
 #include "fralab/plant/model.h"
 
@@ -56,8 +56,10 @@ Model simulation() {
   p21.poles = {Root::Real(-1.0), Root::Real(-25.0)};
   Tf p12 = lag(5.0, 0.8);
   Tf p22 = lag(3.0, 2.0);
-  m.paths = {{"Y1", "U1", p11, Json::object()}, {"Y2", "U1", p21, Json::object()},
-             {"Y1", "U2", p12, Json::object()}, {"Y2", "U2", p22, Json::object()}};
+  m.paths = {{"Y1", "U1", p11, Json::object()},
+             {"Y2", "U1", p21, Json::object()},
+             {"Y1", "U2", p12, Json::object()},
+             {"Y2", "U2", p22, Json::object()}};
   return m;
 }
 
@@ -67,28 +69,35 @@ int run(const std::string& cmd) {
 }
 
 // Runs the diagnosis of `truth` against the simulation; returns diagnosis.json.
-Json diagnose(const std::string& name, const Model& truth, bool plots = false, std::string* out_dir = nullptr) {
-  const std::string d = (fs::temp_directory_path() / ("fralab_diag_" + name + "_" + std::to_string(getpid()))).string();
+Json diagnose(const std::string& name, const Model& truth, bool plots = false,
+              std::string* out_dir = nullptr) {
+  const std::string d =
+      (fs::temp_directory_path() / ("fralab_diag_" + name + "_" + std::to_string(getpid())))
+          .string();
   fs::remove_all(d);
   fs::create_directories(d);
   save_model(d + "/sim.json", simulation());
   save_model(d + "/truth.json", truth);
   const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
-                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 " + (plots ? "" : "--no-plots ") +
-                          "--out " + d + "/out";
+                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 " +
+                          (plots ? "" : "--no-plots ") + "--out " + d + "/out";
   if (out_dir) *out_dir = d + "/out";
   EXPECT_EQ(run(cmd), 0) << cmd << "\n" << d;
   return json_load_file(d + "/out/diagnosis.json");
 }
 
 const Json* find(const Json& d, const std::string& cause) {
-  for (const auto& f : d["findings"]) if (f["cause"] == cause) return &f;
+  for (const auto& f : d["findings"])
+    if (f["cause"] == cause) return &f;
   return nullptr;
 }
 
 void expect_gain(const Json& d) {
-  EXPECT_LT(d["summary"]["error_after"].get<double>(), 0.3 * d["summary"]["error_before"].get<double>()) << d.dump(1);
-  EXPECT_LT(d["summary"]["validation_error_after"].get<double>(), 0.3 * d["summary"]["validation_error_before"].get<double>());
+  EXPECT_LT(d["summary"]["error_after"].get<double>(),
+            0.3 * d["summary"]["error_before"].get<double>())
+      << d.dump(1);
+  EXPECT_LT(d["summary"]["validation_error_after"].get<double>(),
+            0.3 * d["summary"]["validation_error_before"].get<double>());
 }
 
 }  // namespace
@@ -150,7 +159,8 @@ TEST(Diagnose, SensorLagIsReportedOnceForItsOutput) {
 
 TEST(Diagnose, ActuatorCalibrationErrorIsReportedForItsInput) {
   Model t = simulation();
-  for (auto& p : t.paths) if (p.input == "U2") p.tf.gain *= std::pow(10.0, 1.5 / 20);
+  for (auto& p : t.paths)
+    if (p.input == "U2") p.tf.gain *= std::pow(10.0, 1.5 / 20);
   Json d = diagnose("calibration", t);
   const Json* f = find(d, "gain_mismatch");
   ASSERT_TRUE(f) << d.dump(1);
@@ -215,18 +225,25 @@ TEST(Diagnose, TwoEffectsAtOnce) {
 // The default demonstration: the J85 95 % engine against the simulation the report compared with
 // must give the report's headline findings with its numbers (5 points per decade to keep CI short).
 TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
-  const std::string d = (fs::temp_directory_path() / ("fralab_diag_j85_" + std::to_string(getpid()))).string();
+  const std::string d =
+      (fs::temp_directory_path() / ("fralab_diag_j85_" + std::to_string(getpid()))).string();
   fs::remove_all(d);
-  const std::string cmd = kBin + "/fralab diagnose --simulation j85_95_sim --engine j85_95 --points-per-decade 5 --out " + d;
+  const std::string cmd =
+      kBin +
+      "/fralab diagnose --simulation j85_95_sim --engine j85_95 --points-per-decade 5 --out " + d;
   ASSERT_EQ(run(cmd), 0) << cmd;
   Json j = json_load_file(d + "/diagnosis.json");
-  auto get = [&](const std::string& cause, const std::string& in, const std::string& out) -> const Json* {
+  auto get = [&](const std::string& cause, const std::string& in,
+                 const std::string& out) -> const Json* {
     for (const auto& f : j["findings"]) {
-      if (f["cause"] == cause && f["input"] == in && (out.empty() ? f["output"].is_null() : f["output"] == out)) return &f;
+      if (f["cause"] == cause && f["input"] == in &&
+          (out.empty() ? f["output"].is_null() : f["output"] == out))
+        return &f;
     }
     return nullptr;
   };
-  for (const char* o : {"P3", "P5", "DPP3"}) {  // the 11 ms combustion delay in every pressure response to Wf
+  for (const char* o :
+       {"P3", "P5", "DPP3"}) {  // the 11 ms combustion delay in every pressure response to Wf
     const Json* f = get("time_delay", "Wf", o);
     ASSERT_TRUE(f) << o << j.dump(1);
     EXPECT_NEAR((*f)["parameters"]["delay_s"].get<double>(), 0.011, 0.5e-3);
@@ -237,9 +254,14 @@ TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
   const Json* a8n = get("missing_lag", "A8", "N");
   ASSERT_TRUE(a8n);
   EXPECT_NEAR((*a8n)["parameters"]["corner_rad_s"].get<double>(), 53.9, 5.39);
-  struct Shift { const char* in; double from, to; };
-  for (const Shift& s : {Shift{"A8", 3.142, 38.2}, Shift{"BLD", 2.0, 35.8}, Shift{"IGV", 5.0, 19.9}}) {
-    const Json* f = get("pole_shift", s.in, "");  // the geometry actuators: much faster than modelled
+  struct Shift {
+    const char* in;
+    double from, to;
+  };
+  for (const Shift& s :
+       {Shift{"A8", 3.142, 38.2}, Shift{"BLD", 2.0, 35.8}, Shift{"IGV", 5.0, 19.9}}) {
+    const Json* f =
+        get("pole_shift", s.in, "");  // the geometry actuators: much faster than modelled
     ASSERT_TRUE(f) << s.in;
     EXPECT_NEAR((*f)["parameters"]["from_rad_s"].get<double>(), s.from, 0.01 * s.from);
     EXPECT_NEAR((*f)["parameters"]["to_rad_s"].get<double>(), s.to, 0.1 * s.to);
@@ -249,8 +271,11 @@ TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
   // Width and actuator pole alternate to a joint fit: both within 5 % / 2 %, and no calibration
   // offset invented to make up for a biased width (the engine has none).
   EXPECT_NEAR((*h)["parameters"]["width"].get<double>(), 9.24, 0.05 * 9.24);
-  EXPECT_NEAR(get("pole_shift", "A8", "")->at("parameters")["to_rad_s"].get<double>(), 38.2, 0.02 * 38.2);
+  EXPECT_NEAR(get("pole_shift", "A8", "")->at("parameters")["to_rad_s"].get<double>(), 38.2,
+              0.02 * 38.2);
   for (const auto& f : j["findings"]) EXPECT_NE(f["cause"], "gain_mismatch") << f.dump();
-  EXPECT_LT(j["summary"]["error_after"].get<double>(), 0.2 * j["summary"]["error_before"].get<double>());
-  EXPECT_LT(j["summary"]["validation_error_after"].get<double>(), 0.2 * j["summary"]["validation_error_before"].get<double>());
+  EXPECT_LT(j["summary"]["error_after"].get<double>(),
+            0.2 * j["summary"]["error_before"].get<double>());
+  EXPECT_LT(j["summary"]["validation_error_after"].get<double>(),
+            0.2 * j["summary"]["validation_error_before"].get<double>());
 }

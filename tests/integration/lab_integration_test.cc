@@ -3,16 +3,15 @@
 // private network namespace when permitted); each lab run also uses its own multicast group/port
 // with ttl=0.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <tuple>
-#include <sys/wait.h>
-
-#include <lcm/lcm-cpp.hpp>
 
 #include "fralab/analyze/frd.h"
 #include "fralab/lcm_io.h"
@@ -78,8 +77,8 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   Cmd info = sh(kBin + "/fralab tape --log " + d + "/tape.lcmlog");
   ASSERT_EQ(info.status, 0) << info.output;
   Json j = Json::parse(info.output);
-  for (const char* ch : {"u_Wf", "u_A8", "u_BLD", "u_IGV", "Wf", "A8", "BLD", "IGV", "N", "P3", "DPP3", "P5", "T5",
-                         "ref_phase", "ref_freq_hz"}) {
+  for (const char* ch : {"u_Wf", "u_A8", "u_BLD", "u_IGV", "Wf", "A8", "BLD", "IGV", "N", "P3",
+                         "DPP3", "P5", "T5", "ref_phase", "ref_freq_hz"}) {
     EXPECT_NE(std::find(j["channels"].begin(), j["channels"].end(), ch), j["channels"].end()) << ch;
   }
   EXPECT_TRUE(j["missing_seqs"].empty());
@@ -90,7 +89,8 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   EXPECT_EQ(j["states"]["done"], 1);
   EXPECT_EQ(j["events"]["FRALAB_CMD"], j["tape_blocks"]);
   // Every pair of the input has its frd, every point valid.
-  for (const char* p : {"Wf_N", "Wf_P3", "Wf_DPP3", "Wf_P5", "Wf_T5", "u_Wf_Wf", "u_Wf_N", "u_Wf_T5"}) {
+  for (const char* p :
+       {"Wf_N", "Wf_P3", "Wf_DPP3", "Wf_P5", "Wf_T5", "u_Wf_Wf", "u_Wf_N", "u_Wf_T5"}) {
     Frd f = load_frd(d + "/frd/" + p + ".json");
     EXPECT_EQ(f.points.size(), 4u) << p;
     for (const auto& pt : f.points) EXPECT_TRUE(pt.valid) << p << ": " << pt.note;
@@ -102,7 +102,8 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   EXPECT_EQ(p3["fit"]["status"], "converged");
   // (4 points over 1-10 Hz cannot pin the 11 ms delay; delay accuracy is tfns_test's subject.)
   EXPECT_GE(p3["delay_s"].get<double>(), 0.0);
-  EXPECT_LT(p3["fit"]["chi2_per_dof"].get<double>(), 1.0 + 3.0 / std::sqrt(4.0));  // consistent with sigma
+  EXPECT_LT(p3["fit"]["chi2_per_dof"].get<double>(),
+            1.0 + 3.0 / std::sqrt(4.0));  // consistent with sigma
   Json n = json_load_file(d + "/tf/Wf_N.json");
   EXPECT_NEAR(n["gain"].get<double>(), 2.86, 0.05 * 2.86);
   Json tm = json_load_file(d + "/transfer_matrix.json");
@@ -113,7 +114,8 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
 TEST(Lab, FitCommandReadsAnFrdAndWritesATf) {
   const std::string& d = measured();
   std::string t = tmpdir("fit");
-  Cmd c = sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay 0.011 --out " + t + "/tf.json");
+  Cmd c =
+      sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay 0.011 --out " + t + "/tf.json");
   ASSERT_EQ(c.status, 0) << c.output;
   Json j = json_load_file(t + "/tf.json");
   EXPECT_DOUBLE_EQ(j["delay_s"].get<double>(), 0.011);
@@ -121,7 +123,9 @@ TEST(Lab, FitCommandReadsAnFrdAndWritesATf) {
   EXPECT_TRUE(j.contains("roots"));
   c = sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay soon --out " + t + "/x.json");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--delay \"soon\" must be auto, none or a delay in seconds"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("--delay \"soon\" must be auto, none or a delay in seconds"),
+            std::string::npos)
+      << c.output;
 }
 
 TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
@@ -138,7 +142,8 @@ TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
       csv << p.w << "," << p.value().real() << "," << p.value().imag() << "\n";
     }
   }
-  Cmd c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --delay none --out " + t + "/tf.json --plot " + t + "/cross.png");
+  Cmd c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --delay none --out " + t +
+             "/tf.json --plot " + t + "/cross.png");
   ASSERT_EQ(c.status, 0) << c.output;
   EXPECT_NE(c.output.find("cross-plot " + t + "/cross.png"), std::string::npos) << c.output;
   EXPECT_GT(fs::file_size(t + "/cross.png"), 10000u);
@@ -154,25 +159,29 @@ TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
     EXPECT_NEAR(v[8], 0.0, 1e-6) << line;
   }
   EXPECT_EQ(rows, 31);  // 0.05-50 Hz, 10 per decade
-  c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --out " + t + "/tf2.json --plot " + t + "/cross.svg");
+  c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --out " + t + "/tf2.json --plot " + t +
+         "/cross.svg");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--plot " + t + "/cross.svg: the cross-plot is a PNG: name it *.png"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("--plot " + t + "/cross.svg: the cross-plot is a PNG: name it *.png"),
+            std::string::npos)
+      << c.output;
 }
 
 TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
   const std::string& d = measured();
   // Offline: the tape read directly.
   std::string off = tmpdir("offline");
-  Cmd c = sh(kBin + "/fralab analyze --log " + d + "/tape.lcmlog --pair Wf:P3 --pair u_Wf:Wf --out " + off);
+  Cmd c = sh(kBin + "/fralab analyze --log " + d +
+             "/tape.lcmlog --pair Wf:P3 --pair u_Wf:Wf --out " + off);
   ASSERT_EQ(c.status, 0) << c.output;
   expect_same_frd(d + "/frd/Wf_P3.json", off + "/frd/Wf_P3.json", 1e-12);
   expect_same_frd(d + "/frd/u_Wf_Wf.json", off + "/frd/u_Wf_Wf.json", 1e-12);
   // Replayed: lcm-logplayer into a live analyser on a fresh private URL.
   std::string rep = tmpdir("replay");
   std::string url = private_lcm_url(uint64_t(getpid()) * 7919u + 17u);
-  std::string cmd = "(" + kBin + "/fralab-analyze --pair Wf:P3 --pair u_Wf:Wf --lcm-url '" + url + "' --out " + rep +
-                    " & an=$!; sleep 0.5; lcm-logplayer -s 1 --lcm-url='" + url + "' " + d +
-                    "/tape.lcmlog; wait $an)";
+  std::string cmd = "(" + kBin + "/fralab-analyze --pair Wf:P3 --pair u_Wf:Wf --lcm-url '" + url +
+                    "' --out " + rep + " & an=$!; sleep 0.5; lcm-logplayer -s 1 --lcm-url='" + url +
+                    "' " + d + "/tape.lcmlog; wait $an)";
   c = sh(cmd);
   ASSERT_EQ(c.status, 0) << c.output;
   expect_same_frd(d + "/frd/Wf_P3.json", rep + "/frd/Wf_P3.json", 1e-12);
@@ -182,7 +191,8 @@ TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
 TEST(Lab, PacedAndUnpacedRunsGiveTheSameNumbers) {
   const std::string& d = measured();
   std::string paced = tmpdir("paced");
-  Cmd c = sh(kBin + "/fralab measure --engine j85_95" + kSmall + "--seed 5 --speed 100 --out " + paced);
+  Cmd c =
+      sh(kBin + "/fralab measure --engine j85_95" + kSmall + "--seed 5 --speed 100 --out " + paced);
   ASSERT_EQ(c.status, 0) << c.output;
   for (const char* p : {"Wf_P3", "Wf_N", "u_Wf_Wf"}) {
     expect_same_frd(d + "/frd/" + std::string(p) + ".json", paced + "/frd/" + p + ".json", 0.0);
@@ -194,15 +204,19 @@ TEST(Lab, PacedAndUnpacedRunsGiveTheSameNumbers) {
 
 TEST(Lab, BadEngineModelFailsWithTheReason) {
   std::string d = tmpdir("bad");
-  std::ofstream(d + "/unstable.json") << R"({"format": "fralab-model/1", "inputs": [{"name": "Wf", "units": "lb/hr",
+  std::ofstream(d + "/unstable.json")
+      << R"({"format": "fralab-model/1", "inputs": [{"name": "Wf", "units": "lb/hr",
     "full_scale": 3000}], "outputs": [{"name": "N", "units": "rpm"}],
     "paths": [{"output": "N", "input": "Wf", "tf": {"gain": 1, "poles": [{"real": 2.0}]}}]})";
   Cmd c = sh(kBin + "/fralab measure --engine " + d + "/unstable.json --out " + d + "/out");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("unstable.json: /paths/0/tf/poles/0: unstable pole"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("unstable.json: /paths/0/tf/poles/0: unstable pole"), std::string::npos)
+      << c.output;
   c = sh(kBin + "/fralab measure --engine j85_95 --input XYZ --out " + d + "/out2");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--input XYZ: the model has no such input (inputs: Wf, A8, BLD, IGV)"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("--input XYZ: the model has no such input (inputs: Wf, A8, BLD, IGV)"),
+            std::string::npos)
+      << c.output;
 }
 
 TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
@@ -231,11 +245,14 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
 
 TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
   std::string d = tmpdir("multisine");
-  Cmd c = sh(kBin + "/fralab measure --engine j85_95 --input Wf,BLD --excitation multisine --band 0.5:20 "
-             "--points-per-decade 8 --out " + d);
+  Cmd c = sh(kBin +
+             "/fralab measure --engine j85_95 --input Wf,BLD --excitation multisine --band 0.5:20 "
+             "--points-per-decade 8 --out " +
+             d);
   ASSERT_EQ(c.status, 0) << c.output;
   Model m = load_model(d + "/engine.json");
-  for (const auto& [pair, in, out] : {std::tuple{"Wf:P3", "Wf", "P3"}, std::tuple{"BLD:N", "BLD", "N"}}) {
+  for (const auto& [pair, in, out] :
+       {std::tuple{"Wf:P3", "Wf", "P3"}, std::tuple{"BLD:N", "BLD", "N"}}) {
     Frd f = load_frd(d + "/frd/" + pair_file_stem(pair) + ".json");
     ASSERT_GE(f.points.size(), 5u) << pair;
     for (const auto& p : f.points) {
@@ -243,7 +260,8 @@ TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
       EXPECT_EQ(p.input, in);
       // Against the model (noise on): within 5 sigma plus the plant's 0.2 % sampling allowance.
       const auto want = m.position_to_output(m.output_index(out), m.input_index(in), p.w);
-      EXPECT_LT(std::abs(p.value() - want), 5 * p.sigma + 2e-3 * std::abs(want)) << pair << " " << p.w;
+      EXPECT_LT(std::abs(p.value() - want), 5 * p.sigma + 2e-3 * std::abs(want))
+          << pair << " " << p.w;
     }
   }
   Json run = json_load_file(d + "/acquire.json");

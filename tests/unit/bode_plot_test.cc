@@ -2,13 +2,13 @@
 #include "fralab/analyze/bode_plot.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <sstream>
-#include <unistd.h>
 
 #include "fralab/plant/json_util.h"
 
@@ -33,9 +33,9 @@ std::vector<std::vector<double>> read_dat(const std::string& file) {
 }  // namespace
 
 TEST(BodePlot, ColumnsHoldGainUnwrappedPhaseAndResiduals) {
-  // Measured: a 20 ms delay times 1/(1 + s/10), whose phase passes -180 degrees (unwrapped, it keeps
-  // falling). Model: the same lag without the delay, so the residual is exactly the delay:
-  // 0 dB and -w tau in degrees (wrapped to +-180).
+  // Measured: a 20 ms delay times 1/(1 + s/10), whose phase passes -180 degrees (unwrapped, it
+  // keeps falling). Model: the same lag without the delay, so the residual is exactly the delay: 0
+  // dB and -w tau in degrees (wrapped to +-180).
   const double tau = 0.02, kDeg = 180 / std::numbers::pi;
   BodePlot p{"delay", "delay", {}, {}, {}, {{"lag", {}}}};
   for (int k = 0; k <= 40; ++k) {  // 0.3-300 rad/s: the delay alone reaches -344 degrees
@@ -46,7 +46,8 @@ TEST(BodePlot, ColumnsHoldGainUnwrappedPhaseAndResiduals) {
     p.sigma.push_back(0.01 * std::abs(p.meas.back()));
     p.models[0].g.push_back(1.0 / (1.0 + s / 10.0));
   }
-  const std::string dir = (fs::temp_directory_path() / ("fralab_bode_" + std::to_string(::getpid()))).string();
+  const std::string dir =
+      (fs::temp_directory_path() / ("fralab_bode_" + std::to_string(::getpid()))).string();
   const bool rendered = render_bode_plots({p}, dir);
   auto rows = read_dat(dir + "/delay.dat");
   ASSERT_EQ(rows.size(), p.w.size());
@@ -54,14 +55,15 @@ TEST(BodePlot, ColumnsHoldGainUnwrappedPhaseAndResiduals) {
     const auto& r = rows[i];
     ASSERT_EQ(r.size(), 9u);
     const double w = p.w[i];
-    EXPECT_NEAR(r[0], w / (2 * std::numbers::pi), 1e-9 * r[0]);                               // Hz
-    EXPECT_NEAR(r[1], 20 * std::log10(std::abs(p.meas[i])), 1e-9);                             // gain dB
-    EXPECT_NEAR(r[2], 20 / std::log(10.0) * 0.01, 1e-9);                                       // sigma dB
-    EXPECT_NEAR(r[3], -(w * tau + std::atan(w / 10)) * kDeg, 1e-6);                            // unwrapped
-    EXPECT_NEAR(r[4], 0.01 * kDeg, 1e-9);                                                       // sigma deg
-    EXPECT_NEAR(r[7], 0.0, 1e-9);                                                               // residual dB
-    EXPECT_NEAR(r[8], std::remainder(-w * tau * kDeg, 360.0), 1e-6);                           // residual deg
-    EXPECT_LT(std::abs(r[6] - r[3]), 180.0 + 1e-9);  // the model's phase is drawn near the measurement's
+    EXPECT_NEAR(r[0], w / (2 * std::numbers::pi), 1e-9 * r[0]);       // Hz
+    EXPECT_NEAR(r[1], 20 * std::log10(std::abs(p.meas[i])), 1e-9);    // gain dB
+    EXPECT_NEAR(r[2], 20 / std::log(10.0) * 0.01, 1e-9);              // sigma dB
+    EXPECT_NEAR(r[3], -(w * tau + std::atan(w / 10)) * kDeg, 1e-6);   // unwrapped
+    EXPECT_NEAR(r[4], 0.01 * kDeg, 1e-9);                             // sigma deg
+    EXPECT_NEAR(r[7], 0.0, 1e-9);                                     // residual dB
+    EXPECT_NEAR(r[8], std::remainder(-w * tau * kDeg, 360.0), 1e-6);  // residual deg
+    EXPECT_LT(std::abs(r[6] - r[3]),
+              180.0 + 1e-9);  // the model's phase is drawn near the measurement's
   }
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     EXPECT_TRUE(rendered);
@@ -77,18 +79,24 @@ TEST(BodePlot, ColumnsHoldGainUnwrappedPhaseAndResiduals) {
 TEST(BodePlot, BadPlotsAreRefusedByName) {
   auto error_of = [](const BodePlot& p) {
     try {
-      render_bode_plots({p}, (fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid()))).string());
+      render_bode_plots(
+          {p},
+          (fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid()))).string());
     } catch (const InputError& e) {
       return std::string(e.what());
     }
     return std::string("no error");
   };
   BodePlot p{"x", "bad", {1, 2, 3}, {1, 1, 1}, {}, {{"model", {1, 1}}}};
-  EXPECT_NE(error_of(p).find("bode plot bad: frequencies, measurements, sigmas and model curves differ in length"),
-            std::string::npos)
+  EXPECT_NE(
+      error_of(p).find(
+          "bode plot bad: frequencies, measurements, sigmas and model curves differ in length"),
+      std::string::npos)
       << error_of(p);
   BodeCurve c{"m", {1, 1, 1}};
   BodePlot q{"x", "many", {1, 2, 3}, {1, 1, 1}, {}, {c, c, c, c, c}};
-  EXPECT_NE(error_of(q).find("bode plot many: 5 model curves, at most 4 are drawn"), std::string::npos) << error_of(q);
+  EXPECT_NE(error_of(q).find("bode plot many: 5 model curves, at most 4 are drawn"),
+            std::string::npos)
+      << error_of(q);
   fs::remove_all(fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid())));
 }

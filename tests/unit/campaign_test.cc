@@ -48,7 +48,8 @@ TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
   o.f_lo_hz = 1;
   o.f_hi_hz = 10;
   o.points_per_decade = 3;
-  SteppedSineCampaign c(campaign_inputs(m, 2.0), select_inputs(m, "Wf,A8"), plan_stepped_sine(o), 1000, "r");
+  SteppedSineCampaign c(campaign_inputs(m, 2.0), select_inputs(m, "Wf,A8"), plan_stepped_sine(o),
+                        1000, "r");
   std::vector<std::vector<double>> cmd;
   std::vector<double> ph, fr;
   c.fill(0, int(c.total_samples()), cmd, ph, fr);
@@ -75,7 +76,8 @@ TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
     }
   }
   ASSERT_GT(wf_end, 0u);
-  for (size_t k = 1; k < wf_end; ++k) ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * 10 / 1000 * 1.01);
+  for (size_t k = 1; k < wf_end; ++k)
+    ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * 10 / 1000 * 1.01);
   EXPECT_EQ(c.events().back().state, "done");
   EXPECT_EQ(c.events().back().sample, c.total_samples());
 }
@@ -115,7 +117,9 @@ TEST(Sweep, PhaseAndFrequencyAreContinuousAndWindowsTileTheSweep) {
     const double d = std::remainder(ph[k] - ph[k - 1], 2 * std::numbers::pi);
     ASSERT_NEAR(d, 2 * std::numbers::pi * fr[k - 1] / 1000.0, 0.01 * d + 1e-9) << k;
     ASSERT_LE(std::abs(fr[k] - fr[k - 1]), 0.01 * fr[k - 1]) << k;
-    ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * fr[k] / 1000.0 * 1.01) << k;
+    ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]),
+              amp * 2 * std::numbers::pi * fr[k] / 1000.0 * 1.01)
+        << k;
   }
 }
 
@@ -137,9 +141,9 @@ TEST(Multisine, PeriodicOrthogonalAndScaledToTheAmplitude) {
   EXPECT_EQ(in.n_samples, int64_t(o.periods) * P);
   std::set<int> seen;
   for (size_t j = 0; j < in.lines.size(); ++j) {
-    EXPECT_EQ(in.lines[j] % 2, 1);                      // odd lines only
-    EXPECT_TRUE(seen.insert(in.lines[j]).second);       // each line once: inputs orthogonal
-    EXPECT_EQ(in.line_input[j], j % 2 == 0 ? 0 : 1);    // dealt to Wf, A8 in turn
+    EXPECT_EQ(in.lines[j] % 2, 1);                    // odd lines only
+    EXPECT_TRUE(seen.insert(in.lines[j]).second);     // each line once: inputs orthogonal
+    EXPECT_EQ(in.line_input[j], j % 2 == 0 ? 0 : 1);  // dealt to Wf, A8 in turn
   }
   std::vector<std::vector<double>> cmd;
   std::vector<double> ph, fr;

@@ -14,14 +14,17 @@ TEST(FourierFilter, ExtractsTheFundamentalAndRejectsDcAndHarmonics) {
   std::vector<double> x(n);
   for (size_t k = 0; k < n; ++k) {
     double p = phi0 + k * dphi;
-    x[k] = 15279.0 + 3 * std::sin(p) - 2 * std::cos(p) + 0.7 * std::sin(2 * p + 1) + 0.4 * std::cos(3 * p);
+    x[k] = 15279.0 + 3 * std::sin(p) - 2 * std::cos(p) + 0.7 * std::sin(2 * p + 1) +
+           0.4 * std::cos(3 * p);
   }
   Reference r = make_reference(n, phi0, dphi);
   Complex p = fourier_phasor(x.data(), r, 0, n);
   EXPECT_NEAR(p.real(), 3.0, 1e-10);   // A1: the sin(phi) component
   EXPECT_NEAR(p.imag(), -2.0, 1e-10);  // B1: the cos(phi) component
-  EXPECT_NEAR(std::abs(fourier_phasor(x.data(), make_reference(n, phi0, dphi, 2), 0, n)), 0.7, 1e-10);
-  EXPECT_NEAR(std::abs(fourier_phasor(x.data(), make_reference(n, phi0, dphi, 3), 0, n)), 0.4, 1e-10);
+  EXPECT_NEAR(std::abs(fourier_phasor(x.data(), make_reference(n, phi0, dphi, 2), 0, n)), 0.7,
+              1e-10);
+  EXPECT_NEAR(std::abs(fourier_phasor(x.data(), make_reference(n, phi0, dphi, 3), 0, n)), 0.4,
+              1e-10);
 }
 
 TEST(FourierFilter, PhaseConventionLagIsNegative) {

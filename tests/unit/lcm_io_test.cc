@@ -2,11 +2,11 @@
 #include "fralab/lcm_io.h"
 
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
+#include <lcm/lcm-cpp.hpp>
 
 using namespace fralab;
 namespace fs = std::filesystem;
@@ -29,7 +29,8 @@ std::vector<int64_t> write_log(const std::string& path, int n) {
 }
 
 std::string tmp(const std::string& name) {
-  return (fs::temp_directory_path() / ("fralab_lcm_io_" + std::to_string(::getpid()) + "_" + name)).string();
+  return (fs::temp_directory_path() / ("fralab_lcm_io_" + std::to_string(::getpid()) + "_" + name))
+      .string();
 }
 
 }  // namespace
@@ -52,7 +53,8 @@ TEST(TapeFile, TruncationIsNamedWithItsOffset) {
     FAIL() << "a truncated tape was read without complaint";
   } catch (const InputError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("cut.lcmlog: truncated or corrupt tape: 3 events read, then unreadable bytes from offset " +
+    EXPECT_NE(m.find("cut.lcmlog: truncated or corrupt tape: 3 events read, then unreadable bytes "
+                     "from offset " +
                      std::to_string(ends[2])),
               std::string::npos)
         << m;

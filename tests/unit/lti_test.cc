@@ -108,7 +108,8 @@ TEST(FohLti, FractionalDelayIsExactOnTheInterpolatedInput) {
   std::vector<double> u(100);
   for (size_t k = 0; k < u.size(); ++k) u[k] = std::sin(0.37 * k) + 0.1 * k;
   auto y = run(s, u);
-  for (size_t k = 3; k < u.size(); ++k) EXPECT_NEAR(y[k], 0.7 * u[k - 2] + 0.3 * u[k - 3], 1e-12) << k;
+  for (size_t k = 3; k < u.size(); ++k)
+    EXPECT_NEAR(y[k], 0.7 * u[k - 2] + 0.3 * u[k - 3], 1e-12) << k;
   // And through dynamics: the ratio of a delayed and an undelayed lag at a sinusoid is e^{-jwd}.
   Tf lag;
   lag.poles = {Root::Real(-30.0)};

@@ -87,17 +87,24 @@ TEST(Model, J85EngineAndSimulationDifferAsTheReportSays) {
 
 TEST(Model, ErrorsNameFileAndJsonPath) {
   std::string k = kMinimal;
-  EXPECT_NE(error_of(replaced(k, "fralab-model/1", "fralab-model/2")).find("bad.json: /format"), std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"hysteresis\"", "\"backlash\"")).find(
-                "bad.json: /inputs/0/actuator/nonlinearity/0/type: unknown nonlinearity type \"backlash\""),
+  EXPECT_NE(error_of(replaced(k, "fralab-model/1", "fralab-model/2")).find("bad.json: /format"),
             std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "{\"real\": -2.86}", "{\"real\": 2.86}")).find("bad.json: /paths/0/tf/poles/0: unstable pole"),
+  EXPECT_NE(error_of(replaced(k, "\"hysteresis\"", "\"backlash\""))
+                .find("bad.json: /inputs/0/actuator/nonlinearity/0/type: unknown nonlinearity type "
+                      "\"backlash\""),
             std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"rpm\"", "\"psi\"")).find("bad.json: /outputs/0/units: units \"psi\" are pressure, but N is a speed channel"),
+  EXPECT_NE(error_of(replaced(k, "{\"real\": -2.86}", "{\"real\": 2.86}"))
+                .find("bad.json: /paths/0/tf/poles/0: unstable pole"),
             std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"output\": \"N\"", "\"output\": \"P9\"")).find("/paths/0/output: no output named \"P9\""),
+  EXPECT_NE(
+      error_of(replaced(k, "\"rpm\"", "\"psi\""))
+          .find("bad.json: /outputs/0/units: units \"psi\" are pressure, but N is a speed channel"),
+      std::string::npos);
+  EXPECT_NE(error_of(replaced(k, "\"output\": \"N\"", "\"output\": \"P9\""))
+                .find("/paths/0/output: no output named \"P9\""),
             std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"full_scale\": 3000.0,", "")).find("/inputs/0: missing required key \"full_scale\""),
+  EXPECT_NE(error_of(replaced(k, "\"full_scale\": 3000.0,", ""))
+                .find("/inputs/0: missing required key \"full_scale\""),
             std::string::npos);
 }
 
@@ -108,13 +115,15 @@ TEST(Model, MalformedFileIsAnErrorNamingTheFile) {
     load_model(p.string());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(p.string() + ": malformed JSON"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(p.string() + ": malformed JSON"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(load_model("/nonexistent/model.json"), InputError);
 }
 
 TEST(Model, UnknownKeysAreKeptWithAWarning) {
-  std::string k = replaced(kMinimal, "\"name\": \"m\",", "\"name\": \"m\", \"comment\": \"hello\",");
+  std::string k =
+      replaced(kMinimal, "\"name\": \"m\",", "\"name\": \"m\", \"comment\": \"hello\",");
   Model m = parse_model(Json::parse(k), "x.json");
   ASSERT_EQ(m.warnings.size(), 1u);
   EXPECT_NE(m.warnings[0].find("x.json: /comment: unknown key"), std::string::npos);

@@ -17,7 +17,8 @@ Complex simulated_df(const NonlinearitySpec& s, double a) {
   auto nl = make_nonlinearity(s, 0.0, 1e-4);
   const int per = 4000;
   std::vector<double> y;
-  for (int k = 0; k < 3 * per; ++k) y.push_back(nl->apply(a * std::sin(2 * std::numbers::pi * k / per)));
+  for (int k = 0; k < 3 * per; ++k)
+    y.push_back(nl->apply(a * std::sin(2 * std::numbers::pi * k / per)));
   return sine_phasor(y, 2 * std::numbers::pi, 1.0 / per, per, 2 * per) / a;
 }
 
@@ -30,7 +31,8 @@ TEST(Nonlinearity, BacklashMatchesItsDescribingFunction) {
     EXPECT_NEAR(std::abs(sim - df), 0.0, 2e-3) << a;
   }
   // The J85 exhaust actuator: -30 degrees at +-5 % of 200 in^2 (Section II).
-  EXPECT_NEAR(std::arg(backlash_describing_function(10.0, 9.24)) * 180 / std::numbers::pi, -30.0, 0.1);
+  EXPECT_NEAR(std::arg(backlash_describing_function(10.0, 9.24)) * 180 / std::numbers::pi, -30.0,
+              0.1);
   EXPECT_EQ(backlash_describing_function(4.0, 9.24), Complex(0.0, 0.0));  // never leaves the play
 }
 

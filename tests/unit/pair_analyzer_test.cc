@@ -18,13 +18,16 @@ using fralab::testing::source_path;
 namespace {
 
 std::vector<FrdPoint> analyse(const fralab::testing::TapeRun& run, const std::string& pair,
-                              const std::vector<size_t>& order = {}, const std::set<int64_t>& drop = {}) {
+                              const std::vector<size_t>& order = {},
+                              const std::set<int64_t>& drop = {}) {
   PairAnalyzer a(pair);
   for (const auto& e : run.events) a.on_status(e);
   if (order.empty()) {
-    for (const auto& b : run.blocks) if (!drop.count(b.seq)) a.on_block(b);
+    for (const auto& b : run.blocks)
+      if (!drop.count(b.seq)) a.on_block(b);
   } else {
-    for (size_t i : order) if (!drop.count(run.blocks[i].seq)) a.on_block(run.blocks[i]);
+    for (size_t i : order)
+      if (!drop.count(run.blocks[i].seq)) a.on_block(run.blocks[i]);
   }
   a.flush();
   return a.frd().points;
@@ -80,7 +83,10 @@ TEST(PairAnalyzer, PhaseConventionOnAnalyticPlants) {
     auto run = simulate_tape(m, {"u"}, band(0.5, 20, 3), false, 1);
     for (const auto& p : analyse(run, "u:y")) {
       const double expect = t.delay_s > 0 ? -p.w * 0.0113 : -std::atan(p.w / 20.0);
-      EXPECT_NEAR(std::remainder(p.phase_deg * std::numbers::pi / 180 - expect, 2 * std::numbers::pi), 0.0, 2e-4) << p.w;
+      EXPECT_NEAR(
+          std::remainder(p.phase_deg * std::numbers::pi / 180 - expect, 2 * std::numbers::pi), 0.0,
+          2e-4)
+          << p.w;
       EXPECT_LT(p.phase_deg, 0.0);
     }
   }
@@ -115,7 +121,8 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   // Drop a block inside the second integration window.
   int64_t mid = 0;
   int k = 0;
-  for (const auto& e : run.events) if (e.state == "integrate" && k++ == 1) mid = e.sample + e.n_samples / 2;
+  for (const auto& e : run.events)
+    if (e.state == "integrate" && k++ == 1) mid = e.sample + e.n_samples / 2;
   const int64_t seq = mid / 100;
   auto lossy = analyse(run, "Wf:P3", {}, {seq});
   ASSERT_EQ(lossy.size(), full.size());
@@ -123,7 +130,8 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   for (size_t i = 0; i < full.size(); ++i) {
     if (!lossy[i].valid) {
       ++invalid;
-      EXPECT_NE(lossy[i].note.find("seq " + std::to_string(seq) + " missing"), std::string::npos) << lossy[i].note;
+      EXPECT_NE(lossy[i].note.find("seq " + std::to_string(seq) + " missing"), std::string::npos)
+          << lossy[i].note;
     } else {
       EXPECT_EQ(lossy[i].mag, full[i].mag);
       EXPECT_EQ(lossy[i].phase_deg, full[i].phase_deg);
@@ -224,8 +232,10 @@ TEST(PairAnalyzer, OrthogonalMultisinesMeasureTheWholeMatrixInOneRun) {
     t.poles = {Root::Real(-a)};
     return t;
   };
-  m.paths = {{"y", "a", lag(2, 3), Json::object()}, {"z", "a", lag(-1, 8), Json::object()},
-             {"y", "b", lag(0.5, 1), Json::object()}, {"z", "b", lag(3, 20), Json::object()}};
+  m.paths = {{"y", "a", lag(2, 3), Json::object()},
+             {"z", "a", lag(-1, 8), Json::object()},
+             {"y", "b", lag(0.5, 1), Json::object()},
+             {"z", "b", lag(3, 20), Json::object()}};
   SteppedSineOptions o = band(0.1, 20, 6);
   o.slowest_time_constant_s = 1.0;
   auto run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");

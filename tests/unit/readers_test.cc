@@ -54,19 +54,22 @@ TEST(Readers, CsvErrorsNameFileAndLine) {
   std::string f = write("c.csv", "w,mag,phase_deg\n1,2,3\n2,x,3\n");
   EXPECT_NE(error_of(f).find(f + ":3: \"x\" is not a number"), std::string::npos) << error_of(f);
   f = write("d.csv", "w,gain,phase\n1,2,3\n");
-  EXPECT_NE(error_of(f).find("the header needs mag or mag_db with phase_deg, or re and im"), std::string::npos);
+  EXPECT_NE(error_of(f).find("the header needs mag or mag_db with phase_deg, or re and im"),
+            std::string::npos);
   f = write("e.csv", "w,re,im\n1,1,0\n2,nan,0\n");  // a NaN sample is refused, not fitted around
   EXPECT_NE(error_of(f).find(f + ":3: \"nan\" is not a number"), std::string::npos) << error_of(f);
   f = write("empty.csv", "\n  \n");
-  EXPECT_NE(error_of(f).find(f + ": empty: expected fralab-frd/1 JSON, a CSV with a header"), std::string::npos) << error_of(f);
+  EXPECT_NE(error_of(f).find(f + ": empty: expected fralab-frd/1 JSON, a CSV with a header"),
+            std::string::npos)
+      << error_of(f);
 }
 
 TEST(Readers, TfnsDeckWithUnitOverrides) {
   std::string deck = std::string("C        3         2     0.005      0.02       0.1      0.01\n") +
                      "O       10        40      0.01\n" + "P03 Z02\n" + "*\n" +
-                     card(' ', "1.0", "20.0", "-45.0") +       // Bode: rad/s, dB, degrees
-                     card('B', "H1.0", "M2.0", "R-0.5") +      // Hz, magnitude, radians
-                     card('P', "R10.0", "3.0", "-1.0") +       // polar: magnitude, radians
+                     card(' ', "1.0", "20.0", "-45.0") +        // Bode: rad/s, dB, degrees
+                     card('B', "H1.0", "M2.0", "R-0.5") +       // Hz, magnitude, radians
+                     card('P', "R10.0", "3.0", "-1.0") +        // polar: magnitude, radians
                      card('R', "20.0", "0.0", "-4.0") + "*\n";  // rectangular
   FitInput in = read_tfns_deck(write("deck.dat", deck));
   ASSERT_TRUE(in.has_control);
@@ -87,12 +90,17 @@ TEST(Readers, TfnsDeckWithUnitOverrides) {
 }
 
 TEST(Readers, TfnsDeckErrorsNameTheLine) {
-  std::string f = write("bad.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0") + card(' ', "1.0", "0.0", "0.0") + "*\n");
-  EXPECT_NE(error_of(f).find(f + ":4: cards must be in ascending frequency"), std::string::npos) << error_of(f);
+  std::string f = write("bad.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0") +
+                                       card(' ', "1.0", "0.0", "0.0") + "*\n");
+  EXPECT_NE(error_of(f).find(f + ":4: cards must be in ascending frequency"), std::string::npos)
+      << error_of(f);
   f = write("nostar.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0"));
-  EXPECT_NE(error_of(f).find("two groups each ended by a '*' card"), std::string::npos) << error_of(f);
+  EXPECT_NE(error_of(f).find("two groups each ended by a '*' card"), std::string::npos)
+      << error_of(f);
   f = write("badnum.dat", "C        2         1\n*\n" + card(' ', "2.0", "1.2.3", "0.0") + "*\n");
-  EXPECT_NE(error_of(f).find(f + ":3 (columns 30-44): \"1.2.3\" is not a number"), std::string::npos) << error_of(f);
+  EXPECT_NE(error_of(f).find(f + ":3 (columns 30-44): \"1.2.3\" is not a number"),
+            std::string::npos)
+      << error_of(f);
 }
 
 TEST(Readers, RootDeletionKeepsTheDcGain) {

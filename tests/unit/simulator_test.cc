@@ -19,7 +19,8 @@ struct SimRun {
 };
 
 // Sinusoidal command of amplitude `amp` on input `in` at `f` Hz, others at DC.
-SimRun run_sine(const Model& m, const SimulatorOptions& opt, int in, double f, double amp, size_t n) {
+SimRun run_sine(const Model& m, const SimulatorOptions& opt, int in, double f, double amp,
+                size_t n) {
   Simulator sim(m, opt);
   SimRun r;
   r.ch.assign(sim.n_channels(), {});
@@ -46,7 +47,8 @@ TEST(Simulator, J85SinusoidalResponseMatchesTheModel) {
   for (int in : {0, 2, 3}) {
     for (double f : {0.2, 2.0, 10.0}) {
       const double w = 2 * std::numbers::pi * f;
-      const size_t settle = size_t(std::ceil(30.0 / h)), n = size_t(std::round(std::max(10.0, 10 * f) / f / h));
+      const size_t settle = size_t(std::ceil(30.0 / h)),
+                   n = size_t(std::round(std::max(10.0, 10 * f) / f / h));
       const double amp = 0.02 * m.inputs[in].full_scale;
       SimRun r = run_sine(m, opt, in, f, amp, settle + n);
       std::vector<double> u(settle + n);
@@ -60,7 +62,8 @@ TEST(Simulator, J85SinusoidalResponseMatchesTheModel) {
         if (!m.path(m.outputs[o].name, m.inputs[in].name)) continue;
         Complex go = sine_phasor(r.ch[m.inputs.size() + o], w, h, settle, n) / uph;
         Complex wo = m.command_to_output(int(o), in, w);
-        EXPECT_NEAR(std::abs(go) / std::abs(wo), 1.0, 1e-3) << m.outputs[o].name << "/" << m.inputs[in].name << " " << f;
+        EXPECT_NEAR(std::abs(go) / std::abs(wo), 1.0, 1e-3)
+            << m.outputs[o].name << "/" << m.inputs[in].name << " " << f;
         EXPECT_NEAR(wrap_deg(std::arg(go / wo) * 180 / std::numbers::pi), 0.0, 0.1)
             << m.outputs[o].name << "/" << m.inputs[in].name << " " << f;
       }

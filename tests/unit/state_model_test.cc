@@ -11,7 +11,8 @@ namespace {
 // Truth: 4 states, inputs a, b, outputs y, z. Pole -2 everywhere, pole -10 only from input a,
 // the pair 30 rad/s (zeta 0.3) only into output z.
 struct Truth {
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4), B = Eigen::MatrixXd(4, 2), C = Eigen::MatrixXd(2, 4);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4), B = Eigen::MatrixXd(4, 2),
+                  C = Eigen::MatrixXd(2, 4);
   Truth() {
     A(0, 0) = -2;
     A(1, 1) = -10;
@@ -24,7 +25,8 @@ struct Truth {
     C << 1.5, 0.7, 0.0, 0.0, -1.0, 0.4, 20.0, 10.0;
   }
   std::complex<double> at(int o, int i, double w) const {
-    Eigen::MatrixXcd M = std::complex<double>(0, w) * Eigen::MatrixXcd::Identity(4, 4) - A.cast<std::complex<double>>();
+    Eigen::MatrixXcd M = std::complex<double>(0, w) * Eigen::MatrixXcd::Identity(4, 4) -
+                         A.cast<std::complex<double>>();
     Eigen::VectorXcd x = M.partialPivLu().solve(B.col(i).cast<std::complex<double>>());
     return (C.row(o).cast<std::complex<double>>() * x)(0);
   }
@@ -78,7 +80,8 @@ TEST(StateModel, OrderIsTheNumberOfDistinctPolesAndTheModelMatchesTheData) {
   EXPECT_LT(s.error, 1e-6);
   for (int o = 0; o < 2; ++o) {
     for (int i = 0; i < 2; ++i) {
-      for (double w : {0.3, 3.0, 30.0}) EXPECT_NEAR(std::abs(s.at(o, i, w) / t.at(o, i, w) - 1.0), 0.0, 1e-6);
+      for (double w : {0.3, 3.0, 30.0})
+        EXPECT_NEAR(std::abs(s.at(o, i, w) / t.at(o, i, w) - 1.0), 0.0, 1e-6);
     }
   }
 }

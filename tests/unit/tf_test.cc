@@ -44,14 +44,16 @@ TEST(Tf, DelayIsExactMinusOmegaTau) {
 
 TEST(Tf, HighFrequencyGainOfBiproperTf) {
   // (1 + s/10) / (1 + s/100): lim = 10.
-  Tf tf = tf_from_json(J(R"({"gain": 1.0, "zeros": [{"real": -10}], "poles": [{"real": -100}]})"), {"t", ""});
+  Tf tf = tf_from_json(J(R"({"gain": 1.0, "zeros": [{"real": -10}], "poles": [{"real": -100}]})"),
+                       {"t", ""});
   EXPECT_NEAR(tf.high_frequency_gain(), 10.0, 1e-12);
   EXPECT_NEAR(std::abs(tf.at(1e7)), 10.0, 1e-3);
 }
 
 TEST(Tf, UnstablePoleIsRejectedNamingFileAndPath) {
   try {
-    tf_from_json(J(R"({"gain": 1.0, "poles": [{"real": -1}, {"real": 2.83}]})"), {"m.json", "/paths/3/tf"});
+    tf_from_json(J(R"({"gain": 1.0, "poles": [{"real": -1}, {"real": 2.83}]})"),
+                 {"m.json", "/paths/3/tf"});
     FAIL() << "no throw";
   } catch (const InputError& e) {
     std::string msg = e.what();
@@ -62,10 +64,12 @@ TEST(Tf, UnstablePoleIsRejectedNamingFileAndPath) {
 }
 
 TEST(Tf, NegativeDampingPoleIsRejected) {
-  EXPECT_THROW(tf_from_json(J(R"({"gain": 1.0, "poles": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}),
-               InputError);
+  EXPECT_THROW(
+      tf_from_json(J(R"({"gain": 1.0, "poles": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}),
+      InputError);
   // ... but allowed for zeros (a right-half-plane pair).
-  EXPECT_NO_THROW(tf_from_json(J(R"({"gain": 1.0, "zeros": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}));
+  EXPECT_NO_THROW(
+      tf_from_json(J(R"({"gain": 1.0, "zeros": [{"wn": 63.6, "zeta": -0.188}]})"), {"f", ""}));
 }
 
 TEST(Tf, MalformedRootsAndMissingGainNameTheProblem) {
@@ -79,10 +83,12 @@ TEST(Tf, MalformedRootsAndMissingGainNameTheProblem) {
   };
   EXPECT_NE(msg(R"({"poles": []})").find("missing required key \"gain\""), std::string::npos);
   EXPECT_NE(msg(R"({"gain": 1, "zeros": [{"real": 0}]})").find("s = 0"), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"wn": -3, "zeta": 0.5}]})").find("wn must be > 0"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"wn": -3, "zeta": 0.5}]})").find("wn must be > 0"),
+            std::string::npos);
   EXPECT_NE(msg(R"({"gain": "1"})").find("expected a number"), std::string::npos);
   EXPECT_NE(msg(R"({"gain": 1, "delay_s": -0.01})").find("delay must be >= 0"), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"real": -1, "wn": 2}]})").find("either"), std::string::npos);
+  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"real": -1, "wn": 2}]})").find("either"),
+            std::string::npos);
 }
 
 TEST(Tf, JsonRoundTripKeepsEveryField) {

@@ -1,6 +1,7 @@
 #include "fralab/identify/tfns.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-
-#include <unistd.h>
 
 #include "fralab/plant/model.h"
 #include "test_util.h"
@@ -22,31 +21,36 @@ using fralab::testing::worst_root_error;
 
 namespace {
 
-// Every transfer function of the report (Tables 4-23 as in models/, delays true): actuators and paths.
+// Every transfer function of the report (Tables 4-23 as in models/, delays true): actuators and
+// paths.
 std::vector<std::pair<std::string, Tf>> report_tfs() {
   std::vector<std::pair<std::string, Tf>> v;
   for (int op : {70, 85, 95}) {
     Model m = load_model(source_path("models/j85_" + std::to_string(op) + ".json"));
-    for (const auto& in : m.inputs) v.push_back({std::to_string(op) + " u_" + in.name + ":" + in.name, *in.actuator});
-    for (const auto& p : m.paths) v.push_back({std::to_string(op) + " " + p.input + ":" + p.output, p.tf});
+    for (const auto& in : m.inputs)
+      v.push_back({std::to_string(op) + " u_" + in.name + ":" + in.name, *in.actuator});
+    for (const auto& p : m.paths)
+      v.push_back({std::to_string(op) + " " + p.input + ":" + p.output, p.tf});
   }
   return v;
 }
 
 // Each true root inside the data band has a fitted root of the same kind within
 // max(tol, 3 sigma) relative distance, sigma being the fit's own standard deviation of that root
-// (from the refinement's covariance); the same for the DC gain. Also counts how many are within tol.
-// Misses beyond 3 sigma are counted in *beyond (and printed), not failed here: the caller decides.
-void check_roots(const std::string& name, const std::vector<Root>& truth, const std::vector<Root>& fit,
-                 const std::vector<RootInfo>& info, double lo, double hi, double tol, int* within, int* total,
-                 int* beyond) {
+// (from the refinement's covariance); the same for the DC gain. Also counts how many are within
+// tol. Misses beyond 3 sigma are counted in *beyond (and printed), not failed here: the caller
+// decides.
+void check_roots(const std::string& name, const std::vector<Root>& truth,
+                 const std::vector<Root>& fit, const std::vector<RootInfo>& info, double lo,
+                 double hi, double tol, int* within, int* total, int* beyond) {
   for (const Root& t : truth) {
     const double wt = t.pair ? t.wn : std::abs(t.real);
     if (wt < lo || wt > hi) continue;
     std::complex<double> lt = t.locations()[0];
     if (lt.imag() < 0) lt = std::conj(lt);
     double best = INFINITY, sig = 0;
-    for (size_t k = 0; k < fit.size(); ++k) {  // any kind: a zeta ~ 1 pair may come out as two reals
+    for (size_t k = 0; k < fit.size();
+         ++k) {  // any kind: a zeta ~ 1 pair may come out as two reals
       std::complex<double> lf = fit[k].locations()[0];
       if (lf.imag() < 0) lf = std::conj(lf);
       const double e = std::abs(lf - lt) / std::abs(lt);
@@ -54,15 +58,16 @@ void check_roots(const std::string& name, const std::vector<Root>& truth, const 
     }
     if (!(best < std::max(tol, 3 * sig))) {
       ++*beyond;
-      std::printf("beyond 3 sigma: %s root %s: error %.3g, sigma %.3g\n", name.c_str(), t.str().c_str(), best, sig);
+      std::printf("beyond 3 sigma: %s root %s: error %.3g, sigma %.3g\n", name.c_str(),
+                  t.str().c_str(), best, sig);
     }
     ++*total;
     *within += best < tol;
   }
 }
 
-// max_beyond: the fraction of in-band roots allowed outside max(root_tol, 3 sigma). At 5 % noise two
-// close real roots (P5/Wf 85 %: 81.7 and 130 rad/s) come back as one pair near zeta = 1, whose
+// max_beyond: the fraction of in-band roots allowed outside max(root_tol, 3 sigma). At 5 % noise
+// two close real roots (P5/Wf 85 %: 81.7 and 130 rad/s) come back as one pair near zeta = 1, whose
 // location sigma does not describe the split into two reals.
 void check_recovery(double noise, double root_tol, uint64_t seed, double max_beyond = 0.0) {
   int n = 0, within = 0, total = 0, beyond = 0;
@@ -73,25 +78,35 @@ void check_recovery(double noise, double root_tol, uint64_t seed, double max_bey
     FitResult r = fit_tf(pts, o);
     ASSERT_EQ(r.status, FitResult::Status::kConverged) << name << ": " << r.message;
     const double lo = pts.front().w, hi = pts.back().w;  // roots inside the data band
-    check_roots(name, tf.poles, r.tf.poles, r.pole_info, lo, hi, root_tol, &within, &total, &beyond);
-    check_roots(name, tf.zeros, r.tf.zeros, r.zero_info, lo, hi, root_tol, &within, &total, &beyond);
+    check_roots(name, tf.poles, r.tf.poles, r.pole_info, lo, hi, root_tol, &within, &total,
+                &beyond);
+    check_roots(name, tf.zeros, r.tf.zeros, r.zero_info, lo, hi, root_tol, &within, &total,
+                &beyond);
     EXPECT_NEAR(r.tf.delay_s, tf.delay_s, 0.5e-3) << name;
-    EXPECT_LT(std::abs(r.tf.gain / tf.gain - 1.0), std::max(root_tol, 3 * r.gain_rel_sigma)) << name;
+    EXPECT_LT(std::abs(r.tf.gain / tf.gain - 1.0), std::max(root_tol, 3 * r.gain_rel_sigma))
+        << name;
     for (const Root& p : r.tf.poles) EXPECT_TRUE(p.stable()) << name;
     ++n;
   }
   EXPECT_EQ(n, 57);
-  EXPECT_LE(beyond, max_beyond * total) << beyond << " of " << total << " roots beyond max(tol, 3 sigma)";
-  std::printf("noise %.0f %%: %d of %d in-band roots within %.1f %% (%.0f %%), %d beyond 3 sigma\n", 100 * noise, within,
-              total, 100 * root_tol, 100.0 * within / total, beyond);
+  EXPECT_LE(beyond, max_beyond * total)
+      << beyond << " of " << total << " roots beyond max(tol, 3 sigma)";
+  std::printf("noise %.0f %%: %d of %d in-band roots within %.1f %% (%.0f %%), %d beyond 3 sigma\n",
+              100 * noise, within, total, 100 * root_tol, 100.0 * within / total, beyond);
   // Most roots meet the tolerance outright; the rest are within their own 3-sigma (reported).
   // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 % (README).
-  EXPECT_GE(double(within) / total, noise == 0 ? 1.0 : (noise <= 0.01 ? 0.9 : noise <= 0.02 ? 0.8 : 0.0)) << within << " of " << total;
+  EXPECT_GE(double(within) / total, noise == 0 ? 1.0
+                                               : (noise <= 0.01   ? 0.9
+                                                  : noise <= 0.02 ? 0.8
+                                                                  : 0.0))
+      << within << " of " << total;
 }
 
 }  // namespace
 
-TEST(Tfns, NoiseFreeRecoversEveryReportTransferFunctionTo0_1Percent) { check_recovery(0.0, 1e-3, 1); }
+TEST(Tfns, NoiseFreeRecoversEveryReportTransferFunctionTo0_1Percent) {
+  check_recovery(0.0, 1e-3, 1);
+}
 TEST(Tfns, OnePercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.01, 0.02, 3); }
 TEST(Tfns, TwoPercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.02, 0.02, 3); }
 TEST(Tfns, FivePercentNoiseRecoversRootsWithinTheirSigma) { check_recovery(0.05, 0.02, 3, 0.01); }
@@ -134,10 +149,13 @@ TEST(Tfns, PadeSetsAreRecognisedAndReportedAsADelay) {
     ASSERT_EQ(r.pade.size(), 2u) << fit_to_json(r, "").dump();
     // The equivalent delay is the sets' low-frequency group delay, sum 2 |zeta| / wn.
     double gd = 0;
-    for (const Root& z : k.tf.zeros) if (z.pair && z.zeta < 0) gd += -2 * z.zeta / z.wn;
-    for (const Root& p : k.tf.poles) if (p.pair && p.wn > 200) gd += 2 * p.zeta / p.wn;
+    for (const Root& z : k.tf.zeros)
+      if (z.pair && z.zeta < 0) gd += -2 * z.zeta / z.wn;
+    for (const Root& p : k.tf.poles)
+      if (p.pair && p.wn > 200) gd += 2 * p.zeta / p.wn;
     EXPECT_NEAR(r.pade_delay_s, gd, 1e-5);
-    EXPECT_NEAR(r.pade_delay_s, k.report, 0.75e-3);  // the report rounded: 14.3 -> 15, 11.6 -> 11 ms
+    EXPECT_NEAR(r.pade_delay_s, k.report,
+                0.75e-3);  // the report rounded: 14.3 -> 15, 11.6 -> 11 ms
   }
 }
 
@@ -146,10 +164,12 @@ TEST(Tfns, PolesAreAlwaysStable) {
   Tf t;
   t.poles = {Root::Pair(5.0, 0.2)};
   auto pts = tf_points(t, 0.1, 10, 10, 0.0, 1);
-  for (auto& p : pts) p.phase_deg = -p.phase_deg;  // mirror: the response of (s^2/25 - 0.08 s + 1)^-1
+  for (auto& p : pts)
+    p.phase_deg = -p.phase_deg;  // mirror: the response of (s^2/25 - 0.08 s + 1)^-1
   FitResult r = fit_tf(pts, FitOptions{});
   for (const Root& p : r.tf.poles) EXPECT_TRUE(p.stable()) << fit_to_json(r, "").dump();
-  // A stable model cannot reproduce that phase: the fit says so instead of returning an unstable pole.
+  // A stable model cannot reproduce that phase: the fit says so instead of returning an unstable
+  // pole.
   EXPECT_EQ(r.status, FitResult::Status::kMaxOrderReached) << r.message;
 }
 
@@ -166,7 +186,8 @@ TEST(Tfns, FailurePathsSayWhy) {
     fit_tf(tf_points(Tf{}, 1, 10, 5, 0, 1), bad);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("numerator starting order must be <= denominator"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("numerator starting order must be <= denominator"),
+              std::string::npos);
   }
 }
 
@@ -175,10 +196,12 @@ TEST(Tfns, FailurePathsSayWhy) {
 // fit's orders; it has no delay, so on the delayed paths it is at a disadvantage the comparison
 // keeps (the report's point: a rational in raw powers of s is what breaks).
 TEST(Tfns, NeverWorseThanOctaveInvfreqs) {
-  if (std::system("command -v octave-cli >/dev/null 2>&1 && octave-cli --eval 'pkg load signal' >/dev/null 2>&1") != 0) {
+  if (std::system("command -v octave-cli >/dev/null 2>&1 && octave-cli --eval 'pkg load signal' "
+                  ">/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "octave-cli with the signal package is not installed";
   }
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fralab_invfreqs_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("fralab_invfreqs_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   struct Case {
     std::string name;
@@ -191,18 +214,22 @@ TEST(Tfns, NeverWorseThanOctaveInvfreqs) {
   for (const auto& [name, tf] : report_tfs()) {
     Case c{name, tf_points(tf, 0.05, 100, 10, 0.02, 5), 0};
     FitResult r = fit_tf(c.pts, FitOptions{});
-    for (const auto& p : c.pts) c.ours += std::norm(p.value() - r.tf.at(p.w)) / std::norm(p.value());
+    for (const auto& p : c.pts)
+      c.ours += std::norm(p.value() - r.tf.at(p.w)) / std::norm(p.value());
     const std::string file = (dir / ("d" + std::to_string(cases.size()) + ".txt")).string();
     std::ofstream f(file);
     f.precision(17);
-    for (const auto& p : c.pts) f << p.w << " " << p.value().real() << " " << p.value().imag() << "\n";
+    for (const auto& p : c.pts)
+      f << p.w << " " << p.value().real() << " " << p.value().imag() << "\n";
     script << "d = load('" << file << "'); w = d(:,1); h = d(:,2) + 1i*d(:,3); "
-           << "[b,a] = invfreqs(h, w, " << r.num_order << ", " << r.den_order << "); e = h - freqs(b, a, w); "
+           << "[b,a] = invfreqs(h, w, " << r.num_order << ", " << r.den_order
+           << "); e = h - freqs(b, a, w); "
            << "printf('%.17g\\n', sum(abs(e).^2 ./ abs(h).^2));\n";
     cases.push_back(std::move(c));
   }
   script.close();
-  const std::string cmd = "octave-cli --no-gui -q " + (dir / "run.m").string() + " > " + (dir / "e.txt").string() + " 2>/dev/null";
+  const std::string cmd = "octave-cli --no-gui -q " + (dir / "run.m").string() + " > " +
+                          (dir / "e.txt").string() + " 2>/dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::ifstream in(dir / "e.txt");
   int worse_for_octave = 0, octave_broke = 0;
@@ -220,10 +247,12 @@ TEST(Tfns, NeverWorseThanOctaveInvfreqs) {
     ratio.push_back(octave_err / c.ours);
   }
   std::sort(ratio.begin(), ratio.end());
-  std::printf("invfreqs: %zu transfer functions; ours better on %d (error ratio invfreqs/ours: min %.3g, median %.3g), "
-              "invfreqs gave no finite fit on %d\n",
-              cases.size(), worse_for_octave, ratio.empty() ? 0.0 : ratio.front(), ratio.empty() ? 0.0 : ratio[ratio.size() / 2],
-              octave_broke);
+  std::printf(
+      "invfreqs: %zu transfer functions; ours better on %d (error ratio invfreqs/ours: min %.3g, "
+      "median %.3g), "
+      "invfreqs gave no finite fit on %d\n",
+      cases.size(), worse_for_octave, ratio.empty() ? 0.0 : ratio.front(),
+      ratio.empty() ? 0.0 : ratio[ratio.size() / 2], octave_broke);
   std::filesystem::remove_all(dir);
 }
 

@@ -2,8 +2,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <numbers>
 #include <memory>
+#include <numbers>
 #include <random>
 
 #include "fralab/acquire/model_info.h"
@@ -11,7 +11,9 @@
 
 namespace fralab::testing {
 
-std::string source_path(const std::string& rel) { return std::string(FRALAB_TEST_SOURCE_DIR) + "/" + rel; }
+std::string source_path(const std::string& rel) {
+  return std::string(FRALAB_TEST_SOURCE_DIR) + "/" + rel;
+}
 
 std::complex<double> sine_phasor(const std::vector<double>& x, double w, double h, size_t start,
                                  size_t n) {
@@ -48,13 +50,15 @@ Model siso_model(const Tf& path, const Tf* actuator, const Tf* sensor, double no
   return m;
 }
 
-TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
-                      bool noise, uint64_t seed, int block, double amplitude_pct, const std::string& excitation) {
+TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
+                      const SteppedSineOptions& so, bool noise, uint64_t seed, int block,
+                      double amplitude_pct, const std::string& excitation) {
   std::string csv;
   for (const auto& e : excite) csv += (csv.empty() ? "" : ",") + e;
   std::unique_ptr<Campaign> owner;
   if (excitation == "sweep") {
-    owner = std::make_unique<SweepCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), so, "test");
+    owner = std::make_unique<SweepCampaign>(campaign_inputs(m, amplitude_pct),
+                                            select_inputs(m, csv), so, "test");
   } else if (excitation == "multisine") {
     MultisineOptions mo;
     mo.f_lo_hz = so.f_lo_hz;
@@ -62,10 +66,12 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, co
     mo.points_per_decade = so.points_per_decade;
     mo.slowest_time_constant_s = so.slowest_time_constant_s;
     mo.sample_rate_hz = so.sample_rate_hz;
-    owner = std::make_unique<MultisineCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv), mo, "test");
+    owner = std::make_unique<MultisineCampaign>(campaign_inputs(m, amplitude_pct),
+                                                select_inputs(m, csv), mo, "test");
   } else {
-    owner = std::make_unique<SteppedSineCampaign>(campaign_inputs(m, amplitude_pct), select_inputs(m, csv),
-                                                  plan_stepped_sine(so), so.sample_rate_hz, "test");
+    owner = std::make_unique<SteppedSineCampaign>(campaign_inputs(m, amplitude_pct),
+                                                  select_inputs(m, csv), plan_stepped_sine(so),
+                                                  so.sample_rate_hz, "test");
   }
   const Campaign& camp = *owner;
   SimulatorOptions opt;
@@ -104,8 +110,8 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, co
   return r;
 }
 
-std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade, double rel_noise,
-                                uint64_t seed) {
+std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade,
+                                double rel_noise, uint64_t seed) {
   std::mt19937_64 g(seed);
   std::normal_distribution<double> n(0.0, std::sqrt(0.5));
   const int k = int(std::round(std::log10(f_hi / f_lo) * per_decade));
@@ -125,7 +131,8 @@ std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_
   return out;
 }
 
-double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>& fit, double w_lo, double w_hi) {
+double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>& fit, double w_lo,
+                        double w_hi) {
   double worst = 0;
   for (const Root& t : truth) {
     const double wt = t.pair ? t.wn : std::abs(t.real);

@@ -32,19 +32,20 @@ struct TapeRun {
   std::vector<StatusEvent> events;
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
 };
-TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite, const SteppedSineOptions& so,
-                      bool noise, uint64_t seed, int block = 100, double amplitude_pct = 2.0,
-                      const std::string& excitation = "stepped");
+TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
+                      const SteppedSineOptions& so, bool noise, uint64_t seed, int block = 100,
+                      double amplitude_pct = 2.0, const std::string& excitation = "stepped");
 
 /// Frequency-response points of `tf` at `per_decade` log-spaced frequencies over [f_lo, f_hi] Hz,
 /// with complex Gaussian noise of standard deviation rel_noise * |G| (sigma set accordingly; 0:
 /// noise-free, sigma unset).
-std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade, double rel_noise,
-                                uint64_t seed);
+std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade,
+                                double rel_noise, uint64_t seed);
 
 /// Largest relative distance |r_fit - r_true| / |r_true| from each true root (inside
 /// [w_lo, w_hi] rad/s) to the nearest fitted root of the same kind; +inf when one is unmatched.
-double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>& fit, double w_lo, double w_hi);
+double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>& fit, double w_lo,
+                        double w_hi);
 
 /// Phase difference in degrees wrapped to (-180, 180].
 double wrap_deg(double d);

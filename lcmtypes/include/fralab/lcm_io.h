@@ -6,20 +6,19 @@
 
 #include <cstdint>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <lcm/lcm-cpp.hpp>
 
 #include "fralab/ack_t.hpp"
 #include "fralab/command_block_t.hpp"
 #include "fralab/excitation_status_t.hpp"
 #include "fralab/frd_t.hpp"
-#include "fralab/tape_block_t.hpp"
-#include "fralab/tf_t.hpp"
 #include "fralab/plant/json_util.h"
 #include "fralab/plant/tape.h"
+#include "fralab/tape_block_t.hpp"
+#include "fralab/tf_t.hpp"
 
 namespace fralab {
 
@@ -86,6 +85,7 @@ int64_t read_tape_file(const std::string& path, const std::function<void(const T
 /// and leaves *offset after the last of them (a partly written last event is read on a later
 /// call). Start with *offset = 0. Returns the number of events read by this call. Throws
 /// InputError when the file cannot be opened.
-int64_t follow_tape_file(const std::string& path, int64_t* offset, const std::function<void(const TapeEvent&)>& fn);
+int64_t follow_tape_file(const std::string& path, int64_t* offset,
+                         const std::function<void(const TapeEvent&)>& fn);
 
 }  // namespace fralab

@@ -65,8 +65,8 @@ class Campaign {
   const std::vector<CampaignInput>& inputs() const { return inputs_; }
   /// Fills commands for samples [start, start + n): cmd[i][k] absolute command of input i,
   /// ref_phase[k] (radians, continuous within a segment) and ref_freq_hz[k] (0 when idle).
-  virtual void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-                    std::vector<double>& ref_freq) const = 0;
+  virtual void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+                    std::vector<double>& ref_phase, std::vector<double>& ref_freq) const = 0;
 
  protected:
   Campaign(std::vector<CampaignInput> inputs, double fs) : inputs_(std::move(inputs)), fs_(fs) {}
@@ -82,8 +82,8 @@ class Campaign {
 /// next. The stepped sine and the sweep differ only in their segments and status events.
 class SegmentCampaign : public Campaign {
  public:
-  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-            std::vector<double>& ref_freq) const override;
+  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+            std::vector<double>& ref_phase, std::vector<double>& ref_freq) const override;
 
  protected:
   SegmentCampaign(std::vector<CampaignInput> inputs, double fs) : Campaign(std::move(inputs), fs) {}
@@ -120,20 +120,20 @@ class SteppedSineCampaign : public SegmentCampaign {
 /// analyser integrates against the recorded per-sample reference phase (tape channel ref_phase).
 class SweepCampaign : public SegmentCampaign {
  public:
-  SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const SteppedSineOptions& opt,
-                std::string run_id);
+  SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                const SteppedSineOptions& opt, std::string run_id);
 };
 
 struct MultisineOptions {
-  double f_lo_hz = 0.04;       // the frequency resolution: period = round(fs / f_lo) samples
+  double f_lo_hz = 0.04;  // the frequency resolution: period = round(fs / f_lo) samples
   double f_hi_hz = 100.0;
   int points_per_decade = 10;  // line density: log-spaced targets rounded to harmonics
   int periods = 8;             // measured periods (>= 2: the noise comes from their spread)
   double settle_time_constants = 5.0;
   double slowest_time_constant_s = 0.0;
-  bool odd_lines = false;      // only odd harmonics: even lines then reveal even nonlinearities
+  bool odd_lines = false;  // only odd harmonics: even lines then reveal even nonlinearities
   std::string phases = "schroeder";  // or "random"
-  uint64_t seed = 1;           // random phases
+  uint64_t seed = 1;                 // random phases
   double sample_rate_hz = 1000.0;
   void validate() const;
 };
@@ -142,15 +142,16 @@ struct MultisineOptions {
 /// measures the whole transfer matrix: lines k of df = fs / P near log-spaced targets (unique,
 /// optionally odd), dealt to the excited inputs in turn; each input's signal
 /// x_i[n] = a_i sum_{k in K_i} sin(2 pi k n / P + phi_k), phases Schroeder
-/// (phi_k = -pi j (j - 1) / |K_i| for its j-th line) or random, a_i scaling the period's peak to the
-/// input's amplitude. Settle periods (>= 1, >= the slowest time constants) then `periods` measured
-/// periods in one "integrate" status (excitation "multisine", with period_samples and the lines).
+/// (phi_k = -pi j (j - 1) / |K_i| for its j-th line) or random, a_i scaling the period's peak to
+/// the input's amplitude. Settle periods (>= 1, >= the slowest time constants) then `periods`
+/// measured periods in one "integrate" status (excitation "multisine", with period_samples and the
+/// lines).
 class MultisineCampaign : public Campaign {
  public:
-  MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite, const MultisineOptions& opt,
-                    std::string run_id);
-  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd, std::vector<double>& ref_phase,
-            std::vector<double>& ref_freq) const override;
+  MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
+                    const MultisineOptions& opt, std::string run_id);
+  void fill(int64_t start, int n, std::vector<std::vector<double>>& cmd,
+            std::vector<double>& ref_phase, std::vector<double>& ref_freq) const override;
   int period_samples() const { return P_; }
 
  private:

@@ -24,6 +24,7 @@ std::vector<int> select_inputs(const Model& m, const std::string& csv);
 
 /// Every input with its DC and test amplitude: amplitude_pct of full scale when >= 0, else the
 /// input's test_amplitude_pct, else 2 %; times `scale` (a second-amplitude measurement).
-std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct, double scale = 1.0);
+std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct,
+                                           double scale = 1.0);
 
 }  // namespace fralab

@@ -3,9 +3,10 @@
 // reason: "NAME exited with status S: <its last error line>". Used by `fralab run|measure`.
 #pragma once
 
+#include <sys/types.h>
+
 #include <map>
 #include <string>
-#include <sys/types.h>
 #include <vector>
 
 namespace fralab {

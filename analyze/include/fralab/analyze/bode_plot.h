@@ -16,8 +16,8 @@
 namespace fralab {
 
 struct BodeCurve {
-  std::string title;                       // legend, e.g. "simulation", "fit"
-  std::vector<std::complex<double>> g;     // at BodePlot::w
+  std::string title;                    // legend, e.g. "simulation", "fit"
+  std::vector<std::complex<double>> g;  // at BodePlot::w
 };
 
 struct BodePlot {
@@ -33,6 +33,7 @@ struct BodePlot {
 /// with a single gnuplot run. Returns false (nothing rendered) when gnuplot is not installed or
 /// fails; the .dat files and the script are written either way. Throws InputError when a plot's
 /// arrays disagree in length or it has more than 4 model curves.
-bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& dir, const std::string& script = "plots.gp");
+bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& dir,
+                       const std::string& script = "plots.gp");
 
 }  // namespace fralab

@@ -26,7 +26,7 @@ struct FrdPoint {
   double nl_rel = -1.0;  // multisine: level on non-excited lines relative to the line (< 0: n/a)
   int n_cycles = 0;
   int step = -1;
-  std::string input;  // the excited input
+  std::string input;       // the excited input
   double amplitude = 0.0;  // excitation amplitude of that input (peak, input units)
   bool valid = true;
   std::string note;

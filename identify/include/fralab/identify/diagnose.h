@@ -1,11 +1,12 @@
 // Diagnosis (contracts 6): where a simulation is wrong, why, and what the extended model gains.
 //
 // Points with sigma > 0.3 |G| (an actuator inside its own backlash, a response in the noise) are
-// left out of fitting and of the error metric. For every measured pair the residual is R(w) = G_meas(jw) / G_sim(jw) (ratio in dB and phase in
-// degrees), with the measurement's uncertainty sigma_R = sigma_eff / |G_sim|, where
-// sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the analyser/plant accuracy, 2e-3).
-// A pair is beyond its uncertainty when chi2 = sum |G_meas - G_sim|^2 / sigma_eff^2 exceeds
-// N + 4 sqrt(N) (N points; each complex point contributes 1 on average when the model is right).
+// left out of fitting and of the error metric. For every measured pair the residual is R(w) =
+// G_meas(jw) / G_sim(jw) (ratio in dB and phase in degrees), with the measurement's uncertainty
+// sigma_R = sigma_eff / |G_sim|, where sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the
+// analyser/plant accuracy, 2e-3). A pair is beyond its uncertainty when chi2 = sum |G_meas -
+// G_sim|^2 / sigma_eff^2 exceeds N + 4 sqrt(N) (N points; each complex point contributes 1 on
+// average when the model is right).
 //
 // Catalogue (each a factor F(s; theta) multiplying the simulated response, fitted by weighted least
 // squares over the points; s = jw, w rad/s):
@@ -47,7 +48,7 @@ struct DiagnoseOptions {
   double sigma_floor = 2e-3;      // relative accuracy floor of measurement and simulation
   double min_improvement = 0.25;  // a cause must remove at least this fraction of chi2
   int max_causes_per_path = 2;
-  double max_rel_sigma = 0.3;     // points measured worse than this (sigma / |G|) are not used
+  double max_rel_sigma = 0.3;  // points measured worse than this (sigma / |G|) are not used
   void validate() const;
 };
 
@@ -85,14 +86,15 @@ struct Diagnosis {
   std::string metric = "rms over points of |ln(G_model/G_measured)| (nepers and radians combined)";
 };
 
-Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data, const DiagnoseOptions& opt = {});
+Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data,
+                   const DiagnoseOptions& opt = {});
 
 /// fralab-diagnosis/1 JSON (contracts 6).
 Json diagnosis_to_json(const Diagnosis& d);
 
 /// The model's response for a measured pair ("X:O" position -> output, "u_X:X" the actuator's
 /// linear response, "u_X:O" command -> output); nullopt when the model has no such path.
-std::optional<std::complex<double>> model_pair_response(const Model& m, const std::string& pair, double w,
-                                                        double amplitude = 0.0);
+std::optional<std::complex<double>> model_pair_response(const Model& m, const std::string& pair,
+                                                        double w, double amplitude = 0.0);
 
 }  // namespace fralab

@@ -16,13 +16,13 @@ void parse_delay_option(const std::string& text, FitOptions* o);
 /// Fits every curve, writes DIR/tf/<stem>.json for each and the transfer matrix of the pairs whose
 /// E1 is an input position and E2 an output (u_X:X actuator fits are listed beside it). Returns the
 /// fits in the order of `curves`.
-std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o, const std::string& dir,
-                                     const std::string& title);
+std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o,
+                                     const std::string& dir, const std::string& title);
 
 /// TFNS's cross-plot of `data` against `fit` (and against `after_deletion` when given): the valid
 /// points sorted by frequency, sigma bars when every valid point carries sigma > 0. Titled
 /// "<pair or source>: data and fit"; `stem` names its files.
-BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit, const Tf* after_deletion,
-                        const std::string& stem);
+BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fit,
+                        const Tf* after_deletion, const std::string& stem);
 
 }  // namespace fralab

@@ -4,12 +4,13 @@
 //
 // TFNS deck: a program control group ended by a "*" card, then frequency-response cards ended by
 // "*". Control cards: "C" (cols 2-10 denominator starting order, 11-20 numerator starting order,
-// 21-30 equation error tolerance c_phi, 31-40 real error tolerance c_N, 41-50 frequency scale factor
-// (ignored: fralab scales automatically), 51-60 term rejection criterion), "O" (plot, ignored),
-// "Z"/"P" (root deletion: A4 fields "P03", "Z02", ... from column 1; a blank field ends the scan).
-// Data cards, in ascending frequency: column 1 type (blank or B: Bode gain dB and phase degrees;
-// P: magnitude and angle radians; R: real and imaginary), columns 15-29 frequency (rad/s; "H" in
-// column 15: Hz, "R": rad/s), 30-44 part 1 ("D" in column 30: dB, "M": magnitude), 45-59 part 2
+// 21-30 equation error tolerance c_phi, 31-40 real error tolerance c_N, 41-50 frequency scale
+// factor (ignored: fralab scales automatically), 51-60 term rejection criterion), "O" (plot,
+// ignored), "Z"/"P" (root deletion: A4 fields "P03", "Z02", ... from column 1; a blank field ends
+// the scan). Data cards, in ascending frequency: column 1 type (blank or B: Bode gain dB and phase
+// degrees; P: magnitude and angle radians; R: real and imaginary), columns 15-29 frequency (rad/s;
+// "H" in column 15: Hz, "R": rad/s), 30-44 part 1 ("D" in column 30: dB, "M": magnitude), 45-59
+// part 2
 // ("D" in column 45: degrees, "R": radians). Errors name the file and line.
 #pragma once
 
@@ -23,8 +24,8 @@ namespace fralab {
 
 struct FitInput {
   Frd frd;
-  bool has_control = false;  // a TFNS "C" card was read
-  FitOptions options;        // from the "C" card
+  bool has_control = false;            // a TFNS "C" card was read
+  FitOptions options;                  // from the "C" card
   std::vector<std::string> deletions;  // "P03", "Z02" (1-based root numbers)
 };
 

@@ -12,11 +12,10 @@
 //    the diagnosis measures it.
 #pragma once
 
+#include <Eigen/Dense>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "fralab/identify/transfer_matrix.h"
 
@@ -36,7 +35,8 @@ struct StateModel {
 };
 
 /// `data`: the measured curve of each fitted path, keyed "input:output".
-StateModel build_state_model(const TransferMatrix& m, const std::map<std::string, std::vector<FrdPoint>>& data);
+StateModel build_state_model(const TransferMatrix& m,
+                             const std::map<std::string, std::vector<FrdPoint>>& data);
 
 Json state_model_json(const StateModel& s);
 

@@ -8,10 +8,10 @@
 //    logarithms of the data's frequencies around zero.
 // 2. SK iteration at orders (n, m): minimise E_phi = sum_i phi_i |D(s_i) G_i - N(s_i)|^2 (B-5) with
 //    phi_i = W_i / |D^{(k-1)}(s_i)|^2 (B-8), until the equation error
-//    E_phi' = mean_i |1 - D^{(k)}(s_i) / D^{(k-1)}(s_i)| (B-9, D normalised to D(0) = 1) is <= c_phi.
-//    The polynomials are expanded in a basis orthonormal on the data (Arnoldi on the points +-j w_i
-//    with weights phi_i, so coefficients stay real); N is eliminated by projecting onto those
-//    orthonormal columns and D is the smallest right singular vector of the QR factor of what
+//    E_phi' = mean_i |1 - D^{(k)}(s_i) / D^{(k-1)}(s_i)| (B-9, D normalised to D(0) = 1) is <=
+//    c_phi. The polynomials are expanded in a basis orthonormal on the data (Arnoldi on the points
+//    +-j w_i with weights phi_i, so coefficients stay real); N is eliminated by projecting onto
+//    those orthonormal columns and D is the smallest right singular vector of the QR factor of what
 //    remains (||d|| = 1): never normal equations in raw powers of s. The iterate with the lowest
 //    real error is kept; an iteration that has not lowered it for 8 iterations stops (SK is a
 //    fixed point, not a descent: with noise or a wrong delay it can oscillate).
@@ -26,8 +26,8 @@
 //    candidate within 3x of adequate) is refined to convergence.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
-//    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <= c_n.
-//    At each n, numerator orders n down to n-3 are tried; the fewest parameters that pass win.
+//    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
+//    c_n. At each n, numerator orders n down to n-3 are tried; the fewest parameters that pass win.
 //    Above order 3, raising stops when two successive orders improve the error by less than 5 %.
 // Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
 // on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
@@ -43,17 +43,17 @@
 namespace fralab {
 
 struct FitOptions {
-  int den_order_start = 1;   // TFNS "C" card: denominator starting order
-  int num_order_start = 0;   // numerator starting order (<= den)
+  int den_order_start = 1;  // TFNS "C" card: denominator starting order
+  int num_order_start = 0;  // numerator starting order (<= den)
   int max_den_order = 10;
   double c_phi = 0.01;       // equation error tolerance (B-9)
   double c_n = 0.01;         // real error tolerance (used when the data carry no sigma)
   int max_iterations = 100;  // SK iterations per order
   enum class Delay { kNone, kAuto, kFixed } delay = Delay::kAuto;
-  double delay_s = 0.0;      // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
-  double max_delay_s = 0.05; // kAuto search range [0, max_delay_s]
-  bool refine = true;        // output-error refinement
-  bool use_sigma = true;     // weight by 1/sigma^2 when present
+  double delay_s = 0.0;       // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
+  double max_delay_s = 0.05;  // kAuto search range [0, max_delay_s]
+  bool refine = true;         // output-error refinement
+  bool use_sigma = true;      // weight by 1/sigma^2 when present
   /// Throws InputError naming the bad option.
   void validate() const;
 };
@@ -88,10 +88,10 @@ struct FitResult {
   int n_points = 0;
   int unstable_reflected = 0;
   std::vector<PadeSet> pade;
-  double pade_delay_s = 0;   // sum of the Pade sets' delays
+  double pade_delay_s = 0;                     // sum of the Pade sets' delays
   std::vector<RootInfo> zero_info, pole_info;  // with rel_sigma from the fit's covariance
-  double gain_rel_sigma = -1;  // relative standard deviation of the DC gain
-  double delay_sigma_s = -1;   // standard deviation of a fitted delay
+  double gain_rel_sigma = -1;                  // relative standard deviation of the DC gain
+  double delay_sigma_s = -1;                   // standard deviation of a fitted delay
   std::string status_str() const;
 };
 

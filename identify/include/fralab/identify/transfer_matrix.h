@@ -23,7 +23,7 @@ struct MatrixEntry {
 };
 
 struct PoleCluster {
-  Root mean;  // mean location (real) or (wn, zeta)
+  Root mean;                       // mean location (real) or (wn, zeta)
   std::vector<std::string> pairs;  // "input:output" members
   std::string scope;               // "plant", "output", "input", "path"
   std::string where;               // the output or input name for those scopes
@@ -36,7 +36,8 @@ struct TransferMatrix {
   int state_count = 0;
 };
 
-/// Human form of a tf in the report's notation: 2.86 [1 - s/192] / ([s/2.86 + 1][s/76.7 + 1]) e^(-0.011 s).
+/// Human form of a tf in the report's notation: 2.86 [1 - s/192] / ([s/2.86 + 1][s/76.7 + 1])
+/// e^(-0.011 s).
 std::string tf_to_text(const Tf& tf);
 
 TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, double rel_tol = 0.1);

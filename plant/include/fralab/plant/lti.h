@@ -18,11 +18,10 @@
 // driven by the same samples share F(w), so their ratio is G2/G1 up to the images only.
 #pragma once
 
+#include <Eigen/Dense>
 #include <complex>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "fralab/plant/tf.h"
 

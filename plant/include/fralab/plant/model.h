@@ -28,7 +28,7 @@ namespace fralab {
 inline constexpr const char* kModelFormat = "fralab-model/1";
 
 struct NonlinearitySpec {
-  std::string type;  // "deadband", "hysteresis", "rate_limit", "saturation"
+  std::string type;    // "deadband", "hysteresis", "rate_limit", "saturation"
   double width = 0.0;  // deadband/hysteresis, input units (total width)
   double rate = 0.0;   // rate_limit, input units per second
   double min = 0.0;    // saturation, absolute input units
@@ -43,7 +43,7 @@ struct MeasurementCoupling {
 struct ModelInput {
   std::string name;
   std::string units;
-  double full_scale = 0.0;  // > 0, input units
+  double full_scale = 0.0;     // > 0, input units
   std::optional<Tf> actuator;  // identity when absent
   std::vector<NonlinearitySpec> nonlinearity;
   double noise_rms = 0.0;
@@ -89,8 +89,8 @@ struct Model {
   double dc(const std::string& channel) const;
 
   // Linear frequency responses at w rad/s (delays exact, nonlinearities excluded):
-  Complex actuator_response(int input, double w) const;   // position / command
-  Complex sensor_response(int output, double w) const;    // channel / true output
+  Complex actuator_response(int input, double w) const;          // position / command
+  Complex sensor_response(int output, double w) const;           // channel / true output
   Complex path_response(int output, int input, double w) const;  // 0 for a zero path
   /// Output channel / actuator position (path and sensor).
   Complex position_to_output(int output, int input, double w) const;

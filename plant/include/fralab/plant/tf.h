@@ -44,7 +44,7 @@ struct Tf {
   double gain = 1.0;  // DC gain (value of the rational part at s = 0)
   std::vector<Root> zeros;
   std::vector<Root> poles;
-  double delay_s = 0.0;  // exact pure delay, seconds, >= 0
+  double delay_s = 0.0;         // exact pure delay, seconds, >= 0
   Json extra = Json::object();  // unknown keys read from a file, written back unchanged
 
   /// The rational part N(s)/D(s) at complex s (delay excluded).
