@@ -5,7 +5,7 @@
 #include <numbers>
 #include <random>
 
-#include "fralab/plant/json_util.h"
+#include "fralab/core/json_util.h"
 
 namespace fralab {
 

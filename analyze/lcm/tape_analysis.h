@@ -1,6 +1,5 @@
 // LCM edge of the analyser: decoding tape records into PairAnalyzers, the same code for live
-// subscribers and for reading a tape file directly (so live, replayed and offline agree exactly),
-// and frd <-> fralab.frd_t.
+// subscribers and for reading a tape file directly (so live, replayed and offline agree exactly).
 #pragma once
 
 #include <memory>
@@ -36,8 +35,5 @@ class TapeFeeder {
 /// Offline tape mode: every pair over the whole tape file, flushed at the end.
 std::vector<Frd> analyze_tape_file(const std::string& path, const std::vector<std::string>& pairs,
                                    const AnalyzerOptions& opt);
-
-frd_t to_frd_msg(const Frd& frd, const std::string& run_id, int64_t seq, bool complete);
-Frd from_frd_msg(const frd_t& m);
 
 }  // namespace fralab

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "fralab/plant/tf.h"
+#include "fralab/core/tf.h"
 
 namespace fralab {
 

@@ -7,7 +7,7 @@
 #include <map>
 
 #include "fralab/identify/fit_io.h"
-#include "tape_analysis.h"
+#include "fralab/lcm_io.h"
 
 using namespace fralab;
 
@@ -27,29 +27,6 @@ struct Collector {
     }
   }
 };
-
-tf_t to_tf_msg(const FitResult& r, const std::string& pair, const std::string& run_id) {
-  tf_t m;
-  m.run_id = run_id;
-  m.pair = pair;
-  m.gain = r.tf.gain;
-  auto conv = [](const Root& x) {
-    root_t q;
-    q.kind = x.pair ? "pair" : "real";
-    q.real = x.real;
-    q.wn = x.wn;
-    q.zeta = x.zeta;
-    return q;
-  };
-  for (const Root& z : r.tf.zeros) m.zeros.push_back(conv(z));
-  for (const Root& p : r.tf.poles) m.poles.push_back(conv(p));
-  m.n_zeros = int32_t(m.zeros.size());
-  m.n_poles = int32_t(m.poles.size());
-  m.delay_s = r.tf.delay_s;
-  m.fit_error = r.e_n;
-  m.status = r.status_str();
-  return m;
-}
 
 }  // namespace
 
@@ -87,7 +64,7 @@ int main(int argc, char** argv) {
     for (auto& [p, f] : c.complete) curves.push_back(f);
     auto fits = fit_and_write(curves, o, out, title);
     for (size_t i = 0; i < fits.size(); ++i) {
-      tf_t m = to_tf_msg(fits[i], curves[i].pair, run_id);
+      tf_t m = to_tf_msg(fits[i].tf, curves[i].pair, run_id, fits[i].e_n, fits[i].status_str());
       lcm.publish(kTfChannel, &m);
     }
     return 0;

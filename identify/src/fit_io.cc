@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "fralab/identify/readers.h"
 #include "fralab/identify/state_model.h"
 
 namespace fralab {
@@ -89,6 +90,19 @@ BodePlot fit_cross_plot(const Frd& data, const std::string& source, const Tf& fi
     if (after_deletion) bp.models[1].g.push_back(after_deletion->at(pt.w));
   }
   return bp;
+}
+
+Json fit_output_json(const FitResult& r, const std::string& pair,
+                     const std::vector<std::string>& deletions, Tf* kept) {
+  Json j = fit_to_json(r, pair);
+  *kept = deletions.empty() ? r.tf : delete_roots(r.tf, deletions);
+  if (!deletions.empty()) {
+    const Json k = tf_to_json(*kept);
+    j["deleted"] = deletions;
+    j["zeros"] = k["zeros"];
+    j["poles"] = k["poles"];
+  }
+  return j;
 }
 
 }  // namespace fralab

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <functional>
 
-#include "line_search.h"
+#include "fralab/core/numerics.h"
 
 namespace fralab {
 namespace {

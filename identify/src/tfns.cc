@@ -6,7 +6,7 @@
 #include <numbers>
 #include <unsupported/Eigen/NonLinearOptimization>
 
-#include "line_search.h"
+#include "fralab/core/numerics.h"
 
 namespace fralab {
 namespace {

@@ -195,4 +195,129 @@ int64_t follow_tape_file(const std::string& path, int64_t* offset,
   return n;
 }
 
+// frd_point_t and FrdPoint share their field names: one copy serves both directions, so a field
+// added to one and not the other fails to compile instead of being dropped.
+template <class From, class To>
+static void copy_point(const From& a, To& b) {
+  b.step = a.step;
+  b.w = a.w;
+  b.mag = a.mag;
+  b.phase_deg = a.phase_deg;
+  b.sigma = a.sigma;
+  b.coherence = a.coherence;
+  b.h2_rel = a.h2_rel;
+  b.h3_rel = a.h3_rel;
+  b.nl_rel = a.nl_rel;
+  b.n_cycles = a.n_cycles;
+  b.input = a.input;
+  b.amplitude = a.amplitude;
+  b.valid = a.valid;
+  b.note = a.note;
+}
+
+frd_t to_frd_msg(const Frd& frd, const std::string& run_id, int64_t seq, bool complete) {
+  frd_t m;
+  m.run_id = run_id;
+  m.seq = seq;
+  m.pair = frd.pair;
+  m.complete = complete;
+  for (const FrdPoint& p : frd.points) copy_point(p, m.points.emplace_back());
+  m.n_points = static_cast<int32_t>(m.points.size());
+  return m;
+}
+
+Frd from_frd_msg(const frd_t& m) {
+  if (m.n_points != int32_t(m.points.size()))
+    throw InputError("fralab.frd_t " + m.pair + ": n_points " + std::to_string(m.n_points) +
+                     " != " + std::to_string(m.points.size()) + " points");
+  Frd f;
+  f.pair = m.pair;
+  for (const frd_point_t& q : m.points) copy_point(q, f.points.emplace_back());
+  std::stable_sort(f.points.begin(), f.points.end(),
+                   [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  return f;
+}
+
+tf_t to_tf_msg(const Tf& tf, const std::string& pair, const std::string& run_id, double fit_error,
+               const std::string& status) {
+  tf_t m;
+  m.run_id = run_id;
+  m.pair = pair;
+  m.gain = tf.gain;
+  auto conv = [](const Root& x) {
+    root_t q;
+    q.kind = x.pair ? "pair" : "real";
+    q.real = x.real;
+    q.wn = x.wn;
+    q.zeta = x.zeta;
+    return q;
+  };
+  for (const Root& z : tf.zeros) m.zeros.push_back(conv(z));
+  for (const Root& p : tf.poles) m.poles.push_back(conv(p));
+  m.n_zeros = int32_t(m.zeros.size());
+  m.n_poles = int32_t(m.poles.size());
+  m.delay_s = tf.delay_s;
+  m.fit_error = fit_error;
+  m.status = status;
+  return m;
+}
+
+Tf from_tf_msg(const tf_t& m) {
+  auto conv = [&](const root_t& q) {
+    if (q.kind == "pair") return Root::Pair(q.wn, q.zeta);
+    if (q.kind == "real") return Root::Real(q.real);
+    throw InputError("fralab.tf_t " + m.pair + ": root kind '" + q.kind +
+                     "' is neither 'real' nor 'pair'");
+  };
+  Tf tf;
+  tf.gain = m.gain;
+  for (const root_t& z : m.zeros) tf.zeros.push_back(conv(z));
+  for (const root_t& p : m.poles) tf.poles.push_back(conv(p));
+  tf.delay_s = m.delay_s;
+  return tf;
+}
+
+Json tape_summary(const std::string& path) {
+  Json j{{"file", path}, {"events", Json::object()}, {"states", Json::object()}};
+  std::vector<int64_t> seqs;
+  std::vector<std::string> channels;
+  bool final_block = false;
+  int64_t samples = 0;
+  double fs = 0;
+  read_tape_file(path, [&](const TapeEvent& ev) {
+    j["events"][ev.channel] = j["events"].value(ev.channel, 0) + 1;
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    try {
+      if (ev.channel == kTapeChannel) {
+        Block b = from_msg(decode_checked<tape_block_t>(&rb, ev.channel));
+        seqs.push_back(b.seq);
+        if (channels.empty()) channels = b.channels;
+        final_block |= b.final_block;
+        samples += b.n_samples;
+        fs = b.sample_rate_hz;
+      } else if (ev.channel == kStatusChannel) {
+        StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
+        j["states"][e.state] = j["states"].value(e.state, 0) + 1;
+      }
+    } catch (const InputError& e) {
+      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
+    }
+  });
+  std::sort(seqs.begin(), seqs.end());
+  Json gaps = Json::array();
+  for (size_t i = 1; i < seqs.size(); ++i) {
+    for (int64_t q = seqs[i - 1] + 1; q < seqs[i]; ++q) gaps.push_back(q);
+  }
+  j["channels"] = channels;
+  j["tape_blocks"] = seqs.size();
+  j["first_seq"] = seqs.empty() ? -1 : seqs.front();
+  j["last_seq"] = seqs.empty() ? -1 : seqs.back();
+  j["missing_seqs"] = gaps;
+  j["final_block"] = final_block;
+  j["samples"] = samples;
+  j["sample_rate_hz"] = fs;
+  j["engine_time_s"] = fs > 0 ? samples / fs : 0.0;
+  return j;
+}
+
 }  // namespace fralab

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "fralab/analyze/frd.h"
+#include "fralab/core/frd.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/model.h"
 #include "test_util.h"

@@ -10,7 +10,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "fralab/plant/json_util.h"
+#include "fralab/core/json_util.h"
 
 using namespace fralab;
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-#include "fralab/plant/tf.h"
+#include "fralab/core/tf.h"
 
 #include <gtest/gtest.h>
 

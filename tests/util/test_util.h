@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "fralab/acquire/campaign.h"
-#include "fralab/analyze/frd.h"
+#include "fralab/core/block.h"
+#include "fralab/core/frd.h"
 #include "fralab/plant/model.h"
-#include "fralab/plant/tape.h"
 
 namespace fralab::testing {
 

@@ -13,10 +13,12 @@
 
 #include "fralab/ack_t.hpp"
 #include "fralab/command_block_t.hpp"
+#include "fralab/core/block.h"
+#include "fralab/core/frd.h"
+#include "fralab/core/json_util.h"
+#include "fralab/core/tf.h"
 #include "fralab/excitation_status_t.hpp"
 #include "fralab/frd_t.hpp"
-#include "fralab/plant/json_util.h"
-#include "fralab/plant/tape.h"
 #include "fralab/tape_block_t.hpp"
 #include "fralab/tf_t.hpp"
 
@@ -36,6 +38,15 @@ Block from_msg(const tape_block_t& m);
 Block from_msg(const command_block_t& m);
 excitation_status_t to_status_msg(const StatusEvent& e);
 StatusEvent from_msg(const excitation_status_t& m);
+/// A curve as published on FRALAB_FRD; every FrdPoint field travels.
+frd_t to_frd_msg(const Frd& frd, const std::string& run_id, int64_t seq, bool complete);
+/// Points sorted by w; InputError when n_points disagrees with the points carried.
+Frd from_frd_msg(const frd_t& m);
+/// A fitted transfer function as published on FRALAB_TF.
+tf_t to_tf_msg(const Tf& tf, const std::string& pair, const std::string& run_id, double fit_error,
+               const std::string& status);
+/// InputError naming the pair for a root kind other than "real" or "pair".
+Tf from_tf_msg(const tf_t& m);
 
 /// Decodes a message of type Msg from a raw buffer; InputError naming the channel and the expected
 /// type when the bytes are not that type (fingerprint mismatch, truncated).
@@ -87,5 +98,9 @@ int64_t read_tape_file(const std::string& path, const std::function<void(const T
 /// InputError when the file cannot be opened.
 int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn);
+
+/// `fralab tape`: per LCM channel the event count, the tape's channels, block sequence with the
+/// missing seqs named, excitation states, samples and engine time. Errors name the file and event.
+Json tape_summary(const std::string& path);
 
 }  // namespace fralab

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "fralab/plant/tape.h"
+#include "fralab/core/block.h"
 
 namespace fralab {
 

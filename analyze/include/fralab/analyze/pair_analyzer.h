@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "fralab/analyze/frd.h"
-#include "fralab/plant/tape.h"
+#include "fralab/core/block.h"
+#include "fralab/core/frd.h"
 
 namespace fralab {
 

@@ -19,6 +19,11 @@ void parse_delay_option(const std::string& text, FitOptions* o);
 std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o,
                                      const std::string& dir, const std::string& title);
 
+/// The `fralab fit` output file: fit_to_json, and when roots are deleted (TFNS P/Z cards, e.g.
+/// "P03"), "deleted" with the kept zeros and poles. *kept receives the tf after deletion.
+Json fit_output_json(const FitResult& r, const std::string& pair,
+                     const std::vector<std::string>& deletions, Tf* kept);
+
 /// TFNS's cross-plot of `data` against `fit` (and against `after_deletion` when given): the valid
 /// points sorted by frequency, sigma bars when every valid point carries sigma > 0. Titled
 /// "<pair or source>: data and fit"; `stem` names its files.

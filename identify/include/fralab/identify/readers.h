@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "fralab/analyze/frd.h"
+#include "fralab/core/frd.h"
 #include "fralab/identify/tfns.h"
 
 namespace fralab {

@@ -23,7 +23,7 @@
 #include <optional>
 #include <vector>
 
-#include "fralab/plant/tf.h"
+#include "fralab/core/tf.h"
 
 namespace fralab {
 

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "fralab/plant/tf.h"
+#include "fralab/core/tf.h"
 
 namespace fralab {
 

@@ -1,4 +1,4 @@
-#include "fralab/acquire/supervisor.h"
+#include "fralab/lab/supervisor.h"
 
 #include <fcntl.h>
 #include <spawn.h>
@@ -12,7 +12,7 @@
 #include <fstream>
 #include <thread>
 
-#include "fralab/plant/json_util.h"
+#include "fralab/core/json_util.h"
 
 extern char** environ;
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "lab.h"
+#include "fralab/lab/measure.h"
 
 namespace fralab {
 

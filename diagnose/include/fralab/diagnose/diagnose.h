@@ -9,7 +9,8 @@
 // average when the model is right).
 //
 // Catalogue (each a factor F(s; theta) multiplying the simulated response, fitted by weighted least
-// squares over the points; s = jw, w rad/s):
+// squares over the points; s = jw, w rad/s; one unit per cause in diagnose/src/causes/, search
+// ranges in DiagnoseOptions):
 //   time_delay          F = e^{-s tau}                           delay_s
 //   missing_lag         F = 1 / (1 + s/a)                        corner_rad_s = a
 //   missing_lead        F = 1 + s/a                              corner_rad_s = a
@@ -28,27 +29,65 @@
 //                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
 // A cause is accepted when it lowers chi2 by more than its parameters' BIC penalty (k ln 2N) and
 // by at least 25 %; a second cause may follow on what remains. Scope: the same cause with
-// consistent parameters (delays within 0.5 ms or 10 %, corners within 10 %, gains within 0.3 dB) in
+// consistent parameters (delays within 0.5 ms or 10 %, corners within 10 %, gains within 0.3 dB:
+// DiagnoseOptions) in
 // every measured path into one output is reported once for that output (a sensor), in every path
 // from one input for that input (its actuator or calibration), everywhere for the plant.
 // Error metric (summary.metric): the rms over points of |ln(G_model / G_meas)| (nepers and radians
 // combined), per finding over the paths it covers, in total over every pair.
 #pragma once
 
+#include <complex>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "fralab/analyze/frd.h"
+#include "fralab/core/frd.h"
 #include "fralab/plant/model.h"
 
 namespace fralab {
+
+/// The catalogue (contracts 6 names at the JSON edge: to_string / cause_from_string).
+enum class CauseKind {
+  kTimeDelay,
+  kMissingLag,
+  kMissingLead,
+  kMissingResonance,
+  kPoleShift,
+  kGainMismatch,
+  kHysteresis,
+  kDeadband,
+  kMeasurementCoupling,
+};
+/// Where a finding sits: one path, every path into an output (its sensor), every path from an
+/// input (its actuator or calibration), every path (the plant).
+enum class Scope { kPath, kOutput, kInput, kPlant };
+
+const char* to_string(CauseKind c);
+const char* to_string(Scope s);
+/// InputError naming the text when it is not a contracts-6 name.
+CauseKind cause_from_string(const std::string& s);
+Scope scope_from_string(const std::string& s);
 
 struct DiagnoseOptions {
   double sigma_floor = 2e-3;      // relative accuracy floor of measurement and simulation
   double min_improvement = 0.25;  // a cause must remove at least this fraction of chi2
   int max_causes_per_path = 2;
   double max_rel_sigma = 0.3;  // points measured worse than this (sigma / |G|) are not used
+  // Search ranges.
+  double delay_min_s = -0.02;  // time_delay searched over [delay_min_s, delay_max_s], s
+  double delay_max_s = 0.05;
+  double corner_decades_beyond = 1;  // lag/lead corners: the band widened by this many decades
+  double pole_shift_range = 30;      // a pole moves within [from / range, from * range]
+  // Scope: the same cause on several paths is one effect when the parameters agree within these.
+  double consistent_delay_s = 0.5e-3;  // delays: within max(consistent_delay_s, consistent_rel)
+  double consistent_gain_db = 0.3;     // gains, dB
+  double consistent_rel = 0.1;         // corners and frequencies (and delays, relative)
+  // Nonlinear actuators: the width is fitted below this fraction of the simulated actuator's
+  // slowest corner, when the mean 3rd harmonic there exceeds min_odd_harmonic.
+  double low_corner_fraction = 0.3;
+  double min_odd_harmonic = 0.01;
   void validate() const;
 };
 
@@ -59,7 +98,9 @@ struct MeasuredPair {
 };
 
 struct Finding {
-  std::string cause, scope, output, input;  // output/input "" = null
+  CauseKind cause = CauseKind::kGainMismatch;
+  Scope scope = Scope::kPath;
+  std::string output, input;  // "" = null
   std::map<std::string, double> parameters;
   std::map<std::string, std::string> text_parameters;  // measurement_coupling's channel names
   std::string explanation;

@@ -1,4 +1,4 @@
-#include "fralab/analyze/frd.h"
+#include "fralab/core/frd.h"
 
 #include <algorithm>
 #include <cmath>

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "fralab/plant/json_util.h"
+#include "fralab/core/json_util.h"
 
 namespace fralab {
 

@@ -1,4 +1,4 @@
-#include "lab.h"
+#include "fralab/lab/measure.h"
 
 #include <unistd.h>
 
@@ -10,8 +10,8 @@
 #include <thread>
 
 #include "fralab/acquire/model_info.h"
-#include "fralab/acquire/supervisor.h"
-#include "fralab/analyze/frd.h"
+#include "fralab/core/frd.h"
+#include "fralab/lab/supervisor.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
 

@@ -1,4 +1,4 @@
-#include "fralab/plant/json_util.h"
+#include "fralab/core/json_util.h"
 
 #include <cmath>
 #include <fstream>

@@ -1,4 +1,4 @@
-// Numerics shared by the identifier, the state model and the diagnosis (internal header): a
+// Numerics shared by the identifier, the state model and the diagnosis: a
 // one-dimensional minimisation and the error metric fralab reports for models against data.
 #pragma once
 

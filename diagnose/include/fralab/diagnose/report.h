@@ -1,0 +1,27 @@
+// The diagnosis's files: the measured pairs read from a `measure` folder, the report
+// (DIR/report.md, with one gnuplot Bode plot per pair in DIR/plots/) and the terminal summary.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fralab/diagnose/diagnose.h"
+
+namespace fralab {
+
+/// Every DIR/frd/*.json as a MeasuredPair (sorted by pair), with DIR/validation/frd/<same>.json as
+/// its validation when present. InputError when DIR has no frd/ or no frd files.
+std::vector<MeasuredPair> read_measured_dir(const std::string& dir);
+
+/// One PNG per pair in DIR/plots: measured (with sigma bars), simulation, extended model, and the
+/// residuals. false when gnuplot is missing or failed (the report then has no figures).
+bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir);
+
+/// DIR/report.md: errors, findings with their explanation, the per-pair table, the figures.
+void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
+                            const std::string& data_name, bool plots, const std::string& dir);
+
+/// The findings as printed on the terminal: a count and errors, one line per finding.
+std::string diagnosis_summary(const Diagnosis& d, const std::string& dir);
+
+}  // namespace fralab

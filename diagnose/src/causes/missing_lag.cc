@@ -1,0 +1,34 @@
+// missing_lag: F = 1 / (1 + s/a), a real pole the simulation lacks, corner_rad_s = a
+// (corner.h: the search). Consistent across pairs within DiagnoseOptions::consistent_rel.
+#include "corner.h"
+
+namespace fralab::diag {
+namespace {
+
+class MissingLag final : public LinearCause {
+ public:
+  CauseKind kind() const override { return CauseKind::kMissingLag; }
+  void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
+           std::vector<Cause>* out) const override {
+    out->push_back(fit_corner(kind(), false, p, opt));
+  }
+  bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
+    return params_within(a, b, {"corner_rad_s"}, opt.consistent_rel);
+  }
+  void extend(Tf& t, const Finding& f) const override {
+    t.poles.push_back(Root::Real(-f.parameters.at("corner_rad_s")));
+  }
+  std::string explain(const Finding& f) const override {
+    return "a -20 dB/decade corner at " + fmt(f.parameters.at("corner_rad_s")) +
+           " rad/s with its -90 deg phase, absent from the simulation";
+  }
+};
+
+}  // namespace
+
+const LinearCause& missing_lag_cause() {
+  static const MissingLag c;
+  return c;
+}
+
+}  // namespace fralab::diag

@@ -1,0 +1,45 @@
+// time_delay: F = e^{-s tau}, delay_s = tau, searched over DiagnoseOptions' delay range (a grid
+// then golden section). Consistent across pairs within max(consistent_delay_s, consistent_rel).
+#include <algorithm>
+#include <cmath>
+
+#include "cause.h"
+
+namespace fralab::diag {
+namespace {
+
+constexpr int kGrid = 280;  // grid points over the delay range before the golden section
+
+class TimeDelay final : public LinearCause {
+ public:
+  CauseKind kind() const override { return CauseKind::kTimeDelay; }
+  void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
+           std::vector<Cause>* out) const override {
+    auto F = [&](double tau) { return factor_of(p.w, [&](C s) { return std::exp(-s * tau); }); };
+    const double tau = minimise_1d([&](double t) { return chi2(p, F(t)); }, opt.delay_min_s,
+                                   opt.delay_max_s, kGrid);
+    Cause c{kind(), {{"delay_s", tau}}, F(tau), 0, 1, ""};
+    c.chi2 = chi2(p, c.F);
+    out->push_back(std::move(c));
+  }
+  bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
+    const double v = a.params.at("delay_s"), u = b.params.at("delay_s");
+    return std::abs(v - u) <= std::max(opt.consistent_delay_s, opt.consistent_rel * std::abs(v));
+  }
+  void extend(Tf& t, const Finding& f) const override {
+    t.delay_s = std::max(0.0, t.delay_s + f.parameters.at("delay_s"));
+  }
+  std::string explain(const Finding& f) const override {
+    return "phase residual linear in w (" + fmt(-f.parameters.at("delay_s") * 1e3) +
+           " ms slope), gain residual flat";
+  }
+};
+
+}  // namespace
+
+const LinearCause& time_delay_cause() {
+  static const TimeDelay c;
+  return c;
+}
+
+}  // namespace fralab::diag

@@ -1,0 +1,41 @@
+#include "pair_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "fralab/core/numerics.h"
+
+namespace fralab::diag {
+
+double chi2(const PairFit& p, const std::vector<C>& F) {
+  double c = 0;
+  for (size_t i = 0; i < p.w.size(); ++i)
+    c += std::norm(p.meas[i] - p.sim[i] * p.factor[i] * F[i]) / (p.sig[i] * p.sig[i]);
+  return c;
+}
+
+std::vector<C> factor_of(const std::vector<double>& w, const std::function<C(C)>& f) {
+  std::vector<C> F;
+  for (double x : w) F.push_back(f(C(0, x)));
+  return F;
+}
+
+double minimise_1d(const std::function<double(double)>& f, double lo, double hi, int grid) {
+  double best = lo, fb = INFINITY;
+  for (int k = 0; k <= grid; ++k) {
+    double x = lo + (hi - lo) * k / grid, v = f(x);
+    if (v < fb) fb = v, best = x;
+  }
+  const double step = (hi - lo) / grid;
+  return detail::golden(f, std::max(lo, best - step), std::min(hi, best + step));
+}
+
+std::string fmt(double v, int prec) {
+  std::ostringstream s;
+  s.precision(prec);
+  s << v;
+  return s.str();
+}
+
+}  // namespace fralab::diag

@@ -1,0 +1,26 @@
+// `fralab diagnose`: what the simulation gets wrong, why, and the extended model.
+#include <cstdio>
+#include <memory>
+
+#include "commands.h"
+#include "fralab/lab/diagnose_command.h"
+
+namespace fralab {
+
+void add_diagnose_command(CLI::App& app) {
+  auto dc = std::make_shared<DiagnoseCommand>();
+  auto* c =
+      app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
+  c->add_option("--simulation", dc->simulation,
+                "the simulation (fralab-model/1 file or embedded name)")
+      ->required();
+  c->add_option("--engine", dc->engine,
+                "measure this engine model first (every flag of measure applies)");
+  c->add_option("--measured", dc->measured, "or: a measure output folder");
+  c->add_option("--out", dc->out)->required();
+  c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
+  add_measure_flags(c, dc->measure);
+  c->callback([dc] { std::printf("fralab: %s\n", run_diagnose(*dc).c_str()); });
+}
+
+}  // namespace fralab

@@ -1,0 +1,67 @@
+// `fralab run`: the lab end to end. With a simulation to compare with (given, or the engine's
+// embedded `_sim` model), the diagnosis measures the engine (and once more for validation),
+// identifies every path and compares; otherwise it measures only.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "commands.h"
+#include "fralab/lab/diagnose_command.h"
+#include "fralab/plant/embedded_models.h"
+
+namespace fralab {
+
+namespace {
+
+struct RunCommand {
+  MeasureOptions measure;
+  std::string simulation;
+};
+
+void run(const RunCommand& c) {
+  std::string sim = c.simulation;
+  if (sim.empty()) {
+    const std::string base = std::filesystem::path(c.measure.engine).stem().string();
+    for (const auto& e : embedded_models())
+      if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
+  }
+  if (sim.empty()) {
+    print_measure(run_measure(c.measure), c.measure.out);
+    return;
+  }
+  DiagnoseCommand d;
+  d.simulation = sim;
+  d.engine = c.measure.engine;
+  d.out = c.measure.out;
+  d.measure = c.measure;
+  std::printf("fralab: measuring %s and diagnosing %s ...\n", c.measure.engine.c_str(),
+              sim.c_str());
+  const std::string summary = run_diagnose(d);
+  const Json rj = json_load_file(c.measure.out + "/measure/run.json");
+  std::printf(
+      "fralab: engine time %.0f s (%.2f h) measured in %.1f s (%.0fx), tape "
+      "%s/measure/tape.lcmlog, transfer matrix %s/measure/transfer_matrix.md\n",
+      rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600,
+      rj["wall_time_s"].get<double>(), rj["speedup"].get<double>(), c.measure.out.c_str(),
+      c.measure.out.c_str());
+  std::printf("fralab: %s\n", summary.c_str());
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app) {
+  auto rc = std::make_shared<RunCommand>();
+  rc->measure.out = "out/lab";
+  auto* c =
+      app.add_subcommand("run", "the lab end to end on an engine (default: embedded J85 95 %)");
+  c->add_option("--engine", rc->measure.engine, "engine model file or embedded name")
+      ->capture_default_str();
+  c->add_option("--out", rc->measure.out)->capture_default_str();
+  c->add_option(
+      "--simulation", rc->simulation,
+      "diagnose against this simulation (default: the engine's _sim model when embedded)");
+  add_measure_flags(c, rc->measure);
+  c->callback([rc] { run(*rc); });
+}
+
+}  // namespace fralab

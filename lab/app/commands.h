@@ -1,0 +1,24 @@
+// The `fralab` driver's subcommands, one file each (lab/app/cmd_<name>.cc). Each adds itself to
+// the CLI11 app with its flags and a callback that does the work; errors are thrown (InputError)
+// and reported by main as one line on stderr with a non-zero exit status.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "fralab/lab/measure.h"
+
+namespace fralab {
+
+/// The flags every measuring subcommand shares (measure, run, diagnose --engine).
+void add_measure_flags(CLI::App* c, MeasureOptions& m);
+/// "fralab: N pairs measured; engine time ..." on stdout.
+void print_measure(const MeasureResult& r, const std::string& out);
+
+void add_run_command(CLI::App& app);
+void add_measure_command(CLI::App& app);
+void add_analyze_command(CLI::App& app);
+void add_fit_command(CLI::App& app);
+void add_diagnose_command(CLI::App& app);
+void add_tape_command(CLI::App& app);
+
+}  // namespace fralab

@@ -1,0 +1,27 @@
+// fralab: the one driver. Subcommands spawn the module executables as separate processes talking
+// LCM (run, measure) or run a module's library directly on files (analyze --log, fit, tape). Exit
+// status 0 on success, non-zero with a one-line reason on stderr otherwise.
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"fralab: frequency-response identification lab (J85-13 by default)"};
+  app.require_subcommand(1);
+  fralab::add_run_command(app);
+  fralab::add_measure_command(app);
+  fralab::add_analyze_command(app);
+  fralab::add_fit_command(app);
+  fralab::add_diagnose_command(app);
+  fralab::add_tape_command(app);
+  try {
+    app.parse(argc, argv);  // the chosen subcommand's callback runs here
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fralab: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,55 @@
+#include "fralab/lab/diagnose_command.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "fralab/diagnose/report.h"
+#include "fralab/plant/embedded_models.h"
+
+namespace fralab {
+
+namespace fs = std::filesystem;
+
+std::string run_diagnose(const DiagnoseCommand& c) {
+  if (c.out.empty()) throw InputError("--out DIR is required");
+  if (c.engine.empty() == c.measured.empty())
+    throw InputError("give exactly one of --engine TRUTH.json or --measured DIR");
+  Model sim = load_model_or_embedded(c.simulation);
+  fs::create_directories(c.out);
+  std::string data_dir = c.measured, data_name = c.measured;
+  if (!c.engine.empty()) {
+    MeasureOptions m = c.measure;
+    m.engine = c.engine;
+    if (m.inputs.empty()) {
+      for (const auto& in : sim.inputs) m.inputs += (m.inputs.empty() ? "" : ",") + in.name;
+    }
+    m.out = c.out + "/measure";
+    run_measure(m);
+    // An independent measurement for validation, not used for fitting: another noise seed and a
+    // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
+    MeasureOptions v = m;
+    v.seed = m.seed + 1;
+    v.amplitude_scale = 1.5 * m.amplitude_scale;
+    v.out = c.out + "/measure/validation";
+    run_measure(v);
+    data_dir = m.out;
+    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) +
+                "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
+  }
+  auto data = read_measured_dir(data_dir);
+  Diagnosis d = diagnose(sim, data);
+  json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));
+  Model ext = d.extended;
+  ext.name = sim.name + " + diagnosis";
+  ext.warnings.clear();
+  save_model(c.out + "/extended_model.json", ext);
+  load_model(c.out +
+             "/extended_model.json");  // it must be a valid fralab-model/1 the plant can run
+  const bool plots = c.plots && render_diagnosis_plots(d, c.out);
+  write_diagnosis_report(d, sim.name, data_name, plots, c.out);
+  return diagnosis_summary(d, c.out);
+}
+}  // namespace fralab
