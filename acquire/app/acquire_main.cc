@@ -15,8 +15,8 @@
 #include <set>
 #include <thread>
 
-#include "fralab/acquire/campaign.h"
-#include "fralab/acquire/model_info.h"
+#include "fralab/acquire/acquisition.h"
+#include "fralab/core/text.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -25,82 +25,52 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-struct Acq {
+// Acknowledgements on the control URL, for this run only.
+struct AckListener {
   std::string run_id;
-  std::map<std::string, int64_t> acked;  // consumer -> last seq (-1 = ready)
+  AckTracker acks;
   std::string error;
-
   void on_ack(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     try {
       ack_t a = decode_checked<ack_t>(rbuf, ch);
       if (!a.run_id.empty() && a.run_id != run_id) return;
-      auto it = acked.find(a.consumer);
-      if (it == acked.end())
-        acked[a.consumer] = a.seq;
-      else
-        it->second = std::max(it->second, a.seq);
+      acks.on_ack(a.consumer, a.seq);
     } catch (const std::exception& e) {
       error = e.what();
     }
   }
-  int64_t min_ack(const std::vector<std::string>& who, std::string* laggard) const {
-    int64_t m = INT64_MAX;
-    for (const auto& c : who) {
-      auto it = acked.find(c);
-      int64_t v = it == acked.end() ? -2 : it->second;
-      if (v < m) {
-        m = v;
-        if (laggard) *laggard = c;
-      }
-    }
-    return m;
-  }
 };
-
-std::vector<std::string> split_csv(const std::string& s) {
-  std::vector<std::string> out;
-  size_t a = 0;
-  while (a <= s.size()) {
-    size_t b = s.find(',', a);
-    if (b == std::string::npos) b = s.size();
-    if (b > a) out.push_back(s.substr(a, b - a));
-    a = b + 1;
-  }
-  return out;
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"fralab-acquire: excitation campaign over LCM"};
-  std::string engine = "j85_95", inputs_csv, band = "0.04:100", url, ctl_url, run_id = "run",
-              consumers_csv = "plant", summary;
-  SteppedSineOptions so;
-  double amplitude_pct = -1, amplitude_scale = 1, speed = 0, ready_timeout = 30, stall_timeout = 60;
-  int block = 100, window = 2;
-  std::string excitation = "stepped", ms_phases = "schroeder";
-  bool odd_lines = false;
+  std::string engine = "j85_95", url, ctl_url, run_id = "run", consumers_csv = "plant", summary,
+              excitation = "stepped";
+  AcquireOptions o;
+  double ready_timeout = 30, stall_timeout = 60;
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
-  app.add_option("--input", inputs_csv, "input(s) to excite, comma separated (default: all)");
-  app.add_option("--band", band, "LO_HZ:HI_HZ")->capture_default_str();
+  app.add_option("--input", o.inputs, "input(s) to excite, comma separated (default: all)");
+  app.add_option("--band", o.band, "LO_HZ:HI_HZ")->capture_default_str();
   app.add_option("--excitation", excitation,
                  "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at "
                  "once, orthogonal lines; --min-cycles = periods)")
       ->capture_default_str();
-  app.add_option("--multisine-phases", ms_phases, "schroeder or random")->capture_default_str();
-  app.add_flag("--odd-lines", odd_lines, "multisine: odd harmonics only");
-  app.add_option("--points-per-decade", so.points_per_decade)->capture_default_str();
-  app.add_option("--amplitude-pct", amplitude_pct,
+  app.add_option("--multisine-phases", o.multisine_phases, "schroeder or random")
+      ->capture_default_str();
+  app.add_flag("--odd-lines", o.odd_lines, "multisine: odd harmonics only");
+  app.add_option("--points-per-decade", o.points_per_decade)->capture_default_str();
+  app.add_option("--amplitude-pct", o.amplitude_pct,
                  "amplitude, % of full scale (default: the input's test_amplitude_pct, else 2)");
-  app.add_option("--amplitude-scale", amplitude_scale, "multiplies every input's amplitude")
+  app.add_option("--amplitude-scale", o.amplitude_scale, "multiplies every input's amplitude")
       ->capture_default_str();
-  app.add_option("--min-cycles", so.min_cycles)->capture_default_str();
-  app.add_option("--min-integrate-s", so.min_integrate_s)->capture_default_str();
-  app.add_option("--sample-rate", so.sample_rate_hz)->capture_default_str();
-  app.add_option("--speed", speed, "1 = real time, 100 = 100x, 0 = as fast as consumers keep up")
+  app.add_option("--min-cycles", o.min_cycles)->capture_default_str();
+  app.add_option("--min-integrate-s", o.min_integrate_s)->capture_default_str();
+  app.add_option("--sample-rate", o.sample_rate_hz)->capture_default_str();
+  app.add_option("--speed", o.speed, "1 = real time, 100 = 100x, 0 = as fast as consumers keep up")
       ->capture_default_str();
-  app.add_option("--block", block, "samples per command block")->capture_default_str();
-  app.add_option("--window", window, "blocks in flight ahead of the slowest consumer")
+  app.add_option("--block", o.block, "samples per command block")->capture_default_str();
+  app.add_option("--window", o.window, "blocks in flight ahead of the slowest consumer")
       ->capture_default_str();
   app.add_option("--consumers", consumers_csv,
                  "who must acknowledge (plant is implicit via its tape)")
@@ -115,49 +85,19 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     Model model = load_model_or_embedded(engine);
-    auto [lo, hi] = parse_band(band);
-    so.f_lo_hz = lo;
-    so.f_hi_hz = hi;
-    so.slowest_time_constant_s = slowest_time_constant_s(model);
-    if (block < 1 || block * 8.0 * (model.inputs.size() * 2 + model.outputs.size() + 2) > 60000) {
-      throw InputError("--block " + std::to_string(block) +
-                       " would make tape blocks over 60 kB (LCM fragments); use a smaller block");
-    }
-    if (window < 1) throw InputError("--window must be >= 1");
-    if (speed < 0) throw InputError("--speed must be >= 0");
-    std::vector<int> excite = select_inputs(model, inputs_csv);
-    auto cin = campaign_inputs(model, amplitude_pct, amplitude_scale);
-    std::unique_ptr<Campaign> campaign;
-    if (excitation == "stepped") {
-      campaign = std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so),
-                                                       so.sample_rate_hz, run_id);
-    } else if (excitation == "sweep") {
-      campaign = std::make_unique<SweepCampaign>(cin, excite, so, run_id);
-    } else if (excitation == "multisine") {
-      MultisineOptions mo;
-      mo.f_lo_hz = so.f_lo_hz;
-      mo.f_hi_hz = so.f_hi_hz;
-      mo.points_per_decade = so.points_per_decade;
-      mo.periods = std::max(2, so.min_cycles);
-      mo.slowest_time_constant_s = so.slowest_time_constant_s;
-      mo.sample_rate_hz = so.sample_rate_hz;
-      mo.odd_lines = odd_lines;
-      mo.phases = ms_phases;
-      campaign = std::make_unique<MultisineCampaign>(cin, excite, mo, run_id);
-    } else {
-      throw InputError("--excitation \"" + excitation + "\": stepped, sweep or multisine");
-    }
+    o.excitation = excitation_from_string(excitation);
+    const std::unique_ptr<Campaign> campaign = make_campaign(model, o, run_id);
     const Campaign& camp = *campaign;
 
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    Acq acq;
+    AckListener acq;
     acq.run_id = run_id;
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    ctl.subscribe(kAckChannel, &Acq::on_ack, &acq)->setQueueCapacity(100000);
-    std::vector<std::string> consumers = split_csv(consumers_csv);
+    ctl.subscribe(kAckChannel, &AckListener::on_ack, &acq)->setQueueCapacity(100000);
+    std::vector<std::string> consumers = split_list(consumers_csv);
     if (std::find(consumers.begin(), consumers.end(), "plant") == consumers.end())
       consumers.push_back("plant");
 
@@ -167,7 +107,7 @@ int main(int argc, char** argv) {
     auto wait_acks = [&](int64_t target, double timeout, int poll_ms,
                          const std::function<std::string()>& why) {
       const auto t = Clock::now();
-      while (acq.min_ack(consumers, &lag) < target) {
+      while (acq.acks.min_ack(consumers, &lag) < target) {
         handle_either(lcm, ctl, poll_ms);
         if (!acq.error.empty()) throw InputError(acq.error);
         if (std::chrono::duration<double>(Clock::now() - t).count() > timeout)
@@ -191,43 +131,26 @@ int main(int argc, char** argv) {
 
     const auto t0 = Clock::now();
     const int64_t total = camp.total_samples();
-    const int64_t nblocks = (total + block - 1) / block;
+    const int64_t nblocks = command_block_count(camp, o.block);
     size_t ev = 0;
-    std::vector<std::vector<double>> cmd;
-    std::vector<double> ref_phase, ref_freq;
     for (int64_t b = 0; b < nblocks; ++b) {
-      wait_acks(b - window, stall_timeout, 20, [&] {
+      wait_acks(b - o.window, stall_timeout, 20, [&] {
         return "consumer \"" + lag + "\" stopped acknowledging at block " +
-               std::to_string(acq.min_ack(consumers, nullptr)) + " (sent up to " +
+               std::to_string(acq.acks.min_ack(consumers, nullptr)) + " (sent up to " +
                std::to_string(b - 1) + ")";
       });
-      const int64_t s0 = b * block;
-      const int n = int(std::min<int64_t>(block, total - s0));
-      if (speed > 0) {
-        auto due = t0 + std::chrono::duration<double>(double(s0) / so.sample_rate_hz / speed);
+      const Block blk = command_block(camp, b, o.block, o.sample_rate_hz, run_id);
+      if (o.speed > 0) {
+        auto due = t0 + std::chrono::duration<double>(double(blk.start_sample) / o.sample_rate_hz /
+                                                      o.speed);
         while (Clock::now() < due)
           handle_either(
               lcm, ctl,
               1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
       }
-      const bool last = b == nblocks - 1;
-      while (ev < camp.events().size() && (camp.events()[ev].sample < s0 + n || last))
+      while (ev < camp.events().size() &&
+             (camp.events()[ev].sample < blk.start_sample + blk.n_samples || blk.final_block))
         publish_status(camp.events()[ev++]);
-      camp.fill(s0, n, cmd, ref_phase, ref_freq);
-      Block blk;
-      blk.run_id = run_id;
-      blk.seq = b;
-      blk.start_sample = s0;
-      blk.sample_rate_hz = so.sample_rate_hz;
-      blk.n_samples = n;
-      blk.final_block = last;
-      for (const auto& in : camp.inputs()) blk.channels.push_back("u_" + in.name);
-      blk.channels.push_back("ref_phase");
-      blk.channels.push_back("ref_freq_hz");
-      blk.samples.reserve(blk.channels.size() * n);
-      for (const auto& c : cmd) blk.samples.insert(blk.samples.end(), c.begin(), c.end());
-      blk.samples.insert(blk.samples.end(), ref_phase.begin(), ref_phase.end());
-      blk.samples.insert(blk.samples.end(), ref_freq.begin(), ref_freq.end());
       command_block_t m = to_command_msg(blk);
       lcm.publish(kCmdChannel, &m);
     }
@@ -237,11 +160,14 @@ int main(int argc, char** argv) {
              std::to_string(nblocks - 1);
     });
     const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double engine_s = double(total) / so.sample_rate_hz;
-    Json sj{{"run_id", run_id},        {"engine_time_s", engine_s},
-            {"wall_time_s", wall},     {"speedup", engine_s / std::max(wall, 1e-9)},
-            {"blocks", nblocks},       {"samples", total},
-            {"excitation", excitation}};
+    const double engine_s = double(total) / o.sample_rate_hz;
+    Json sj{{"run_id", run_id},
+            {"engine_time_s", engine_s},
+            {"wall_time_s", wall},
+            {"speedup", engine_s / std::max(wall, 1e-9)},
+            {"blocks", nblocks},
+            {"samples", total},
+            {"excitation", to_string(o.excitation)}};
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";
     if (!summary.empty()) json_save_file(summary, sj);
     return 0;

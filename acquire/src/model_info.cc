@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fralab/core/text.h"
+
 namespace fralab {
 
 std::pair<double, double> parse_band(const std::string& band) {
@@ -38,22 +40,14 @@ std::vector<int> select_inputs(const Model& m, const std::string& csv) {
     for (size_t i = 0; i < m.inputs.size(); ++i) out.push_back(int(i));
     return out;
   }
-  size_t a = 0;
-  while (a <= csv.size()) {
-    size_t b = csv.find(',', a);
-    if (b == std::string::npos) b = csv.size();
-    std::string name = csv.substr(a, b - a);
-    if (!name.empty()) {
-      int i = m.input_index(name);
-      if (i < 0) {
-        std::string known;
-        for (const auto& in : m.inputs) known += (known.empty() ? "" : ", ") + in.name;
-        throw InputError("--input " + name + ": the model has no such input (inputs: " + known +
-                         ")");
-      }
-      if (std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
+  for (const std::string& name : split_list(csv)) {
+    int i = m.input_index(name);
+    if (i < 0) {
+      std::string known;
+      for (const auto& in : m.inputs) known += (known.empty() ? "" : ", ") + in.name;
+      throw InputError("--input " + name + ": the model has no such input (inputs: " + known + ")");
     }
-    a = b + 1;
+    if (std::find(out.begin(), out.end(), i) == out.end()) out.push_back(i);
   }
   if (out.empty()) throw InputError("--input names no input");
   return out;

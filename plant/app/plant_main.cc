@@ -8,85 +8,37 @@
 
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
-#include "fralab/plant/simulator.h"
+#include "fralab/plant/lockstep.h"
 
 using namespace fralab;
 
 namespace {
 
-struct Plant {
-  Simulator sim;
+// The lockstep plant on LCM: command blocks in, tape blocks out, one acknowledgement per block.
+struct PlantNode {
+  LockstepPlant plant;
   lcm::LCM* lcm;
   lcm::LCM* ctl;  // control URL: acknowledgements
-  std::vector<std::string> input_names;
-  int64_t next_seq = 0;
-  std::string run_id;  // "" until given or fixed by the first command
-  bool done = false;
   bool started = false;
   std::string error;
 
   void ack(int64_t seq) {
     ack_t a;
-    a.run_id = run_id;
+    a.run_id = plant.run_id();
     a.consumer = "plant";
     a.seq = seq;
     ctl->publish(kAckChannel, &a);
   }
 
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (done || !error.empty()) return;
+    if (plant.done() || !error.empty()) return;
     try {
-      Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
-      if (run_id.empty()) run_id = cmd.run_id;
-      if (cmd.run_id != run_id) return;  // another run on the same URL: not ours
-      if (cmd.seq != next_seq) {
-        throw InputError("command block gap: expected seq " + std::to_string(next_seq) + ", got " +
-                         std::to_string(cmd.seq) + " (a block was lost or reordered)");
-      }
-      if (cmd.start_sample != sim.samples_done()) {
-        throw InputError("command block seq " + std::to_string(cmd.seq) + " starts at sample " +
-                         std::to_string(cmd.start_sample) + ", plant is at " +
-                         std::to_string(sim.samples_done()));
-      }
-      std::vector<int> idx;
-      for (const auto& n : input_names) {
-        int c = cmd.channel_index("u_" + n);
-        if (c < 0) throw InputError("command block has no channel u_" + n);
-        idx.push_back(c);
-      }
-      Block tape;
-      tape.run_id = cmd.run_id;
-      tape.seq = cmd.seq;
-      tape.start_sample = cmd.start_sample;
-      tape.sample_rate_hz = cmd.sample_rate_hz;
-      tape.final_block = cmd.final_block;
-      tape.n_samples = cmd.n_samples;
-      std::vector<int> echo;
-      for (const auto& n : input_names) tape.channels.push_back("u_" + n);
-      for (const auto& n : sim.channel_names()) tape.channels.push_back(n);
-      for (size_t c = 0; c < cmd.channels.size(); ++c) {
-        if (cmd.channels[c].rfind("u_", 0) != 0) {
-          echo.push_back(static_cast<int>(c));
-          tape.channels.push_back(cmd.channels[c]);
-        }
-      }
-      tape.samples.assign(tape.channels.size() * size_t(cmd.n_samples), 0.0);
-      std::vector<double> u(input_names.size()), y(sim.n_channels());
-      const int ni = static_cast<int>(input_names.size());
-      for (int k = 0; k < cmd.n_samples; ++k) {
-        for (int i = 0; i < ni; ++i) u[i] = cmd.at(idx[i], k);
-        sim.step(u.data(), y.data());
-        for (int i = 0; i < ni; ++i) tape.at(i, k) = u[i];
-        for (size_t c = 0; c < y.size(); ++c) tape.at(ni + int(c), k) = y[c];
-        for (size_t e = 0; e < echo.size(); ++e)
-          tape.at(ni + int(y.size() + e), k) = cmd.at(echo[e], k);
-      }
+      const Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
+      if (!plant.accepts(cmd.run_id)) return;  // another run on the same URL: not ours
+      tape_block_t msg = to_tape_msg(plant.advance(cmd));
       started = true;
-      tape_block_t msg = to_tape_msg(tape);
       lcm->publish(kTapeChannel, &msg);
       ack(cmd.seq);
-      ++next_seq;
-      if (cmd.final_block) done = true;
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -121,12 +73,11 @@ int main(int argc, char** argv) {
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    Plant plant{Simulator(model, opt), &lcm, &ctl, {}, 0, run_id, false, false, ""};
-    for (const auto& in : model.inputs) plant.input_names.push_back(in.name);
-    lcm::Subscription* sub = lcm.subscribe(kCmdChannel, &Plant::on_command, &plant);
+    PlantNode plant{LockstepPlant(model, opt, run_id), &lcm, &ctl, false, ""};
+    lcm::Subscription* sub = lcm.subscribe(kCmdChannel, &PlantNode::on_command, &plant);
     sub->setQueueCapacity(100000);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    while (keep_running || !plant.done) {
+    while (keep_running || !plant.plant.done()) {
       if (!plant.started &&
           std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
         plant.ack(-1);  // ready: the acquisition waits for this before the first command

@@ -6,8 +6,9 @@
 #include <numbers>
 #include <random>
 
-#include "fralab/acquire/model_info.h"
-#include "fralab/plant/simulator.h"
+#include "fralab/acquire/acquisition.h"
+#include "fralab/core/text.h"
+#include "fralab/plant/lockstep.h"
 
 namespace fralab::testing {
 
@@ -53,60 +54,27 @@ Model siso_model(const Tf& path, const Tf* actuator, const Tf* sensor, double no
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
                       const SteppedSineOptions& so, bool noise, uint64_t seed, int block,
                       double amplitude_pct, const std::string& excitation) {
-  std::string csv;
-  for (const auto& e : excite) csv += (csv.empty() ? "" : ",") + e;
-  std::unique_ptr<Campaign> owner;
-  if (excitation == "sweep") {
-    owner = std::make_unique<SweepCampaign>(campaign_inputs(m, amplitude_pct),
-                                            select_inputs(m, csv), so, "test");
-  } else if (excitation == "multisine") {
-    MultisineOptions mo;
-    mo.f_lo_hz = so.f_lo_hz;
-    mo.f_hi_hz = so.f_hi_hz;
-    mo.points_per_decade = so.points_per_decade;
-    mo.slowest_time_constant_s = so.slowest_time_constant_s;
-    mo.sample_rate_hz = so.sample_rate_hz;
-    owner = std::make_unique<MultisineCampaign>(campaign_inputs(m, amplitude_pct),
-                                                select_inputs(m, csv), mo, "test");
-  } else {
-    owner = std::make_unique<SteppedSineCampaign>(campaign_inputs(m, amplitude_pct),
-                                                  select_inputs(m, csv), plan_stepped_sine(so),
-                                                  so.sample_rate_hz, "test");
-  }
-  const Campaign& camp = *owner;
+  AcquireOptions o;
+  for (const auto& e : excite) o.inputs += (o.inputs.empty() ? "" : ",") + e;
+  o.band = lossless(so.f_lo_hz) + ":" + lossless(so.f_hi_hz);
+  o.excitation = excitation_from_string(excitation);
+  o.points_per_decade = so.points_per_decade;
+  o.amplitude_pct = amplitude_pct;
+  o.min_cycles = so.min_cycles;
+  o.min_integrate_s = so.min_integrate_s;
+  o.sample_rate_hz = so.sample_rate_hz;
+  o.slowest_time_constant_s = so.slowest_time_constant_s;
+  o.block = block;
+  const std::unique_ptr<Campaign> camp = make_campaign(m, o, "test");
   SimulatorOptions opt;
   opt.sample_rate_hz = so.sample_rate_hz;
   opt.noise = noise;
   opt.seed = seed;
-  Simulator sim(m, opt);
+  LockstepPlant plant(m, opt, "test");
   TapeRun r;
-  r.events = camp.events();
-  std::vector<std::vector<double>> cmd;
-  std::vector<double> ph, fr, u(m.inputs.size()), y(sim.n_channels());
-  const int ni = int(m.inputs.size());
-  for (int64_t s0 = 0, seq = 0; s0 < camp.total_samples(); s0 += block, ++seq) {
-    const int n = int(std::min<int64_t>(block, camp.total_samples() - s0));
-    camp.fill(s0, n, cmd, ph, fr);
-    Block b;
-    b.run_id = "test";
-    b.seq = seq;
-    b.start_sample = s0;
-    b.sample_rate_hz = so.sample_rate_hz;
-    b.n_samples = n;
-    b.final_block = s0 + n >= camp.total_samples();
-    for (const auto& in : m.inputs) b.channels.push_back("u_" + in.name);
-    for (const auto& c : sim.channel_names()) b.channels.push_back(c);
-    b.channels.push_back("ref_phase");
-    b.samples.resize(b.channels.size() * n);
-    for (int k = 0; k < n; ++k) {
-      for (int i = 0; i < ni; ++i) u[i] = cmd[i][k];
-      sim.step(u.data(), y.data());
-      for (int i = 0; i < ni; ++i) b.at(i, k) = u[i];
-      for (size_t c = 0; c < y.size(); ++c) b.at(ni + int(c), k) = y[c];
-      b.at(int(b.channels.size()) - 1, k) = ph[k];
-    }
-    r.blocks.push_back(std::move(b));
-  }
+  r.events = camp->events();
+  for (int64_t seq = 0; seq < command_block_count(*camp, block); ++seq)
+    r.blocks.push_back(plant.advance(command_block(*camp, seq, block, so.sample_rate_hz, "test")));
   return r;
 }
 

@@ -26,8 +26,9 @@ std::complex<double> sine_phasor(const std::vector<double>& x, double w, double 
 Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor = nullptr,
                  double noise_rms = 0.0);
 
-/// A lab run without LCM: the campaign drives the plant (Simulator) exactly as fralab-acquire and
-/// fralab-plant do over LCM, producing the tape's records in order.
+/// A lab run without LCM: the same library code as fralab-acquire (make_campaign, command_block)
+/// and fralab-plant (LockstepPlant), producing the tape's records in order. `so` gives the band,
+/// points per decade, cycles, integration time, sample rate and settling time constant.
 struct TapeRun {
   std::vector<StatusEvent> events;
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs

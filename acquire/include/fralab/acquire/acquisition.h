@@ -1,0 +1,71 @@
+// The acquisition's protocol logic, free of LCM: which campaign a set of options asks for, the
+// command block of each sequence number (what fralab-acquire publishes on FRALAB_CMD), and the
+// flow-control bookkeeping of acknowledgements. fralab-acquire wires these to LCM; the tests'
+// generators (tests/util) call the same functions, so a simulated tape is the lab's tape.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fralab/acquire/campaign.h"
+#include "fralab/core/block.h"
+#include "fralab/plant/model.h"
+
+namespace fralab {
+
+enum class Excitation { kStepped, kSweep, kMultisine };
+/// "stepped", "sweep", "multisine" (the flag's words).
+const char* to_string(Excitation e);
+/// InputError naming the text otherwise.
+Excitation excitation_from_string(const std::string& s);
+
+/// One acquisition: the excitation and its schedule, the amplitudes, the block size and the flow
+/// control. Frequencies Hz, amplitudes % of full scale, times s.
+struct AcquireOptions {
+  std::string inputs;             // "NAME[,NAME...]" to excite; "" = every input
+  std::string band = "0.04:100";  // LO_HZ:HI_HZ
+  Excitation excitation = Excitation::kStepped;
+  std::string multisine_phases = "schroeder";  // or "random"
+  bool odd_lines = false;                      // multisine: odd harmonics only
+  int points_per_decade = 10;
+  double amplitude_pct = -1;     // < 0: each input's test_amplitude_pct, else 2
+  double amplitude_scale = 1.0;  // multiplies every input's amplitude
+  int min_cycles = 8;            // stepped/sweep: cycles per point; multisine: periods (>= 2)
+  double min_integrate_s = 4.0;
+  double sample_rate_hz = 1000.0;
+  double slowest_time_constant_s = -1;  // settling; < 0: the model's slowest (largest 1/|pole|)
+  int block = 100;                      // samples per command block
+  int window = 2;                       // blocks in flight ahead of the slowest consumer
+  double speed = 0;                     // 1 = real time, 0 = as fast as the consumers keep up
+  /// InputError naming the option (block, window, speed, band, excitation settings).
+  void validate() const;
+};
+
+/// The campaign the options describe on model `m` (the plan of steps, sweep or multisine).
+std::unique_ptr<Campaign> make_campaign(const Model& m, const AcquireOptions& o,
+                                        const std::string& run_id);
+
+/// Number of command blocks of `block` samples that carry the whole campaign.
+int64_t command_block_count(const Campaign& c, int block);
+
+/// Command block `seq`: samples [seq * block, ...) of every input's command (channels u_<input>)
+/// and the reference (ref_phase, rad; ref_freq_hz), final_block on the last one.
+Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
+                    const std::string& run_id);
+
+/// Flow control: the last sequence number each consumer acknowledged (-1: ready).
+class AckTracker {
+ public:
+  /// Records an acknowledgement (later ones never move a consumer back).
+  void on_ack(const std::string& consumer, int64_t seq);
+  /// The lowest acknowledgement among `who` (-2 for one never heard); *laggard names it.
+  int64_t min_ack(const std::vector<std::string>& who, std::string* laggard) const;
+
+ private:
+  std::map<std::string, int64_t> acked_;
+};
+
+}  // namespace fralab

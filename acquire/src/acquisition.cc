@@ -1,0 +1,126 @@
+#include "fralab/acquire/acquisition.h"
+
+#include <algorithm>
+#include <climits>
+
+#include "fralab/acquire/model_info.h"
+
+namespace fralab {
+
+const char* to_string(Excitation e) {
+  switch (e) {
+    case Excitation::kStepped:
+      return "stepped";
+    case Excitation::kSweep:
+      return "sweep";
+    case Excitation::kMultisine:
+      return "multisine";
+  }
+  return "?";
+}
+
+Excitation excitation_from_string(const std::string& s) {
+  for (Excitation e : {Excitation::kStepped, Excitation::kSweep, Excitation::kMultisine})
+    if (s == to_string(e)) return e;
+  throw InputError("--excitation \"" + s + "\": stepped, sweep or multisine");
+}
+
+void AcquireOptions::validate() const {
+  if (block < 1) throw InputError("--block must be >= 1");
+  if (window < 1) throw InputError("--window must be >= 1");
+  if (!(speed >= 0)) throw InputError("--speed must be >= 0");
+  if (!(amplitude_scale > 0)) throw InputError("--amplitude-scale must be > 0");
+  if (multisine_phases != "schroeder" && multisine_phases != "random")
+    throw InputError("--multisine-phases \"" + multisine_phases + "\": schroeder or random");
+  parse_band(band);
+}
+
+std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions& o,
+                                        const std::string& run_id) {
+  o.validate();
+  SteppedSineOptions so;
+  std::tie(so.f_lo_hz, so.f_hi_hz) = parse_band(o.band);
+  so.points_per_decade = o.points_per_decade;
+  so.min_cycles = o.min_cycles;
+  so.min_integrate_s = o.min_integrate_s;
+  so.sample_rate_hz = o.sample_rate_hz;
+  so.slowest_time_constant_s =
+      o.slowest_time_constant_s >= 0 ? o.slowest_time_constant_s : slowest_time_constant_s(model);
+  if (o.block * 8.0 * (model.inputs.size() * 2 + model.outputs.size() + 2) > 60000) {
+    throw InputError("--block " + std::to_string(o.block) +
+                     " would make tape blocks over 60 kB (LCM fragments); use a smaller block");
+  }
+  const std::vector<int> excite = select_inputs(model, o.inputs);
+  auto cin = campaign_inputs(model, o.amplitude_pct, o.amplitude_scale);
+  switch (o.excitation) {
+    case Excitation::kStepped:
+      return std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so),
+                                                   so.sample_rate_hz, run_id);
+    case Excitation::kSweep:
+      return std::make_unique<SweepCampaign>(cin, excite, so, run_id);
+    case Excitation::kMultisine: {
+      MultisineOptions mo;
+      mo.f_lo_hz = so.f_lo_hz;
+      mo.f_hi_hz = so.f_hi_hz;
+      mo.points_per_decade = so.points_per_decade;
+      mo.periods = std::max(2, so.min_cycles);
+      mo.slowest_time_constant_s = so.slowest_time_constant_s;
+      mo.sample_rate_hz = so.sample_rate_hz;
+      mo.odd_lines = o.odd_lines;
+      mo.phases = o.multisine_phases;
+      return std::make_unique<MultisineCampaign>(cin, excite, mo, run_id);
+    }
+  }
+  throw InputError("unknown excitation");
+}
+
+int64_t command_block_count(const Campaign& c, int block) {
+  return (c.total_samples() + block - 1) / block;
+}
+
+Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
+                    const std::string& run_id) {
+  const int64_t s0 = seq * block;
+  const int n = int(std::min<int64_t>(block, c.total_samples() - s0));
+  std::vector<std::vector<double>> cmd;
+  std::vector<double> ref_phase, ref_freq;
+  c.fill(s0, n, cmd, ref_phase, ref_freq);
+  Block blk;
+  blk.run_id = run_id;
+  blk.seq = seq;
+  blk.start_sample = s0;
+  blk.sample_rate_hz = sample_rate_hz;
+  blk.n_samples = n;
+  blk.final_block = seq == command_block_count(c, block) - 1;
+  for (const auto& in : c.inputs()) blk.channels.push_back("u_" + in.name);
+  blk.channels.push_back("ref_phase");
+  blk.channels.push_back("ref_freq_hz");
+  blk.samples.reserve(blk.channels.size() * n);
+  for (const auto& v : cmd) blk.samples.insert(blk.samples.end(), v.begin(), v.end());
+  blk.samples.insert(blk.samples.end(), ref_phase.begin(), ref_phase.end());
+  blk.samples.insert(blk.samples.end(), ref_freq.begin(), ref_freq.end());
+  return blk;
+}
+
+void AckTracker::on_ack(const std::string& consumer, int64_t seq) {
+  auto it = acked_.find(consumer);
+  if (it == acked_.end())
+    acked_[consumer] = seq;
+  else
+    it->second = std::max(it->second, seq);
+}
+
+int64_t AckTracker::min_ack(const std::vector<std::string>& who, std::string* laggard) const {
+  int64_t m = INT64_MAX;
+  for (const auto& c : who) {
+    auto it = acked_.find(c);
+    const int64_t v = it == acked_.end() ? -2 : it->second;
+    if (v < m) {
+      m = v;
+      if (laggard) *laggard = c;
+    }
+  }
+  return m;
+}
+
+}  // namespace fralab

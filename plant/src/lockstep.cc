@@ -1,0 +1,63 @@
+#include "fralab/plant/lockstep.h"
+
+namespace fralab {
+
+LockstepPlant::LockstepPlant(const Model& model, const SimulatorOptions& opt, std::string run_id)
+    : sim_(model, opt), run_id_(std::move(run_id)) {
+  for (const auto& in : model.inputs) input_names_.push_back(in.name);
+}
+
+bool LockstepPlant::accepts(const std::string& run_id) {
+  if (run_id_.empty()) run_id_ = run_id;
+  return run_id == run_id_;
+}
+
+Block LockstepPlant::advance(const Block& cmd) {
+  if (cmd.seq != next_seq_) {
+    throw InputError("command block gap: expected seq " + std::to_string(next_seq_) + ", got " +
+                     std::to_string(cmd.seq) + " (a block was lost or reordered)");
+  }
+  if (cmd.start_sample != sim_.samples_done()) {
+    throw InputError("command block seq " + std::to_string(cmd.seq) + " starts at sample " +
+                     std::to_string(cmd.start_sample) + ", plant is at " +
+                     std::to_string(sim_.samples_done()));
+  }
+  std::vector<int> idx;
+  for (const auto& n : input_names_) {
+    int c = cmd.channel_index("u_" + n);
+    if (c < 0) throw InputError("command block has no channel u_" + n);
+    idx.push_back(c);
+  }
+  Block tape;
+  tape.run_id = cmd.run_id;
+  tape.seq = cmd.seq;
+  tape.start_sample = cmd.start_sample;
+  tape.sample_rate_hz = cmd.sample_rate_hz;
+  tape.final_block = cmd.final_block;
+  tape.n_samples = cmd.n_samples;
+  std::vector<int> echo;
+  for (const auto& n : input_names_) tape.channels.push_back("u_" + n);
+  for (const auto& n : sim_.channel_names()) tape.channels.push_back(n);
+  for (size_t c = 0; c < cmd.channels.size(); ++c) {
+    if (cmd.channels[c].rfind("u_", 0) != 0) {
+      echo.push_back(static_cast<int>(c));
+      tape.channels.push_back(cmd.channels[c]);
+    }
+  }
+  tape.samples.assign(tape.channels.size() * size_t(cmd.n_samples), 0.0);
+  std::vector<double> u(input_names_.size()), y(sim_.n_channels());
+  const int ni = static_cast<int>(input_names_.size());
+  for (int k = 0; k < cmd.n_samples; ++k) {
+    for (int i = 0; i < ni; ++i) u[i] = cmd.at(idx[i], k);
+    sim_.step(u.data(), y.data());
+    for (int i = 0; i < ni; ++i) tape.at(i, k) = u[i];
+    for (size_t c = 0; c < y.size(); ++c) tape.at(ni + int(c), k) = y[c];
+    for (size_t e = 0; e < echo.size(); ++e)
+      tape.at(ni + int(y.size() + e), k) = cmd.at(echo[e], k);
+  }
+  ++next_seq_;
+  if (cmd.final_block) done_ = true;
+  return tape;
+}
+
+}  // namespace fralab
