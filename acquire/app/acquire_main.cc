@@ -15,7 +15,7 @@
 #include <set>
 #include <thread>
 
-#include "fralab/acquire/acquisition.h"
+#include "fralab/acquire/acquire_flags.h"
 #include "fralab/core/text.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
@@ -45,33 +45,11 @@ struct AckListener {
 
 int main(int argc, char** argv) {
   CLI::App app{"fralab-acquire: excitation campaign over LCM"};
-  std::string engine = "j85_95", url, ctl_url, run_id = "run", consumers_csv = "plant", summary,
-              excitation = "stepped";
+  std::string engine = "j85_95", url, ctl_url, run_id = "run", consumers_csv = "plant", summary;
   AcquireOptions o;
   double ready_timeout = 30, stall_timeout = 60;
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
-  app.add_option("--input", o.inputs, "input(s) to excite, comma separated (default: all)");
-  app.add_option("--band", o.band, "LO_HZ:HI_HZ")->capture_default_str();
-  app.add_option("--excitation", excitation,
-                 "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at "
-                 "once, orthogonal lines; --min-cycles = periods)")
-      ->capture_default_str();
-  app.add_option("--multisine-phases", o.multisine_phases, "schroeder or random")
-      ->capture_default_str();
-  app.add_flag("--odd-lines", o.odd_lines, "multisine: odd harmonics only");
-  app.add_option("--points-per-decade", o.points_per_decade)->capture_default_str();
-  app.add_option("--amplitude-pct", o.amplitude_pct,
-                 "amplitude, % of full scale (default: the input's test_amplitude_pct, else 2)");
-  app.add_option("--amplitude-scale", o.amplitude_scale, "multiplies every input's amplitude")
-      ->capture_default_str();
-  app.add_option("--min-cycles", o.min_cycles)->capture_default_str();
-  app.add_option("--min-integrate-s", o.min_integrate_s)->capture_default_str();
-  app.add_option("--sample-rate", o.sample_rate_hz)->capture_default_str();
-  app.add_option("--speed", o.speed, "1 = real time, 100 = 100x, 0 = as fast as consumers keep up")
-      ->capture_default_str();
-  app.add_option("--block", o.block, "samples per command block")->capture_default_str();
-  app.add_option("--window", o.window, "blocks in flight ahead of the slowest consumer")
-      ->capture_default_str();
+  add_acquire_flags(&app, o);
   app.add_option("--consumers", consumers_csv,
                  "who must acknowledge (plant is implicit via its tape)")
       ->capture_default_str();
@@ -85,7 +63,6 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     Model model = load_model_or_embedded(engine);
-    o.excitation = excitation_from_string(excitation);
     const std::unique_ptr<Campaign> campaign = make_campaign(model, o, run_id);
     const Campaign& camp = *campaign;
 

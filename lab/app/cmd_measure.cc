@@ -8,23 +8,8 @@
 namespace fralab {
 
 void add_measure_flags(CLI::App* c, MeasureOptions& m) {
-  c->add_option("--input", m.inputs, "input(s) NAME[,NAME...] (default: all)");
-  c->add_option("--band", m.band, "LO_HZ:HI_HZ")->capture_default_str();
-  c->add_option("--excitation", m.excitation, "stepped, sweep or multisine (all inputs at once)")
-      ->capture_default_str();
-  c->add_option("--multisine-phases", m.multisine_phases, "schroeder or random")
-      ->capture_default_str();
-  c->add_flag("--odd-lines", m.odd_lines, "multisine: odd harmonics only");
-  c->add_option("--points-per-decade", m.points_per_decade)->capture_default_str();
-  c->add_option("--amplitude-pct", m.amplitude_pct, "% of full scale (default: per input, 2)");
+  add_acquire_flags(c, m.acquire);
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
-  c->add_option("--amplitude-scale", m.amplitude_scale, "multiplies every input's amplitude")
-      ->capture_default_str();
-  c->add_option("--speed", m.speed, "1 = real time, 0 = as fast as possible")
-      ->capture_default_str();
-  c->add_option("--sample-rate", m.sample_rate_hz, "Hz")->capture_default_str();
-  c->add_option("--min-cycles", m.min_cycles)->capture_default_str();
-  c->add_option("--min-integrate-s", m.min_integrate_s)->capture_default_str();
   c->add_option("--lcm-url", m.lcm_url, "LCM URL (default: a private one per run)");
   c->add_flag("--no-noise", m.no_noise, "plant noise off");
 }

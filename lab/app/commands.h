@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "fralab/acquire/acquire_flags.h"
 #include "fralab/lab/measure.h"
 
 namespace fralab {

@@ -23,8 +23,9 @@ std::string run_diagnose(const DiagnoseCommand& c) {
   if (!c.engine.empty()) {
     MeasureOptions m = c.measure;
     m.engine = c.engine;
-    if (m.inputs.empty()) {
-      for (const auto& in : sim.inputs) m.inputs += (m.inputs.empty() ? "" : ",") + in.name;
+    if (m.acquire.inputs.empty()) {
+      for (const auto& in : sim.inputs)
+        m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
     }
     m.out = c.out + "/measure";
     run_measure(m);
@@ -32,7 +33,7 @@ std::string run_diagnose(const DiagnoseCommand& c) {
     // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
     MeasureOptions v = m;
     v.seed = m.seed + 1;
-    v.amplitude_scale = 1.5 * m.amplitude_scale;
+    v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
     v.out = c.out + "/measure/validation";
     run_measure(v);
     data_dir = m.out;

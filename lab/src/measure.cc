@@ -9,8 +9,10 @@
 #include <map>
 #include <thread>
 
+#include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
+#include "fralab/core/text.h"
 #include "fralab/lab/supervisor.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
@@ -105,8 +107,8 @@ class TapeCheck {
 MeasureResult run_measure(const MeasureOptions& o) {
   if (o.out.empty()) throw InputError("--out DIR is required");
   Model model = load_model_or_embedded(o.engine);
-  std::vector<int> excite = select_inputs(model, o.inputs);
-  parse_band(o.band);
+  o.acquire.validate();
+  std::vector<int> excite = select_inputs(model, o.acquire.inputs);
   fs::create_directories(o.out + "/frd");
   fs::create_directories(o.out + "/logs");
   const std::string engine_file = o.out + "/engine.json";
@@ -141,7 +143,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
                                          "--run-id",
                                          r.run_id,
                                          "--sample-rate",
-                                         std::to_string(o.sample_rate_hz)};
+                                         lossless(o.acquire.sample_rate_hz)};
   if (o.no_noise) plant_args.push_back("--no-noise");
   sup.start({"plant", plant_args, log("plant")});
 
@@ -181,6 +183,8 @@ MeasureResult run_measure(const MeasureOptions& o) {
   for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
   std::string inputs_csv;
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
+  AcquireOptions ao = o.acquire;
+  ao.inputs = inputs_csv;
   std::vector<std::string> acq = {module_path("fralab-acquire"),
                                   "--engine",
                                   engine_file,
@@ -188,35 +192,11 @@ MeasureResult run_measure(const MeasureOptions& o) {
                                   url,
                                   "--run-id",
                                   r.run_id,
-                                  "--input",
-                                  inputs_csv,
-                                  "--band",
-                                  o.band,
-                                  "--excitation",
-                                  o.excitation,
-                                  "--multisine-phases",
-                                  o.multisine_phases,
-                                  "--points-per-decade",
-                                  std::to_string(o.points_per_decade),
-                                  "--speed",
-                                  std::to_string(o.speed),
                                   "--consumers",
                                   consumers_csv,
-                                  "--sample-rate",
-                                  std::to_string(o.sample_rate_hz),
-                                  "--min-cycles",
-                                  std::to_string(o.min_cycles),
-                                  "--min-integrate-s",
-                                  std::to_string(o.min_integrate_s),
                                   "--summary",
                                   o.out + "/acquire.json"};
-  if (o.odd_lines) acq.push_back("--odd-lines");
-  acq.push_back("--amplitude-scale");
-  acq.push_back(std::to_string(o.amplitude_scale));
-  if (o.amplitude_pct >= 0) {
-    acq.push_back("--amplitude-pct");
-    acq.push_back(std::to_string(o.amplitude_pct));
-  }
+  for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
   const auto t0 = std::chrono::steady_clock::now();
   sup.start({"acquire", acq, log("acquire")});
   waits.push_back("acquire");

@@ -7,25 +7,16 @@
 #include <string>
 #include <vector>
 
+#include "fralab/acquire/acquisition.h"
+
 namespace fralab {
 
 struct MeasureOptions {
   std::string engine = "j85_95";
-  std::string inputs;  // "" = every input
-  std::string band = "0.04:100";
-  std::string excitation = "stepped";  // or "sweep", "multisine"
-  std::string multisine_phases = "schroeder";
-  bool odd_lines = false;
-  int points_per_decade = 10;
-  double amplitude_pct = -1;     // < 0: each input's default
-  double amplitude_scale = 1.0;  // multiplies every input's amplitude
-  uint64_t seed = 1;
+  AcquireOptions acquire;  // the excitation (passed to fralab-acquire losslessly)
+  uint64_t seed = 1;       // plant noise seed
   std::string out;
-  double speed = 0;
   bool no_noise = false;
-  double sample_rate_hz = 1000;
-  int min_cycles = 8;
-  double min_integrate_s = 4.0;
   std::string lcm_url;  // "" = a fresh private URL
   double timeout_s = 3600;
   std::string fit_delay = "auto";  // the identifier's --delay

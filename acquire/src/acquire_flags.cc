@@ -1,0 +1,72 @@
+#include "fralab/acquire/acquire_flags.h"
+
+#include <map>
+
+#include "fralab/core/text.h"
+
+namespace fralab {
+
+void add_acquire_flags(CLI::App* c, AcquireOptions& o) {
+  const std::map<std::string, Excitation> excitations{{"stepped", Excitation::kStepped},
+                                                      {"sweep", Excitation::kSweep},
+                                                      {"multisine", Excitation::kMultisine}};
+  c->add_option("--input", o.inputs, "input(s) NAME[,NAME...] to excite (default: all)");
+  c->add_option("--band", o.band, "LO_HZ:HI_HZ")->capture_default_str();
+  c->add_option("--excitation", o.excitation,
+                "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at "
+                "once, orthogonal lines; --min-cycles = periods)")
+      ->transform(CLI::CheckedTransformer(excitations))
+      ->default_str("stepped");
+  c->add_option("--multisine-phases", o.multisine_phases, "schroeder or random")
+      ->capture_default_str();
+  c->add_flag("--odd-lines", o.odd_lines, "multisine: odd harmonics only");
+  c->add_option("--points-per-decade", o.points_per_decade)->capture_default_str();
+  c->add_option("--amplitude-pct", o.amplitude_pct,
+                "% of full scale (default: the input's test_amplitude_pct, else 2)");
+  c->add_option("--amplitude-scale", o.amplitude_scale, "multiplies every input's amplitude")
+      ->capture_default_str();
+  c->add_option("--min-cycles", o.min_cycles)->capture_default_str();
+  c->add_option("--min-integrate-s", o.min_integrate_s)->capture_default_str();
+  c->add_option("--sample-rate", o.sample_rate_hz, "Hz")->capture_default_str();
+  c->add_option("--speed", o.speed, "1 = real time, 100 = 100x, 0 = as fast as consumers keep up")
+      ->capture_default_str();
+  c->add_option("--block", o.block, "samples per command block")->capture_default_str();
+  c->add_option("--window", o.window, "blocks in flight ahead of the slowest consumer")
+      ->capture_default_str();
+  c->add_option("--settle-time-constant-s", o.slowest_time_constant_s,
+                "settling time constant, s (default: the model's slowest)");
+}
+
+std::vector<std::string> acquire_flags(const AcquireOptions& o) {
+  std::vector<std::string> f = {"--band",
+                                o.band,
+                                "--excitation",
+                                to_string(o.excitation),
+                                "--multisine-phases",
+                                o.multisine_phases,
+                                "--points-per-decade",
+                                std::to_string(o.points_per_decade),
+                                "--amplitude-pct",
+                                lossless(o.amplitude_pct),
+                                "--amplitude-scale",
+                                lossless(o.amplitude_scale),
+                                "--min-cycles",
+                                std::to_string(o.min_cycles),
+                                "--min-integrate-s",
+                                lossless(o.min_integrate_s),
+                                "--sample-rate",
+                                lossless(o.sample_rate_hz),
+                                "--speed",
+                                lossless(o.speed),
+                                "--block",
+                                std::to_string(o.block),
+                                "--window",
+                                std::to_string(o.window),
+                                "--settle-time-constant-s",
+                                lossless(o.slowest_time_constant_s)};
+  if (o.odd_lines) f.push_back("--odd-lines");
+  if (!o.inputs.empty()) f.insert(f.end(), {"--input", o.inputs});
+  return f;
+}
+
+}  // namespace fralab
