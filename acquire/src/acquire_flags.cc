@@ -1,21 +1,18 @@
 #include "fralab/acquire/acquire_flags.h"
 
-#include <map>
-
 #include "fralab/core/text.h"
 
 namespace fralab {
 
 void add_acquire_flags(CLI::App* c, AcquireOptions& o) {
-  const std::map<std::string, Excitation> excitations{{"stepped", Excitation::kStepped},
-                                                      {"sweep", Excitation::kSweep},
-                                                      {"multisine", Excitation::kMultisine}};
   c->add_option("--input", o.inputs, "input(s) NAME[,NAME...] to excite (default: all)");
   c->add_option("--band", o.band, "LO_HZ:HI_HZ")->capture_default_str();
-  c->add_option("--excitation", o.excitation,
-                "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at "
-                "once, orthogonal lines; --min-cycles = periods)")
-      ->transform(CLI::CheckedTransformer(excitations))
+  c->add_option_function<std::string>(
+       "--excitation",
+       [&o](const std::string& word) { o.excitation = excitation_from_string(word); },
+       "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at once, "
+       "orthogonal lines; --min-cycles = periods)")
+      ->check(CLI::IsMember({"stepped", "sweep", "multisine"}))
       ->default_str("stepped");
   c->add_option("--multisine-phases", o.multisine_phases, "schroeder or random")
       ->capture_default_str();
