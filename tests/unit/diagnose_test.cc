@@ -1,0 +1,250 @@
+// The diagnosis on synthetic residuals, without processes: a truth model (the simulation with one
+// hidden effect) gives exact frequency-response data; the diagnosis must name the effect, its scope
+// and its parameter within named tolerances, extend the model so the error falls, and report
+// nothing when nothing is hidden. One test per cause of the catalogue.
+#include "fralab/diagnose/diagnose.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace fralab {
+// gtest prints the enums by name.
+std::ostream& operator<<(std::ostream& os, CauseKind c) { return os << to_string(c); }
+std::ostream& operator<<(std::ostream& os, Scope s) { return os << to_string(s); }
+
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::Field;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+
+constexpr double kRelSigma = 0.002;  // the data's sigma, relative to |G|
+constexpr double kAmplitude = 0.02;  // excitation amplitude, input units
+
+Tf tf(double gain, std::vector<Root> poles, std::vector<Root> zeros = {}) {
+  Tf t;
+  t.gain = gain;
+  t.poles = std::move(poles);
+  t.zeros = std::move(zeros);
+  return t;
+}
+
+// One actuator u (pole at 20 rad/s), two outputs: y = 2/(s/3+1), z = -1/((s/8+1)(pair 30, 0.3)).
+Model simulation() {
+  Model m;
+  m.name = "diagnose_test";
+  m.source = "test";
+  ModelInput in;
+  in.name = "u";
+  in.units = "1";
+  in.full_scale = 1.0;
+  in.actuator = tf(1.0, {Root::Real(-20)});
+  m.inputs.push_back(in);
+  for (const char* n : {"y", "z"}) {
+    ModelOutput o;
+    o.name = n;
+    o.units = "1";
+    m.outputs.push_back(o);
+  }
+  m.paths = {{"y", "u", tf(2.0, {Root::Real(-3)}), Json::object()},
+             {"z", "u", tf(-1.0, {Root::Real(-8), Root::Pair(30, 0.3)}), Json::object()}};
+  return m;
+}
+
+// Exact data of `truth` for u:y, u:z and the actuator u_u:u, 0.05-200 rad/s at 10 per decade;
+// `h3` is the odd-harmonic level recorded on the actuator's points (the nonlinearity's trigger).
+std::vector<MeasuredPair> measure(const Model& truth, double h3 = 0.0) {
+  std::vector<MeasuredPair> out;
+  for (const std::string pair : {"u:y", "u:z", "u_u:u"}) {
+    MeasuredPair mp;
+    mp.pair = pair;
+    mp.frd.pair = pair;
+    for (int k = 0; k <= 36; ++k) {
+      const double w = 0.05 * std::pow(10.0, k / 10.0);
+      const auto g = model_pair_response(truth, pair, w, kAmplitude);
+      FrdPoint p;
+      p.w = w;
+      p.mag = std::abs(*g);
+      p.phase_deg = std::arg(*g) * 180 / M_PI;
+      p.sigma = kRelSigma * p.mag;
+      p.amplitude = kAmplitude;
+      p.input = "u";
+      p.h3_rel = pair == "u_u:u" ? h3 : 0.0;
+      mp.frd.points.push_back(p);
+    }
+    mp.validation = mp.frd;
+    out.push_back(mp);
+  }
+  return out;
+}
+
+ModelPath& path(Model& m, const std::string& out) {
+  for (auto& p : m.paths)
+    if (p.output == out) return p;
+  throw std::runtime_error("no path");
+}
+
+// The one finding of a diagnosis, with the extended model closer to the data than the simulation.
+Finding only_finding(const Diagnosis& d) {
+  EXPECT_EQ(d.findings.size(), 1u);
+  EXPECT_LT(d.error_after, 0.2 * d.error_before);
+  EXPECT_LT(d.validation_after, 0.2 * d.validation_before);
+  return d.findings.at(0);
+}
+
+TEST(Diagnose, NothingHiddenNothingFound) {
+  const Model sim = simulation();
+  const Diagnosis d = diagnose(sim, measure(sim));
+  EXPECT_THAT(d.findings, IsEmpty());
+  EXPECT_LT(d.error_before, 1e-9);
+}
+
+TEST(Diagnose, TimeDelayInOnePath) {
+  Model truth = simulation();
+  path(truth, "y").tf.delay_s = 0.011;
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kTimeDelay);
+  EXPECT_EQ(f.scope, Scope::kPath);
+  EXPECT_EQ(f.output, "y");
+  EXPECT_NEAR(f.parameters.at("delay_s"), 0.011, 0.2e-3);
+  EXPECT_THAT(f.explanation, HasSubstr("phase residual linear in w"));
+}
+
+TEST(Diagnose, MissingLag) {
+  Model truth = simulation();
+  path(truth, "z").tf.poles.push_back(Root::Real(-15));
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kMissingLag);
+  EXPECT_EQ(f.output, "z");
+  EXPECT_NEAR(f.parameters.at("corner_rad_s"), 15, 0.03 * 15);
+}
+
+TEST(Diagnose, MissingLead) {
+  Model truth = simulation();
+  path(truth, "y").tf.zeros.push_back(Root::Real(-6));
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kMissingLead);
+  EXPECT_NEAR(f.parameters.at("corner_rad_s"), 6, 0.03 * 6);
+}
+
+TEST(Diagnose, GainMismatch) {
+  Model truth = simulation();
+  path(truth, "y").tf.gain *= std::pow(10.0, 1.0 / 20);  // +1 dB
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kGainMismatch);
+  EXPECT_NEAR(f.parameters.at("gain_db"), 1.0, 0.05);
+}
+
+TEST(Diagnose, PoleShiftInAPath) {
+  Model truth = simulation();
+  path(truth, "y").tf.poles[0] = Root::Real(-4.5);
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kPoleShift);
+  EXPECT_NEAR(f.parameters.at("from_rad_s"), 3, 1e-12);
+  EXPECT_NEAR(f.parameters.at("to_rad_s"), 4.5, 0.03 * 4.5);
+}
+
+TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
+  Model truth = simulation();
+  truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});
+  const Diagnosis d = diagnose(simulation(), measure(truth));
+  EXPECT_THAT(d.findings, ElementsAre(Field(&Finding::cause, CauseKind::kPoleShift)));
+  const Finding f = only_finding(d);
+  EXPECT_EQ(f.scope, Scope::kInput);
+  EXPECT_EQ(f.input, "u");
+  EXPECT_NEAR(f.parameters.at("to_rad_s"), 35, 0.03 * 35);
+  EXPECT_THAT(f.explanation, HasSubstr("in the actuator's own response u_u:u"));
+  // The extended model's actuator carries the moved pole.
+  EXPECT_NEAR(-d.extended.inputs[0].actuator->poles.at(0).real, 35, 0.03 * 35);
+}
+
+TEST(Diagnose, MissingResonancePeak) {
+  Model truth = simulation();
+  path(truth, "y").tf.poles.push_back(Root::Pair(12, 0.1));
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kMissingResonance);
+  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 12, 0.03 * 12);
+  EXPECT_NEAR(f.parameters.at("zeta"), 0.1, 0.02);
+  EXPECT_EQ(f.text_parameters.count("shape"), 0u);
+}
+
+TEST(Diagnose, MissingResonanceNotch) {
+  Model truth = simulation();
+  path(truth, "y").tf.zeros.push_back(Root::Pair(12, 0.1));
+  const Diagnosis d = diagnose(simulation(), measure(truth));
+  const Finding f = only_finding(d);
+  EXPECT_EQ(f.cause, CauseKind::kMissingResonance);
+  EXPECT_EQ(f.text_parameters.at("shape"), "notch");
+  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 12, 0.03 * 12);
+  // The notch extends the path's zeros, not its poles.
+  const Model& ext = d.extended;
+  for (const auto& p : ext.paths)
+    if (p.output == "y") EXPECT_EQ(p.tf.zeros.size(), 1u);
+}
+
+TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
+  Model truth = simulation();
+  truth.inputs[0].nonlinearity.push_back({"hysteresis", 0.012});
+  const Diagnosis d = diagnose(simulation(), measure(truth, /*h3=*/0.05));
+  ASSERT_FALSE(d.findings.empty());
+  const Finding& f = d.findings.at(0);
+  EXPECT_EQ(f.cause, CauseKind::kHysteresis);
+  EXPECT_EQ(f.input, "u");
+  EXPECT_NEAR(f.parameters.at("width"), 0.012, 0.05 * 0.012);
+  EXPECT_THAT(f.explanation, HasSubstr("describing function of a hysteresis"));
+  EXPECT_LT(d.error_after, 0.2 * d.error_before);
+}
+
+TEST(Diagnose, NamesAtTheEdgeRoundTrip) {
+  for (CauseKind c :
+       {CauseKind::kTimeDelay, CauseKind::kMissingLag, CauseKind::kMissingLead,
+        CauseKind::kMissingResonance, CauseKind::kPoleShift, CauseKind::kGainMismatch,
+        CauseKind::kHysteresis, CauseKind::kDeadband, CauseKind::kMeasurementCoupling})
+    EXPECT_EQ(cause_from_string(to_string(c)), c);
+  for (Scope s : {Scope::kPath, Scope::kOutput, Scope::kInput, Scope::kPlant})
+    EXPECT_EQ(scope_from_string(to_string(s)), s);
+  EXPECT_THROW(cause_from_string("time-delay"), InputError);
+  EXPECT_THROW(scope_from_string("sensor"), InputError);
+}
+
+TEST(Diagnose, JsonKeepsTheContractsNames) {
+  Model truth = simulation();
+  path(truth, "y").tf.delay_s = 0.011;
+  const Json j = diagnosis_to_json(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(j["format"], "fralab-diagnosis/1");
+  EXPECT_EQ(j["findings"][0]["cause"], "time_delay");
+  EXPECT_EQ(j["findings"][0]["scope"], "path");
+  EXPECT_EQ(j["findings"][0]["input"], "u");
+  EXPECT_TRUE(j["summary"].contains("validation_error_after"));
+}
+
+TEST(Diagnose, OptionsAreValidated) {
+  DiagnoseOptions o;
+  o.delay_min_s = 0.1;
+  o.delay_max_s = 0.05;
+  EXPECT_THROW(o.validate(), InputError);
+  o = {};
+  o.pole_shift_range = 1.0;
+  EXPECT_THROW(o.validate(), InputError);
+  o = {};
+  o.min_improvement = 1.5;
+  EXPECT_THROW(diagnose(simulation(), measure(simulation()), o), InputError);
+}
+
+// A delay beyond the searched range cannot be found: the range is the option's, not a constant.
+TEST(Diagnose, DelaySearchRangeIsAnOption) {
+  Model truth = simulation();
+  path(truth, "y").tf.delay_s = 0.08;
+  DiagnoseOptions o;
+  o.delay_max_s = 0.1;
+  const Diagnosis d = diagnose(simulation(), measure(truth), o);
+  ASSERT_EQ(d.findings.size(), 1u);
+  EXPECT_EQ(d.findings[0].cause, CauseKind::kTimeDelay);
+  EXPECT_NEAR(d.findings[0].parameters.at("delay_s"), 0.08, 0.5e-3);
+}
+
+}  // namespace
+}  // namespace fralab
