@@ -85,3 +85,62 @@ TEST(TapeFile, FollowingReadsOnlyWhatWasAddedAndWaitsForAPartEvent) {
   fs::remove(whole);
   fs::remove(p);
 }
+
+// Every FrdPoint field travels on FRALAB_FRD (input, amplitude and nl_rel were once dropped).
+TEST(LcmIo, FrdMessagesCarryEveryField) {
+  Frd f;
+  f.pair = "Wf:N";
+  FrdPoint p;
+  p.w = 2.0;
+  p.mag = 0.3;
+  p.phase_deg = -40;
+  p.sigma = 0.001;
+  p.coherence = 0.99;
+  p.h2_rel = 0.01;
+  p.h3_rel = 0.02;
+  p.nl_rel = 0.003;
+  p.n_cycles = 9;
+  p.step = 4;
+  p.input = "Wf";
+  p.amplitude = 60;
+  p.valid = false;
+  p.note = "missing seq 3";
+  f.points = {p};
+  const frd_t m = to_frd_msg(f, "run-1", 7, true);
+  EXPECT_EQ(m.run_id, "run-1");
+  EXPECT_TRUE(m.complete);
+  const Frd g = from_frd_msg(m);
+  ASSERT_EQ(g.points.size(), 1u);
+  const FrdPoint& q = g.points[0];
+  EXPECT_EQ(q.input, "Wf");
+  EXPECT_EQ(q.amplitude, 60);
+  EXPECT_EQ(q.nl_rel, 0.003);
+  EXPECT_EQ(q.h3_rel, 0.02);
+  EXPECT_EQ(q.step, 4);
+  EXPECT_FALSE(q.valid);
+  EXPECT_EQ(q.note, "missing seq 3");
+  frd_t bad = m;
+  bad.n_points = 5;
+  EXPECT_THROW(from_frd_msg(bad), InputError);
+}
+
+TEST(LcmIo, TfMessagesRoundTrip) {
+  Tf t;
+  t.gain = 2.86;
+  t.zeros = {Root::Real(192)};
+  t.poles = {Root::Real(-2.86), Root::Pair(49.6, 0.021)};
+  t.delay_s = 0.011;
+  const tf_t m = to_tf_msg(t, "Wf:N", "run-1", 0.004, "converged");
+  EXPECT_EQ(m.status, "converged");
+  EXPECT_EQ(m.fit_error, 0.004);
+  const Tf u = from_tf_msg(m);
+  EXPECT_EQ(u.gain, 2.86);
+  EXPECT_EQ(u.delay_s, 0.011);
+  ASSERT_EQ(u.poles.size(), 2u);
+  EXPECT_TRUE(u.poles[1].pair);
+  EXPECT_EQ(u.poles[1].wn, 49.6);
+  EXPECT_EQ(u.zeros[0].real, 192);
+  tf_t bad = m;
+  bad.poles[0].kind = "complex";
+  EXPECT_THROW(from_tf_msg(bad), InputError);
+}

@@ -9,15 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/error.h"
+
 namespace fralab {
 
 using Json = nlohmann::json;
-
-/// Bad user input (a file, a flag, a message): the message names the value and the fix.
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 /// Where a JSON value sits: the file (or other source name) and its JSON-pointer path.
 struct JsonWhere {

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/error.h"
+
 namespace fralab {
 
 struct ProcessSpec {
