@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       lcm.publish(kStatusChannel, &m);
     };
     StatusEvent start = camp.events().front();
-    start.state = "start";
+    start.state = RunState::kStart;
     start.seq = -1;
     start.sample = 0;
     start.n_samples = camp.total_samples();

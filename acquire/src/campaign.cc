@@ -78,13 +78,13 @@ std::vector<double> SegmentCampaign::only(int i) const {
 }
 
 void SegmentCampaign::finish(const std::string& run_id, int64_t seq, int n_steps,
-                             const std::string& excitation) {
+                             Excitation excitation) {
   StatusEvent done;
   done.run_id = run_id;
   done.seq = seq;
   done.sample_rate_hz = fs_;
   done.excitation = excitation;
-  done.state = "done";
+  done.state = RunState::kDone;
   done.sample = total_;
   done.n_steps = n_steps;
   done.step = n_steps;
@@ -142,13 +142,13 @@ SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std:
       e.inputs = names();
       e.amplitudes = only(i);
       e.seq = seq++;
-      e.state = "settle";
+      e.state = RunState::kSettle;
       e.sample = total_;
       e.ref_phase_rad = phi;
       e.n_samples = s.settle_samples;
       events_.push_back(e);
       e.seq = seq++;
-      e.state = "integrate";
+      e.state = RunState::kIntegrate;
       e.sample = total_ + s.settle_samples;
       e.ref_phase_rad = std::fmod(phi + dphi * double(s.settle_samples), 2 * std::numbers::pi);
       e.n_samples = s.integrate_samples;
@@ -156,7 +156,7 @@ SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std:
       phi = add_segment(i, s.settle_samples + s.integrate_samples, s.f_hz, 0.0, phi);
     }
   }
-  finish(run_id, seq, n_steps, "stepped_sine");
+  finish(run_id, seq, n_steps, Excitation::kStepped);
 }
 
 SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
@@ -175,14 +175,14 @@ SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int>
     StatusEvent e;
     e.run_id = run_id;
     e.sample_rate_hz = fs_;
-    e.excitation = "sweep";
+    e.excitation = Excitation::kSweep;
     e.n_steps = n_steps;
     e.inputs = names();
     e.amplitudes = only(i);
     // Settle at the sweep's starting frequency.
     const double f0 = steps[0].f_hz / std::sqrt(r);
     e.seq = seq++;
-    e.state = "settle";
+    e.state = RunState::kSettle;
     e.step = global;
     e.sample = total_;
     e.frequency_hz = f0;
@@ -195,7 +195,7 @@ SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int>
       const double T = st.n_cycles * std::log(r) / (fa * (r - 1));  // N cycles while f rises by r
       const int64_t L = std::max<int64_t>(1, std::llround(T * fs_));
       e.seq = seq++;
-      e.state = "integrate";
+      e.state = RunState::kIntegrate;
       e.step = global++;
       e.sample = total_;
       e.frequency_hz = st.f_hz;
@@ -206,7 +206,7 @@ SweepCampaign::SweepCampaign(std::vector<CampaignInput> inputs, std::vector<int>
       phi = add_segment(i, L, fa, std::log(r) / (double(L) / fs_), phi);
     }
   }
-  finish(run_id, seq, n_steps, "sweep");
+  finish(run_id, seq, n_steps, Excitation::kSweep);
 }
 
 void MultisineOptions::validate() const {
@@ -274,7 +274,7 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   StatusEvent e;
   e.run_id = run_id;
   e.sample_rate_hz = fs_;
-  e.excitation = "multisine";
+  e.excitation = Excitation::kMultisine;
   for (const auto& in : inputs_) e.inputs.push_back(in.name);
   e.amplitudes = amps;
   e.n_steps = 1;
@@ -283,20 +283,20 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   e.lines = lines;
   e.line_input = line_input;
   e.seq = 0;
-  e.state = "settle";
+  e.state = RunState::kSettle;
   e.sample = 0;
   e.n_cycles = settle;
   e.n_samples = int64_t(settle) * P_;
   events_.push_back(e);
   e.seq = 1;
-  e.state = "integrate";
+  e.state = RunState::kIntegrate;
   e.sample = int64_t(settle) * P_;
   e.n_cycles = o.periods;
   e.n_samples = int64_t(o.periods) * P_;
   events_.push_back(e);
   total_ = int64_t(settle + o.periods) * P_;
   e.seq = 2;
-  e.state = "done";
+  e.state = RunState::kDone;
   e.sample = total_;
   e.n_samples = 0;
   e.step = 1;

@@ -49,7 +49,7 @@ static std::pair<std::string, double> first_excited(const StatusEvent& st) {
 }
 
 void PairAnalyzer::on_status(const StatusEvent& st) {
-  if (st.state == "integrate") {
+  if (st.state == RunState::kIntegrate) {
     if (!wants(st)) return;
     if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
         !(st.sample_rate_hz > 0)) {
@@ -62,7 +62,7 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
       return;
     }
     pending_[st.sample] = Window{st};
-  } else if (st.state == "done" || st.state == "abort") {
+  } else if (st.state == RunState::kDone || st.state == RunState::kAbort) {
     done_seen_ = true;
     done_sample_ = st.sample;
   }
@@ -147,7 +147,7 @@ void PairAnalyzer::try_complete(bool force) {
       continue;
     }
     FrdPoint p;
-    if (ready && st.excitation == "multisine") {
+    if (ready && st.excitation == Excitation::kMultisine) {
       for (const FrdPoint& q : compute_multisine(it->second)) {
         points_.push_back(q);
         fresh_.push_back(q);
@@ -197,7 +197,7 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   const double dphi = 2 * std::numbers::pi * st.frequency_hz / st.sample_rate_hz;
   // A stepped sine's reference is the status's phase and frequency; a sweep's is the recorded
   // per-sample reference phase (tape channel ref_phase).
-  const bool sweep = st.excitation == "sweep";
+  const bool sweep = st.excitation == Excitation::kSweep;
   const double* rp = ref_.data() + (st.sample - base_);
   if (sweep) {
     for (size_t k = 0; k < L; ++k) {

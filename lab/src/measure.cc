@@ -91,7 +91,7 @@ class TapeCheck {
       if (m.run_id == run_id_) seqs_["command"].push_back(m.seq);
     } else if (ev.channel == kStatusChannel) {
       auto m = decode_checked<excitation_status_t>(&rb, ev.channel);
-      done_ |= (m.run_id == run_id_ && m.state == "done");
+      done_ |= (m.run_id == run_id_ && from_msg(m).state == RunState::kDone);
     }
   }
 

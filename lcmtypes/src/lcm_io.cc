@@ -60,8 +60,8 @@ excitation_status_t to_status_msg(const StatusEvent& e) {
   m.seq = e.seq;
   m.sample = e.sample;
   m.sample_rate_hz = e.sample_rate_hz;
-  m.excitation = e.excitation;
-  m.state = e.state;
+  m.excitation = status_word(e.excitation);
+  m.state = to_string(e.state);
   m.step = e.step;
   m.n_steps = e.n_steps;
   m.frequency_hz = e.frequency_hz;
@@ -87,8 +87,8 @@ StatusEvent from_msg(const excitation_status_t& m) {
   e.seq = m.seq;
   e.sample = m.sample;
   e.sample_rate_hz = m.sample_rate_hz;
-  e.excitation = m.excitation;
-  e.state = m.state;
+  e.excitation = excitation_from_status_word(m.excitation);
+  e.state = run_state_from_string(m.state);
   e.step = m.step;
   e.n_steps = m.n_steps;
   e.frequency_hz = m.frequency_hz;
@@ -297,7 +297,7 @@ Json tape_summary(const std::string& path) {
         fs = b.sample_rate_hz;
       } else if (ev.channel == kStatusChannel) {
         StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
-        j["states"][e.state] = j["states"].value(e.state, 0) + 1;
+        j["states"][to_string(e.state)] = j["states"].value(to_string(e.state), 0) + 1;
       }
     } catch (const InputError& e) {
       throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());

@@ -3,6 +3,7 @@
 // --engine`: plant, acquisition, analysers, logger, identifier; measured twice for validation), and
 // requires diagnosis.json to name the cause, the scope and place, and the parameter within
 // tolerance, with error_after well below error_before. ctest runs it through scripts/isolated.sh.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -115,8 +116,8 @@ TEST(Diagnose, DelayInOnePath) {
   // The report: findings in words and a Bode plot per pair, rendered by gnuplot.
   std::ifstream md(dir + "/report.md");
   std::string report((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
-  EXPECT_NE(report.find("**time_delay** (path, input U1, output Y1)"), std::string::npos) << report;
-  EXPECT_NE(report.find("![U1:Y1](plots/U1_Y1.png)"), std::string::npos);
+  EXPECT_THAT(report, ::testing::HasSubstr("**time_delay** (path, input U1, output Y1)")) << report;
+  EXPECT_THAT(report, ::testing::HasSubstr("![U1:Y1](plots/U1_Y1.png)"));
   EXPECT_GT(fs::file_size(dir + "/plots/U1_Y1.png"), 10000u);
   Json ext = json_load_file(dir + "/extended_model.json");
   EXPECT_NO_THROW(parse_model(ext, "extended_model.json"));

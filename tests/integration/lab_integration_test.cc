@@ -2,6 +2,7 @@
 // lcm-logger, lcm-logplayer) end to end. ctest runs this binary through scripts/isolated.sh (a
 // private network namespace when permitted); each lab run also uses its own multicast group/port
 // with ttl=0.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -101,7 +102,10 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   Json p3 = json_load_file(d + "/tf/Wf_P3.json");
   EXPECT_EQ(p3["fit"]["status"], "converged");
   // (4 points over 1-10 Hz cannot pin the 11 ms delay; delay accuracy is tfns_test's subject.)
-  EXPECT_GE(p3["delay_s"].get<double>(), 0.0);
+  // The fitted tf, read back as written, reproduces the measured points within 4 sigma.
+  const Tf p3_tf = tf_from_json(p3, {d + "/tf/Wf_P3.json", ""});
+  for (const auto& pt : load_frd(d + "/frd/Wf_P3.json").points)
+    EXPECT_LT(std::abs(p3_tf.at(pt.w) - pt.value()), 4 * pt.sigma) << pt.w;
   EXPECT_LT(p3["fit"]["chi2_per_dof"].get<double>(),
             1.0 + 3.0 / std::sqrt(4.0));  // consistent with sigma
   Json n = json_load_file(d + "/tf/Wf_N.json");
@@ -123,8 +127,8 @@ TEST(Lab, FitCommandReadsAnFrdAndWritesATf) {
   EXPECT_TRUE(j.contains("roots"));
   c = sh(kBin + "/fralab fit --frd " + d + "/frd/Wf_P3.json --delay soon --out " + t + "/x.json");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--delay \"soon\" must be auto, none or a delay in seconds"),
-            std::string::npos)
+  EXPECT_THAT(c.output,
+              ::testing::HasSubstr("--delay \"soon\" must be auto, none or a delay in seconds"))
       << c.output;
 }
 
@@ -145,7 +149,7 @@ TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
   Cmd c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --delay none --out " + t +
              "/tf.json --plot " + t + "/cross.png");
   ASSERT_EQ(c.status, 0) << c.output;
-  EXPECT_NE(c.output.find("cross-plot " + t + "/cross.png"), std::string::npos) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("cross-plot " + t + "/cross.png")) << c.output;
   EXPECT_GT(fs::file_size(t + "/cross.png"), 10000u);
   // Columns 8 and 9 of the plot's data: measured / fit in dB and degrees, ~0 for an exact fit.
   std::ifstream dat(t + "/cross.dat");
@@ -162,10 +166,18 @@ TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
   c = sh(kBin + "/fralab fit --frd " + t + "/d.csv --out " + t + "/tf2.json --plot " + t +
          "/cross.svg");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--plot " + t + "/cross.svg: the cross-plot is a PNG: name it *.png"),
-            std::string::npos)
+  EXPECT_THAT(c.output, ::testing::HasSubstr("--plot " + t +
+                                             "/cross.svg: the cross-plot is a PNG: name it *.png"))
       << c.output;
 }
+
+// Hears the analyser's "ready" acknowledgement (seq -1) on the control URL.
+struct ReadyListener {
+  bool seen = false;
+  void on_ack(const lcm::ReceiveBuffer* rb, const std::string& ch) {
+    seen |= decode_checked<ack_t>(rb, ch).seq == -1;
+  }
+};
 
 TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
   const std::string& d = measured();
@@ -179,10 +191,20 @@ TEST(Lab, LiveReplayedAndOfflineGiveTheSameNumbers) {
   // Replayed: lcm-logplayer into a live analyser on a fresh private URL.
   std::string rep = tmpdir("replay");
   std::string url = private_lcm_url(uint64_t(getpid()) * 7919u + 17u);
-  std::string cmd = "(" + kBin + "/fralab-analyze --pair Wf:P3 --pair u_Wf:Wf --lcm-url '" + url +
-                    "' --out " + rep + " & an=$!; sleep 0.5; lcm-logplayer -s 1 --lcm-url='" + url +
-                    "' " + d + "/tape.lcmlog; wait $an)";
-  c = sh(cmd);
+  // The analyser starts in the background; the player starts once the analyser has said ready
+  // (its ack -1 on the control URL), not after a guessed sleep.
+  ReadyListener ready;
+  lcm::LCM ctl(control_url_for(url));
+  ASSERT_TRUE(ctl.good());
+  ctl.subscribe(kAckChannel, &ReadyListener::on_ack, &ready);
+  c = sh("(" + kBin + "/fralab-analyze --pair Wf:P3 --pair u_Wf:Wf --lcm-url '" + url + "' --out " +
+         rep + " > " + rep + "/analyze.log 2>&1 & echo $! > " + rep + "/analyze.pid)");
+  ASSERT_EQ(c.status, 0) << c.output;
+  for (int i = 0; i < 300 && !ready.seen; ++i) ctl.handleTimeout(100);
+  ASSERT_TRUE(ready.seen) << "the analyser never said ready";
+  c = sh("lcm-logplayer -s 1 --lcm-url='" + url + "' " + d + "/tape.lcmlog && pid=$(cat " + rep +
+         "/analyze.pid) && for i in $(seq 1200); do kill -0 $pid 2>/dev/null || exit 0; sleep 0.1; "
+         "done; exit 1");
   ASSERT_EQ(c.status, 0) << c.output;
   expect_same_frd(d + "/frd/Wf_P3.json", rep + "/frd/Wf_P3.json", 1e-12);
   expect_same_frd(d + "/frd/u_Wf_Wf.json", rep + "/frd/u_Wf_Wf.json", 1e-12);
@@ -210,12 +232,12 @@ TEST(Lab, BadEngineModelFailsWithTheReason) {
     "paths": [{"output": "N", "input": "Wf", "tf": {"gain": 1, "poles": [{"real": 2.0}]}}]})";
   Cmd c = sh(kBin + "/fralab measure --engine " + d + "/unstable.json --out " + d + "/out");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("unstable.json: /paths/0/tf/poles/0: unstable pole"), std::string::npos)
+  EXPECT_THAT(c.output, ::testing::HasSubstr("unstable.json: /paths/0/tf/poles/0: unstable pole"))
       << c.output;
   c = sh(kBin + "/fralab measure --engine j85_95 --input XYZ --out " + d + "/out2");
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("--input XYZ: the model has no such input (inputs: Wf, A8, BLD, IGV)"),
-            std::string::npos)
+  EXPECT_THAT(c.output, ::testing::HasSubstr(
+                            "--input XYZ: the model has no such input (inputs: Wf, A8, BLD, IGV)"))
       << c.output;
 }
 
@@ -227,7 +249,7 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
   fs::resize_file(t + "/cut.lcmlog", size - 1000);
   Cmd c = sh(kBin + "/fralab analyze --log " + t + "/cut.lcmlog --pair Wf:P3 --out " + t);
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("cut.lcmlog: truncated or corrupt tape"), std::string::npos) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("cut.lcmlog: truncated or corrupt tape")) << c.output;
   {
     lcm::LogFile log(t + "/wrong.lcmlog", "w");
     ack_t a;
@@ -239,8 +261,8 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
   }
   c = sh(kBin + "/fralab analyze --log " + t + "/wrong.lcmlog --pair Wf:P3 --out " + t);
   EXPECT_NE(c.status, 0);
-  EXPECT_NE(c.output.find("channel FRALAB_TAPE: message of"), std::string::npos) << c.output;
-  EXPECT_NE(c.output.find("is not a fralab.tape_block_t"), std::string::npos) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("channel FRALAB_TAPE: message of")) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("is not a fralab.tape_block_t")) << c.output;
 }
 
 TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {

@@ -1,6 +1,7 @@
 // Bode plot files: the numbers behind each figure (gain, unwrapped phase, residuals) and the PNG.
 #include "fralab/analyze/bode_plot.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -88,15 +89,15 @@ TEST(BodePlot, BadPlotsAreRefusedByName) {
     return std::string("no error");
   };
   BodePlot p{"x", "bad", {1, 2, 3}, {1, 1, 1}, {}, {{"model", {1, 1}}}};
-  EXPECT_NE(
-      error_of(p).find(
-          "bode plot bad: frequencies, measurements, sigmas and model curves differ in length"),
-      std::string::npos)
+  EXPECT_THAT(
+      error_of(p),
+      ::testing::HasSubstr(
+          "bode plot bad: frequencies, measurements, sigmas and model curves differ in length"))
       << error_of(p);
   BodeCurve c{"m", {1, 1, 1}};
   BodePlot q{"x", "many", {1, 2, 3}, {1, 1, 1}, {}, {c, c, c, c, c}};
-  EXPECT_NE(error_of(q).find("bode plot many: 5 model curves, at most 4 are drawn"),
-            std::string::npos)
+  EXPECT_THAT(error_of(q),
+              ::testing::HasSubstr("bode plot many: 5 model curves, at most 4 are drawn"))
       << error_of(q);
   fs::remove_all(fs::temp_directory_path() / ("fralab_bode_bad_" + std::to_string(::getpid())));
 }

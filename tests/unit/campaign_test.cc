@@ -1,5 +1,6 @@
 #include "fralab/acquire/campaign.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -36,7 +37,7 @@ TEST(SteppedSine, BadOptionsNameTheProblem) {
     plan_stepped_sine(o);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("above fs/4"), std::string::npos);
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("above fs/4"));
   }
   EXPECT_THROW(parse_band("100:0.04x"), InputError);
   EXPECT_EQ(parse_band("0.04:100"), std::make_pair(0.04, 100.0));
@@ -57,7 +58,7 @@ TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
   // At every integrate status, the command equals dc + A sin(status phase + 2 pi f k / fs).
   int integrates = 0;
   for (const auto& e : c.events()) {
-    if (e.state != "integrate") continue;
+    if (e.state != RunState::kIntegrate) continue;
     ++integrates;
     int in = e.amplitudes[0] > 0 ? 0 : 1;
     for (int64_t k = 0; k < e.n_samples; k += 37) {
@@ -78,7 +79,7 @@ TEST(SteppedSine, CommandIsContinuousAndMatchesTheStatusReference) {
   ASSERT_GT(wf_end, 0u);
   for (size_t k = 1; k < wf_end; ++k)
     ASSERT_LE(std::abs(cmd[0][k] - cmd[0][k - 1]), amp * 2 * std::numbers::pi * 10 / 1000 * 1.01);
-  EXPECT_EQ(c.events().back().state, "done");
+  EXPECT_EQ(c.events().back().state, RunState::kDone);
   EXPECT_EQ(c.events().back().sample, c.total_samples());
 }
 
@@ -95,8 +96,8 @@ TEST(Sweep, PhaseAndFrequencyAreContinuousAndWindowsTileTheSweep) {
   int integrates = 0;
   int64_t expect_start = -1;
   for (const auto& e : c.events()) {
-    if (e.state != "integrate") continue;
-    EXPECT_EQ(e.excitation, "sweep");
+    if (e.state != RunState::kIntegrate) continue;
+    EXPECT_EQ(e.excitation, Excitation::kSweep);
     if (expect_start >= 0) {
       EXPECT_EQ(e.sample, expect_start);  // windows tile the sweep
     }
@@ -136,8 +137,8 @@ TEST(Multisine, PeriodicOrthogonalAndScaledToTheAmplitude) {
   const int P = c.period_samples();
   EXPECT_EQ(P, 2000);
   const StatusEvent& in = c.events()[1];
-  ASSERT_EQ(in.state, "integrate");
-  EXPECT_EQ(in.excitation, "multisine");
+  ASSERT_EQ(in.state, RunState::kIntegrate);
+  EXPECT_EQ(in.excitation, Excitation::kMultisine);
   EXPECT_EQ(in.n_samples, int64_t(o.periods) * P);
   std::set<int> seen;
   for (size_t j = 0; j < in.lines.size(); ++j) {

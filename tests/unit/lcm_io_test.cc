@@ -1,6 +1,7 @@
 // Tape files: reading whole, detecting truncation, and following a tape still being written.
 #include "fralab/lcm_io.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -53,10 +54,11 @@ TEST(TapeFile, TruncationIsNamedWithItsOffset) {
     FAIL() << "a truncated tape was read without complaint";
   } catch (const InputError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("cut.lcmlog: truncated or corrupt tape: 3 events read, then unreadable bytes "
-                     "from offset " +
-                     std::to_string(ends[2])),
-              std::string::npos)
+    EXPECT_THAT(m,
+                ::testing::HasSubstr(
+                    "cut.lcmlog: truncated or corrupt tape: 3 events read, then unreadable bytes "
+                    "from offset " +
+                    std::to_string(ends[2])))
         << m;
   }
   fs::remove(p);

@@ -1,5 +1,6 @@
 #include "fralab/plant/lti.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -138,6 +139,6 @@ TEST(FohLti, ImproperTfIsRefusedWithAReason) {
     FohLti s(t, 1e-3);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("improper"), std::string::npos);
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("improper"));
   }
 }

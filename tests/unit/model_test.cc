@@ -1,5 +1,6 @@
 #include "fralab/plant/model.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -87,25 +88,22 @@ TEST(Model, J85EngineAndSimulationDifferAsTheReportSays) {
 
 TEST(Model, ErrorsNameFileAndJsonPath) {
   std::string k = kMinimal;
-  EXPECT_NE(error_of(replaced(k, "fralab-model/1", "fralab-model/2")).find("bad.json: /format"),
-            std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"hysteresis\"", "\"backlash\""))
-                .find("bad.json: /inputs/0/actuator/nonlinearity/0/type: unknown nonlinearity type "
-                      "\"backlash\""),
-            std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "{\"real\": -2.86}", "{\"real\": 2.86}"))
-                .find("bad.json: /paths/0/tf/poles/0: unstable pole"),
-            std::string::npos);
-  EXPECT_NE(
-      error_of(replaced(k, "\"rpm\"", "\"psi\""))
-          .find("bad.json: /outputs/0/units: units \"psi\" are pressure, but N is a speed channel"),
-      std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"output\": \"N\"", "\"output\": \"P9\""))
-                .find("/paths/0/output: no output named \"P9\""),
-            std::string::npos);
-  EXPECT_NE(error_of(replaced(k, "\"full_scale\": 3000.0,", ""))
-                .find("/inputs/0: missing required key \"full_scale\""),
-            std::string::npos);
+  EXPECT_THAT(error_of(replaced(k, "fralab-model/1", "fralab-model/2")),
+              ::testing::HasSubstr("bad.json: /format"));
+  EXPECT_THAT(error_of(replaced(k, "\"hysteresis\"", "\"backlash\"")),
+              ::testing::HasSubstr(
+                  "bad.json: /inputs/0/actuator/nonlinearity/0/type: unknown nonlinearity type "
+                  "\"backlash\""));
+  EXPECT_THAT(error_of(replaced(k, "{\"real\": -2.86}", "{\"real\": 2.86}")),
+              ::testing::HasSubstr("bad.json: /paths/0/tf/poles/0: unstable pole"));
+  EXPECT_THAT(
+      error_of(replaced(k, "\"rpm\"", "\"psi\"")),
+      ::testing::HasSubstr(
+          "bad.json: /outputs/0/units: units \"psi\" are pressure, but N is a speed channel"));
+  EXPECT_THAT(error_of(replaced(k, "\"output\": \"N\"", "\"output\": \"P9\"")),
+              ::testing::HasSubstr("/paths/0/output: no output named \"P9\""));
+  EXPECT_THAT(error_of(replaced(k, "\"full_scale\": 3000.0,", "")),
+              ::testing::HasSubstr("/inputs/0: missing required key \"full_scale\""));
 }
 
 TEST(Model, MalformedFileIsAnErrorNamingTheFile) {
@@ -115,7 +113,7 @@ TEST(Model, MalformedFileIsAnErrorNamingTheFile) {
     load_model(p.string());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(p.string() + ": malformed JSON"), std::string::npos)
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr(p.string() + ": malformed JSON"))
         << e.what();
   }
   EXPECT_THROW(load_model("/nonexistent/model.json"), InputError);
@@ -126,7 +124,7 @@ TEST(Model, UnknownKeysAreKeptWithAWarning) {
       replaced(kMinimal, "\"name\": \"m\",", "\"name\": \"m\", \"comment\": \"hello\",");
   Model m = parse_model(Json::parse(k), "x.json");
   ASSERT_EQ(m.warnings.size(), 1u);
-  EXPECT_NE(m.warnings[0].find("x.json: /comment: unknown key"), std::string::npos);
+  EXPECT_THAT(m.warnings[0], ::testing::HasSubstr("x.json: /comment: unknown key"));
   EXPECT_EQ(model_to_json(m)["comment"], "hello");
 }
 
@@ -136,6 +134,6 @@ TEST(Model, EmbeddedLookupListsNamesWhenUnknown) {
     load_model_or_embedded("j99");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("j85_95_sim"), std::string::npos);
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("j85_95_sim"));
   }
 }

@@ -1,5 +1,6 @@
 #include "fralab/analyze/pair_analyzer.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -122,7 +123,7 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   int64_t mid = 0;
   int k = 0;
   for (const auto& e : run.events)
-    if (e.state == "integrate" && k++ == 1) mid = e.sample + e.n_samples / 2;
+    if (e.state == RunState::kIntegrate && k++ == 1) mid = e.sample + e.n_samples / 2;
   const int64_t seq = mid / 100;
   auto lossy = analyse(run, "Wf:P3", {}, {seq});
   ASSERT_EQ(lossy.size(), full.size());
@@ -130,7 +131,7 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   for (size_t i = 0; i < full.size(); ++i) {
     if (!lossy[i].valid) {
       ++invalid;
-      EXPECT_NE(lossy[i].note.find("seq " + std::to_string(seq) + " missing"), std::string::npos)
+      EXPECT_THAT(lossy[i].note, ::testing::HasSubstr("seq " + std::to_string(seq) + " missing"))
           << lossy[i].note;
     } else {
       EXPECT_EQ(lossy[i].mag, full[i].mag);
@@ -178,7 +179,7 @@ TEST(PairAnalyzer, MissingChannelIsAnErrorNamingIt) {
     a.on_block(b);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("no channel P9"), std::string::npos);
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("no channel P9"));
   }
   EXPECT_THROW(PairAnalyzer("WfP3"), InputError);
 }

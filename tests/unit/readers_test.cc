@@ -1,5 +1,6 @@
 #include "fralab/identify/readers.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -52,15 +53,15 @@ TEST(Readers, CsvWithNamedColumns) {
 
 TEST(Readers, CsvErrorsNameFileAndLine) {
   std::string f = write("c.csv", "w,mag,phase_deg\n1,2,3\n2,x,3\n");
-  EXPECT_NE(error_of(f).find(f + ":3: \"x\" is not a number"), std::string::npos) << error_of(f);
+  EXPECT_THAT(error_of(f), ::testing::HasSubstr(f + ":3: \"x\" is not a number")) << error_of(f);
   f = write("d.csv", "w,gain,phase\n1,2,3\n");
-  EXPECT_NE(error_of(f).find("the header needs mag or mag_db with phase_deg, or re and im"),
-            std::string::npos);
+  EXPECT_THAT(error_of(f),
+              ::testing::HasSubstr("the header needs mag or mag_db with phase_deg, or re and im"));
   f = write("e.csv", "w,re,im\n1,1,0\n2,nan,0\n");  // a NaN sample is refused, not fitted around
-  EXPECT_NE(error_of(f).find(f + ":3: \"nan\" is not a number"), std::string::npos) << error_of(f);
+  EXPECT_THAT(error_of(f), ::testing::HasSubstr(f + ":3: \"nan\" is not a number")) << error_of(f);
   f = write("empty.csv", "\n  \n");
-  EXPECT_NE(error_of(f).find(f + ": empty: expected fralab-frd/1 JSON, a CSV with a header"),
-            std::string::npos)
+  EXPECT_THAT(error_of(f),
+              ::testing::HasSubstr(f + ": empty: expected fralab-frd/1 JSON, a CSV with a header"))
       << error_of(f);
 }
 
@@ -92,14 +93,14 @@ TEST(Readers, TfnsDeckWithUnitOverrides) {
 TEST(Readers, TfnsDeckErrorsNameTheLine) {
   std::string f = write("bad.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0") +
                                        card(' ', "1.0", "0.0", "0.0") + "*\n");
-  EXPECT_NE(error_of(f).find(f + ":4: cards must be in ascending frequency"), std::string::npos)
+  EXPECT_THAT(error_of(f), ::testing::HasSubstr(f + ":4: cards must be in ascending frequency"))
       << error_of(f);
   f = write("nostar.dat", "C        2         1\n*\n" + card(' ', "2.0", "0.0", "0.0"));
-  EXPECT_NE(error_of(f).find("two groups each ended by a '*' card"), std::string::npos)
+  EXPECT_THAT(error_of(f), ::testing::HasSubstr("two groups each ended by a '*' card"))
       << error_of(f);
   f = write("badnum.dat", "C        2         1\n*\n" + card(' ', "2.0", "1.2.3", "0.0") + "*\n");
-  EXPECT_NE(error_of(f).find(f + ":3 (columns 30-44): \"1.2.3\" is not a number"),
-            std::string::npos)
+  EXPECT_THAT(error_of(f),
+              ::testing::HasSubstr(f + ":3 (columns 30-44): \"1.2.3\" is not a number"))
       << error_of(f);
 }
 

@@ -1,5 +1,6 @@
 #include "fralab/plant/simulator.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -112,7 +113,7 @@ TEST(Simulator, NanCommandIsAnErrorNamingInputAndSample) {
     sim.step(u.data(), y.data());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("input IGV at sample 0"), std::string::npos) << e.what();
+    EXPECT_THAT(std::string(e.what()), ::testing::HasSubstr("input IGV at sample 0")) << e.what();
   }
 }
 

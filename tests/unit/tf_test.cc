@@ -1,5 +1,6 @@
 #include "fralab/core/tf.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -57,9 +58,9 @@ TEST(Tf, UnstablePoleIsRejectedNamingFileAndPath) {
     FAIL() << "no throw";
   } catch (const InputError& e) {
     std::string msg = e.what();
-    EXPECT_NE(msg.find("m.json: /paths/3/tf/poles/1"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("unstable pole"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("{\"real\": -2.83"), std::string::npos) << msg;
+    EXPECT_THAT(msg, ::testing::HasSubstr("m.json: /paths/3/tf/poles/1")) << msg;
+    EXPECT_THAT(msg, ::testing::HasSubstr("unstable pole")) << msg;
+    EXPECT_THAT(msg, ::testing::HasSubstr("{\"real\": -2.83")) << msg;
   }
 }
 
@@ -81,14 +82,14 @@ TEST(Tf, MalformedRootsAndMissingGainNameTheProblem) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(msg(R"({"poles": []})").find("missing required key \"gain\""), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "zeros": [{"real": 0}]})").find("s = 0"), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"wn": -3, "zeta": 0.5}]})").find("wn must be > 0"),
-            std::string::npos);
-  EXPECT_NE(msg(R"({"gain": "1"})").find("expected a number"), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "delay_s": -0.01})").find("delay must be >= 0"), std::string::npos);
-  EXPECT_NE(msg(R"({"gain": 1, "poles": [{"real": -1, "wn": 2}]})").find("either"),
-            std::string::npos);
+  EXPECT_THAT(msg(R"({"poles": []})"), ::testing::HasSubstr("missing required key \"gain\""));
+  EXPECT_THAT(msg(R"({"gain": 1, "zeros": [{"real": 0}]})"), ::testing::HasSubstr("s = 0"));
+  EXPECT_THAT(msg(R"({"gain": 1, "poles": [{"wn": -3, "zeta": 0.5}]})"),
+              ::testing::HasSubstr("wn must be > 0"));
+  EXPECT_THAT(msg(R"({"gain": "1"})"), ::testing::HasSubstr("expected a number"));
+  EXPECT_THAT(msg(R"({"gain": 1, "delay_s": -0.01})"), ::testing::HasSubstr("delay must be >= 0"));
+  EXPECT_THAT(msg(R"({"gain": 1, "poles": [{"real": -1, "wn": 2}]})"),
+              ::testing::HasSubstr("either"));
 }
 
 TEST(Tf, JsonRoundTripKeepsEveryField) {

@@ -1,5 +1,6 @@
 #include "fralab/identify/tfns.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -94,12 +95,9 @@ void check_recovery(double noise, double root_tol, uint64_t seed, double max_bey
   std::printf("noise %.0f %%: %d of %d in-band roots within %.1f %% (%.0f %%), %d beyond 3 sigma\n",
               100 * noise, within, total, 100 * root_tol, 100.0 * within / total, beyond);
   // Most roots meet the tolerance outright; the rest are within their own 3-sigma (reported).
-  // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 % (README).
-  EXPECT_GE(double(within) / total, noise == 0 ? 1.0
-                                               : (noise <= 0.01   ? 0.9
-                                                  : noise <= 0.02 ? 0.8
-                                                                  : 0.0))
-      << within << " of " << total;
+  // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 %; 5 %: 52 % (README).
+  const double min_within = noise == 0 ? 1.0 : noise <= 0.01 ? 0.9 : noise <= 0.02 ? 0.8 : 0.45;
+  EXPECT_GE(double(within) / total, min_within) << within << " of " << total;
 }
 
 }  // namespace
@@ -178,7 +176,7 @@ TEST(Tfns, FailurePathsSayWhy) {
   ASSERT_EQ(two.size(), 2u);
   FitResult r = fit_tf(two, FitOptions{});
   EXPECT_EQ(r.status, FitResult::Status::kFailed);
-  EXPECT_NE(r.message.find("need at least 3 valid points, have 2"), std::string::npos) << r.message;
+  EXPECT_THAT(r.message, ::testing::HasSubstr("need at least 3 valid points, have 2")) << r.message;
   FitOptions bad;
   bad.num_order_start = 3;
   bad.den_order_start = 2;
@@ -186,8 +184,8 @@ TEST(Tfns, FailurePathsSayWhy) {
     fit_tf(tf_points(Tf{}, 1, 10, 5, 0, 1), bad);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("numerator starting order must be <= denominator"),
-              std::string::npos);
+    EXPECT_THAT(std::string(e.what()),
+                ::testing::HasSubstr("numerator starting order must be <= denominator"));
   }
 }
 
@@ -268,5 +266,5 @@ TEST(Tfns, AZeroPathIsReportedAsNoResponse) {
   FitResult r = fit_tf(pts, FitOptions{});
   EXPECT_EQ(r.status, FitResult::Status::kNoResponse);
   EXPECT_EQ(r.status_str(), "no_response");
-  EXPECT_NE(r.message.find("no response above the noise"), std::string::npos) << r.message;
+  EXPECT_THAT(r.message, ::testing::HasSubstr("no response above the noise")) << r.message;
 }

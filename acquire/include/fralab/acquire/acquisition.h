@@ -16,8 +16,7 @@
 
 namespace fralab {
 
-enum class Excitation { kStepped, kSweep, kMultisine };
-/// "stepped", "sweep", "multisine" (the flag's words).
+/// "stepped", "sweep", "multisine" (the flag's words; Excitation is core/block.h's).
 const char* to_string(Excitation e);
 /// InputError naming the text otherwise.
 Excitation excitation_from_string(const std::string& s);

@@ -95,7 +95,7 @@ class SegmentCampaign : public Campaign {
   /// Appends a segment at the end of the run and returns the phase (mod 2 pi) where it ends.
   double add_segment(int input, int64_t length, double fa, double beta, double phi0);
   /// Closes the run with its "done" event.
-  void finish(const std::string& run_id, int64_t seq, int n_steps, const std::string& excitation);
+  void finish(const std::string& run_id, int64_t seq, int n_steps, Excitation excitation);
   /// Every input's name, and amplitudes with only input i excited.
   std::vector<std::string> names() const;
   std::vector<double> only(int i) const;

@@ -8,7 +8,21 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/error.h"
+
 namespace fralab {
+
+/// The test signal. On the tape (StatusEvent, contracts 3) its words are "stepped_sine", "sweep"
+/// and "multisine" (status_word); on the command line "stepped", "sweep", "multisine".
+enum class Excitation { kStepped, kSweep, kMultisine };
+/// The test signal's state: "start", "settle", "integrate", "done", "abort" on the tape.
+enum class RunState { kStart, kSettle, kIntegrate, kDone, kAbort };
+
+const char* status_word(Excitation e);
+const char* to_string(RunState s);
+/// InputError naming the word otherwise.
+Excitation excitation_from_status_word(const std::string& word);
+RunState run_state_from_string(const std::string& word);
 
 /// samples are channel-major: samples[c * n_samples + k] is channel c at sample start_sample + k.
 struct Block {
@@ -39,8 +53,8 @@ struct StatusEvent {
   int64_t seq = 0;
   int64_t sample = 0;
   double sample_rate_hz = 0.0;
-  std::string excitation = "stepped_sine";
-  std::string state;  // "start", "settle", "integrate", "done", "abort"
+  Excitation excitation = Excitation::kStepped;
+  RunState state = RunState::kStart;
   int step = 0;
   int n_steps = 0;
   double frequency_hz = 0.0;
