@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The dependency rule (README, Layout), checked: every #include of a fralab header in a module's
 # library (include/ and src/) must name a module the rule allows; executables (app/) and the LCM
-# edges (analyze/lcm/) may also use the LCM bridge. Prints each violation as FILE:LINE: what, and
+# edges (*/lcm/) may also use the LCM bridge. Prints each violation as FILE:LINE: what, and
 # exits 1 when there is any. Usage: check_layering.sh [SOURCE_DIR]
 set -uo pipefail
 root=${1:-$(cd "$(dirname "$0")/.." && pwd)}
@@ -41,7 +41,7 @@ for mod in "${!allowed[@]}"; do
   while IFS= read -r file; do
     # Executables and the LCM edges may use the bridge on top of what their module may use.
     extra=""
-    case "$file" in */app/* | analyze/lcm/*) extra="lcm" ;; esac
+    case "$file" in */app/* | */lcm/*) extra="lcm" ;; esac
     while IFS=: read -r line text; do
       target=$(module_of_include "$text")
       [ -z "$target" ] && continue

@@ -8,45 +8,11 @@
 #include <filesystem>
 #include <iostream>
 
-#include "tape_analysis.h"
+#include "analyzer_node.h"
 
 using namespace fralab;
 
 namespace {
-
-struct Live {
-  TapeFeeder* feeder;
-  lcm::LCM* lcm;
-  lcm::LCM* ctl;
-  std::string name;
-  bool started = false;
-  int64_t frd_seq = 0;
-  std::string error;
-
-  void on_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (!error.empty()) return;
-    try {
-      started = true;
-      int64_t seq = feeder->feed(channel, rbuf->data, static_cast<int>(rbuf->data_size));
-      for (auto& a : feeder->analyzers()) {
-        if (!a->take_new_points().empty()) {
-          frd_t m = to_frd_msg(a->frd(), feeder->run_id(), frd_seq++, a->done());
-          lcm->publish(kFrdChannel, &m);
-        }
-      }
-      if (seq >= 0) ack(seq);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
-  void ack(int64_t seq) {
-    ack_t a;
-    a.run_id = feeder->run_id();
-    a.consumer = name;
-    a.seq = seq;
-    ctl->publish(kAckChannel, &a);
-  }
-};
 
 void write_frds(const std::vector<Frd>& frds, const std::string& out) {
   std::filesystem::create_directories(out + "/frd");
@@ -77,32 +43,23 @@ int main(int argc, char** argv) {
       for (const Frd& f : frds) std::cout << frd_to_json(f).dump() << "\n";
       return 0;
     }
-    TapeFeeder feeder(pairs, opt, run_id);
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    Live live{&feeder, &lcm, &ctl, name.empty() ? pairs.front() : name, false, 0, ""};
-    for (const char* ch : {kTapeChannel, kStatusChannel}) {
-      lcm.subscribe(ch, &Live::on_msg, &live)->setQueueCapacity(100000);
-    }
+    AnalyzerNode live(lcm, ctl, pairs, opt, name, run_id);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    while (!feeder.all_done()) {
-      if (!live.started &&
+    while (!live.done()) {
+      if (!live.started() &&
           std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
-        live.ack(-1);  // ready
+        live.announce_ready();
         last_ready = std::chrono::steady_clock::now();
       }
       lcm.handleTimeout(100);
-      if (!live.error.empty()) throw InputError(live.error);
+      if (!live.error().empty()) throw InputError(live.error());
     }
-    std::vector<Frd> frds;
-    for (auto& a : feeder.analyzers()) {
-      frds.push_back(a->frd());
-      frd_t m = to_frd_msg(frds.back(), feeder.run_id(), live.frd_seq++, true);
-      lcm.publish(kFrdChannel, &m);
-    }
+    const std::vector<Frd> frds = live.finish();
     if (!out.empty()) write_frds(frds, out);
     return 0;
   } catch (const std::exception& e) {

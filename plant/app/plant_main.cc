@@ -8,44 +8,9 @@
 
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
-#include "fralab/plant/lockstep.h"
+#include "plant_node.h"
 
 using namespace fralab;
-
-namespace {
-
-// The lockstep plant on LCM: command blocks in, tape blocks out, one acknowledgement per block.
-struct PlantNode {
-  LockstepPlant plant;
-  lcm::LCM* lcm;
-  lcm::LCM* ctl;  // control URL: acknowledgements
-  bool started = false;
-  std::string error;
-
-  void ack(int64_t seq) {
-    ack_t a;
-    a.run_id = plant.run_id();
-    a.consumer = "plant";
-    a.seq = seq;
-    ctl->publish(kAckChannel, &a);
-  }
-
-  void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    if (plant.done() || !error.empty()) return;
-    try {
-      const Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
-      if (!plant.accepts(cmd.run_id)) return;  // another run on the same URL: not ours
-      tape_block_t msg = to_tape_msg(plant.advance(cmd));
-      started = true;
-      lcm->publish(kTapeChannel, &msg);
-      ack(cmd.seq);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
-};
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"fralab-plant: the engine emulator (fralab-model/1) in lockstep over LCM"};
@@ -73,18 +38,16 @@ int main(int argc, char** argv) {
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    PlantNode plant{LockstepPlant(model, opt, run_id), &lcm, &ctl, false, ""};
-    lcm::Subscription* sub = lcm.subscribe(kCmdChannel, &PlantNode::on_command, &plant);
-    sub->setQueueCapacity(100000);
+    PlantNode plant(lcm, ctl, LockstepPlant(model, opt, run_id));
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    while (keep_running || !plant.plant.done()) {
-      if (!plant.started &&
+    while (keep_running || !plant.done()) {
+      if (!plant.started() &&
           std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
-        plant.ack(-1);  // ready: the acquisition waits for this before the first command
+        plant.announce_ready();  // the acquisition waits for this before the first command
         last_ready = std::chrono::steady_clock::now();
       }
       lcm.handleTimeout(100);
-      if (!plant.error.empty()) throw InputError(plant.error);
+      if (!plant.error().empty()) throw InputError(plant.error());
     }
     return 0;
   } catch (const std::exception& e) {

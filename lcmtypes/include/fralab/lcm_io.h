@@ -75,7 +75,8 @@ std::string private_lcm_url(uint64_t salt);
 /// Derived from the tape URL by adding 1 to its port ("" stays "").
 std::string control_url_for(const std::string& tape_url);
 
-/// Waits up to timeout_ms for traffic on either instance and dispatches what arrived.
+/// Waits up to timeout_ms for traffic on either instance and dispatches what arrived (a and b may
+/// be the same instance).
 void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms);
 
 /// One event of a tape file.

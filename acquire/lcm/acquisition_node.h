@@ -1,0 +1,54 @@
+// The acquisition on LCM (fralab-acquire's loop as a library, the transport passed in): waits for
+// every consumer's "ready", publishes the status events (FRALAB_STATUS) and command blocks
+// (FRALAB_CMD) of a campaign under flow control (at most `window` blocks ahead of the slowest
+// consumer's acknowledgement), paced at `speed` x real time when > 0. The plant and the analysers
+// may share the instances (memq:// in tests: everything runs in the caller's thread, dispatched
+// while this waits for acknowledgements).
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fralab/acquire/acquisition.h"
+#include "fralab/core/json_util.h"
+
+namespace fralab {
+
+struct AcquisitionLoopOptions {
+  std::string run_id = "run";
+  std::vector<std::string> consumers = {"plant"};  // who must acknowledge ("plant" is added)
+  int block = 100;
+  int window = 2;
+  double speed = 0;
+  double sample_rate_hz = 1000.0;
+  double ready_timeout_s = 30;
+  double stall_timeout_s = 60;
+};
+
+class AcquisitionNode {
+ public:
+  /// Subscribes to the acknowledgements on `control` (may be `data`) from construction on.
+  AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campaign& campaign,
+                  AcquisitionLoopOptions o);
+  ~AcquisitionNode();
+  AcquisitionNode(const AcquisitionNode&) = delete;
+  AcquisitionNode& operator=(const AcquisitionNode&) = delete;
+
+  /// Runs the campaign to its end; returns the summary (run_id, engine_time_s, wall_time_s,
+  /// speedup, blocks, samples, excitation). InputError naming the consumer that never said ready
+  /// or stopped acknowledging, or a decoding error on the control channel.
+  Json run();
+
+ private:
+  struct Acks;
+  lcm::LCM& data_;
+  lcm::LCM& control_;
+  const Campaign& campaign_;
+  AcquisitionLoopOptions o_;
+  std::unique_ptr<Acks> acks_;
+  lcm::Subscription* sub_ = nullptr;
+};
+
+}  // namespace fralab
