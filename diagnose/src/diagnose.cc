@@ -149,7 +149,7 @@ void DiagnoseOptions::validate() const {
 }
 
 std::optional<C> model_pair_response(const Model& m, const std::string& pair, double w,
-                                     double amplitude) {
+                                     double amplitude, const MeasurementChain& chain) {
   auto [e1, e2] = split_pair(pair);
   const bool cmd = e1.rfind("u_", 0) == 0;
   const std::string x = cmd ? e1.substr(2) : e1;
@@ -169,17 +169,20 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
     if (nl.type == "deadband")
       act *= deadband_describing_function(amplitude * std::abs(act), nl.width);
   }
-  if (e2 == x) return cmd ? std::optional<C>(act * coupling) : std::nullopt;
+  const C held = chain.pair_factor(e1, w);  // the lab's hold (measurement_chain.h)
+  if (e2 == x) return cmd ? std::optional<C>(act * coupling * held) : std::nullopt;
   const int o = m.output_index(e2);
   if (o < 0 || !m.path(e2, x)) return std::nullopt;
   const C h = m.position_to_output(o, i, w);
-  return cmd ? act * h : h / coupling;
+  return (cmd ? act * h : h / coupling) * held;
 }
 
 Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
                    const DiagnoseOptions& opt) {
   opt.validate();
+  opt.chain.validate();
   Diagnosis d;
+  d.chain = opt.chain;
   d.extended = sim;
   // Prepare the pairs the simulation can speak to.
   std::vector<PairFit> pairs;
@@ -201,7 +204,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       continue;
     for (const auto& pt : mp.frd.points) {
       if (!usable(pt, opt)) continue;
-      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude);
+      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain);
       if (!s || std::abs(*s) == 0) continue;
       p.w.push_back(pt.w);
       p.meas.push_back(pt.value());
@@ -391,8 +394,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
         meas.push_back(pt.value());
         amp.push_back(pt.amplitude);
       }
-      double e = pair_error(
-          w, meas, [&](double x, size_t i) { return model_pair_response(m, mp.pair, x, amp[i]); });
+      double e = pair_error(w, meas, [&](double x, size_t i) {
+        return model_pair_response(m, mp.pair, x, amp[i], opt.chain);
+      });
       s += e * e * w.size();
       n += int(w.size());
     }
@@ -425,7 +429,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     r.meas = p.meas;
     r.sim = p.sim;
     for (size_t q = 0; q < p.w.size(); ++q) {
-      r.ext.push_back(model_pair_response(ext, p.pair, p.w[q], p.amp[q]).value_or(0.0));
+      r.ext.push_back(model_pair_response(ext, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0));
       r.sigma.push_back(p.sig[q]);
       r.chi2_sim += std::norm(p.meas[q] - p.sim[q]) / (p.sig[q] * p.sig[q]);
       r.chi2_ext += std::norm(p.meas[q] - r.ext.back()) / (p.sig[q] * p.sig[q]);
@@ -456,6 +460,7 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"error_after", f.error_after},
                              {"pairs", f.pairs}});
   }
+  j["measurement_chain"] = chain_to_json(d.chain);
   j["summary"] = {
       {"metric", d.metric}, {"error_before", d.error_before}, {"error_after", d.error_after}};
   if (d.validation_before >= 0) {

@@ -55,6 +55,16 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
     md << "; on the independent validation measurement: " << d.validation_before << " -> "
        << d.validation_after;
   }
+  md << ".\n\nMeasurement chain (the simulation is compared as the lab measured it): ";
+  if (d.chain.sample_rate_hz > 0) {
+    md << (d.chain.hold == MeasurementChain::Hold::kFirstOrder ? "first-order" : "zero-order")
+       << " hold at " << d.chain.sample_rate_hz << " Hz, converter delay "
+       << d.chain.converter_delay_s << " s";
+    for (size_t i = 0; i < d.chain.reheld_inputs.size(); ++i)
+      md << (i ? ", " : "; paths held again from the position of ") << d.chain.reheld_inputs[i];
+  } else {
+    md << "ideal (none recorded)";
+  }
   md << ".\n\n## Findings\n\n";
   if (d.findings.empty())
     md << "None: every measured response agrees with the simulation within its uncertainty.\n";

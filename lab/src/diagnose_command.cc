@@ -41,7 +41,15 @@ std::string run_diagnose(const DiagnoseCommand& c) {
                 "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
   }
   auto data = read_measured_dir(data_dir);
-  Diagnosis d = diagnose(sim, data);
+  // The lab's measurement chain, as the measurement recorded it (else an ideal one).
+  DiagnoseOptions opt;
+  const std::string run_file = data_dir + "/run.json";
+  if (fs::exists(run_file)) {
+    const Json run = json_load_file(run_file);
+    if (run.contains("measurement_chain"))
+      opt.chain = chain_from_json(run["measurement_chain"], {run_file, "/measurement_chain"});
+  }
+  Diagnosis d = diagnose(sim, data, opt);
   json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));
   Model ext = d.extended;
   ext.name = sim.name + " + diagnosis";

@@ -104,6 +104,15 @@ class TapeCheck {
 
 }  // namespace
 
+MeasurementChain emulator_chain(const Model& m, double sample_rate_hz) {
+  MeasurementChain c;
+  c.sample_rate_hz = sample_rate_hz;
+  c.hold = MeasurementChain::Hold::kFirstOrder;
+  for (const auto& in : m.inputs)
+    if (!in.nonlinearity.empty()) c.reheld_inputs.push_back(in.name);
+  return c;
+}
+
 MeasureResult run_measure(const MeasureOptions& o) {
   if (o.out.empty()) throw InputError("--out DIR is required");
   Model model = load_model_or_embedded(o.engine);
@@ -231,16 +240,18 @@ MeasureResult run_measure(const MeasureOptions& o) {
   r.tape_blocks = n;
   Json acq_summary = json_load_file(o.out + "/acquire.json");
   r.engine_time_s = acq_summary.value("engine_time_s", 0.0);
-  Json summary{{"run_id", r.run_id},
-               {"engine", model.name},
-               {"lcm_url", url},
-               {"inputs", inputs_csv},
-               {"pairs", r.pairs},
-               {"engine_time_s", r.engine_time_s},
-               {"wall_time_s", r.wall_time_s},
-               {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)},
-               {"tape_blocks", n},
-               {"fit_time_s", r.fit_time_s}};
+  Json summary{
+      {"run_id", r.run_id},
+      {"engine", model.name},
+      {"lcm_url", url},
+      {"inputs", inputs_csv},
+      {"pairs", r.pairs},
+      {"engine_time_s", r.engine_time_s},
+      {"wall_time_s", r.wall_time_s},
+      {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)},
+      {"tape_blocks", n},
+      {"fit_time_s", r.fit_time_s},
+      {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
   json_save_file(o.out + "/run.json", summary);
   return r;
 }

@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "fralab/core/frd.h"
+#include "fralab/core/measurement_chain.h"
 #include "fralab/plant/model.h"
 
 namespace fralab {
@@ -88,6 +89,9 @@ struct DiagnoseOptions {
   // slowest corner, when the mean 3rd harmonic there exceeds min_odd_harmonic.
   double low_corner_fraction = 0.3;
   double min_odd_harmonic = 0.01;
+  // The lab's measurement chain (core/measurement_chain.h): the simulation is compared as the lab
+  // would have measured it. Ideal (sample_rate_hz 0) unless the measurement recorded one.
+  MeasurementChain chain;
   void validate() const;
 };
 
@@ -119,6 +123,7 @@ struct PairReport {  // per pair, for the report
 };
 
 struct Diagnosis {
+  MeasurementChain chain;  // what the comparison used
   std::vector<Finding> findings;
   Model extended;
   std::vector<PairReport> pairs;
@@ -135,7 +140,9 @@ Json diagnosis_to_json(const Diagnosis& d);
 
 /// The model's response for a measured pair ("X:O" position -> output, "u_X:X" the actuator's
 /// linear response, "u_X:O" command -> output); nullopt when the model has no such path.
+/// Measured through `chain`: times chain.pair_factor(E1, w).
 std::optional<std::complex<double>> model_pair_response(const Model& m, const std::string& pair,
-                                                        double w, double amplitude = 0.0);
+                                                        double w, double amplitude = 0.0,
+                                                        const MeasurementChain& chain = {});
 
 }  // namespace fralab

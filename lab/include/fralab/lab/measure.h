@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "fralab/acquire/acquisition.h"
+#include "fralab/core/measurement_chain.h"
+#include "fralab/plant/model.h"
 
 namespace fralab {
 
@@ -35,6 +37,11 @@ struct MeasureResult {
 /// u_X:O for every output.
 std::vector<std::string> pairs_for_input(const std::string& input,
                                          const std::vector<std::string>& outputs);
+
+/// The measurement chain of fralab's plant emulator at `sample_rate_hz`: first-order hold, and
+/// the inputs whose actuator has a nonlinearity drive their paths from held position samples
+/// (plant/simulator.h). run.json records it as "measurement_chain".
+MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
 
 MeasureResult run_measure(const MeasureOptions& opt);
 
