@@ -224,6 +224,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   };
   std::vector<Raw> raw;
   std::vector<Finding> coupling_findings;
+  std::map<size_t, std::string> refused;  // per pair: the best candidate left out, and why
 
   // 1. Measurement coupling, per input: joint over u_X:X and every X:O.
   for (const auto& in : sim.inputs) {
@@ -252,8 +253,14 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
           if (bic < best_bic) best_bic = bic, best = &c;
         }
         if (!best ||
-            c0 - best->chi2 < std::max(best->k * std::log(2.0 * N), opt.min_improvement * c0))
+            c0 - best->chi2 < std::max(best->k * std::log(2.0 * N), opt.min_improvement * c0)) {
+          if (best)
+            refused[k] =
+                std::string("best candidate ") + to_string(best->cause) +
+                " lowers chi2 only from " + fmt(c0) + " to " + fmt(best->chi2) + " (needs " +
+                fmt(std::max(best->k * std::log(2.0 * N), opt.min_improvement * c0)) + " less)";
           break;
+        }
         found.push_back(*best);
         for (size_t q = 0; q < N; ++q) p.factor[q] *= best->F[q];
       }
@@ -371,11 +378,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     if (!raw[a].c.detail.empty()) findings.back().explanation = raw[a].c.detail;
   }
 
-  // 4. The extended model: the simulation plus every finding.
-  Model& ext = d.extended;
-  for (const auto& f : findings) apply_finding(ext, f);
-
-  // 5. Errors: per finding (its pairs, the simulation plus that finding alone) and in total.
+  // 4. Errors: of a model over some pairs (all when `which` is empty), on the fitted or the
+  // validation measurement.
   auto err_over = [&](const Model& m, const std::vector<std::string>& which, bool validation) {
     double s = 0;
     int n = 0;
@@ -402,6 +406,41 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     }
     return n ? std::sqrt(s / n) : -1.0;
   };
+  bool have_val = false;
+  for (const auto& mp : data) have_val |= !mp.validation.points.empty();
+  auto with = [&](const std::vector<Finding>& fs, size_t skip) {
+    Model m = sim;
+    for (size_t i = 0; i < fs.size(); ++i)
+      if (i != skip) apply_finding(m, fs[i]);
+    return m;
+  };
+  // 5. Every finding earns its place on the independent validation measurement: removed from the
+  // extended model, its pairs' validation error must rise. The one that helps least is dropped
+  // (and said why) until every remaining one does; then the extended model must beat the
+  // simulation on the validation data as a whole, or the least useful finding goes too.
+  if (have_val) {
+    for (;;) {
+      const Model full = with(findings, findings.size());
+      const bool worse_overall = err_over(full, {}, true) > err_over(sim, {}, true);
+      int worst = -1;
+      double worst_gain = INFINITY, worst_with = 0, worst_without = 0;
+      for (size_t i = 0; i < findings.size(); ++i) {
+        const double e_with = err_over(full, findings[i].pairs, true);
+        const double e_without = err_over(with(findings, i), findings[i].pairs, true);
+        const double gain = e_without - e_with;
+        if ((gain <= 0 || worse_overall) && gain < worst_gain) {
+          worst = int(i), worst_gain = gain, worst_with = e_with, worst_without = e_without;
+        }
+      }
+      if (worst < 0) break;
+      d.dropped.push_back({findings[worst], "does not lower the validation error on its pairs (" +
+                                                fmt(worst_without) + " without it, " +
+                                                fmt(worst_with) + " with it)"});
+      findings.erase(findings.begin() + worst);
+    }
+  }
+  Model& ext = d.extended;
+  ext = with(findings, findings.size());
   for (auto& f : findings) {
     Model one = sim;  // the simulation plus this finding alone
     apply_finding(one, f);
@@ -409,14 +448,14 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     f.error_after = err_over(one, f.pairs, false);
     if (f.explanation.empty()) f.explanation = explain(f);
   }
+  for (auto& x : d.dropped)
+    if (x.finding.explanation.empty()) x.finding.explanation = explain(x.finding);
   std::sort(findings.begin(), findings.end(), [](const Finding& a, const Finding& b) {
     return a.error_before - a.error_after > b.error_before - b.error_after;
   });
   d.findings = findings;
   d.error_before = err_over(sim, {}, false);
   d.error_after = err_over(ext, {}, false);
-  bool have_val = false;
-  for (const auto& mp : data) have_val |= !mp.validation.points.empty();
   if (have_val) {
     d.validation_before = err_over(sim, {}, true);
     d.validation_after = err_over(ext, {}, true);
@@ -439,6 +478,27 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
         pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(p.sim[i]); });
     r.error_ext =
         pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(r.ext[i]); });
+    // What the catalogue does not explain is said, not forced.
+    const double n = double(p.w.size());
+    if (r.chi2_ext > n + 4 * std::sqrt(n)) {
+      Unexplained u;
+      u.pair = p.pair;
+      double lo = INFINITY, hi = 0;
+      for (size_t q = 0; q < p.w.size(); ++q) {
+        const double z = std::abs(p.meas[q] - r.ext[q]) / p.sig[q];
+        if (z < 3) continue;
+        lo = std::min(lo, p.w[q] / (2 * M_PI));
+        hi = std::max(hi, p.w[q] / (2 * M_PI));
+        u.residual = std::max(u.residual, std::abs(std::log(p.meas[q] / r.ext[q])));
+      }
+      u.band_hz = {std::isfinite(lo) ? lo : 0.0, hi};
+      u.chi2 = r.chi2_ext;
+      for (const auto& [k, why] : refused)
+        if (pairs[k].pair == p.pair) u.explanation = why;
+      if (u.explanation.empty())
+        u.explanation = "no cause of the catalogue lowers chi2 enough to be accepted";
+      d.unexplained.push_back(u);
+    }
     d.pairs.push_back(r);
   }
   return d;
@@ -461,6 +521,27 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"pairs", f.pairs}});
   }
   j["measurement_chain"] = chain_to_json(d.chain);
+  j["dropped"] = Json::array();
+  for (const auto& x : d.dropped) {
+    Json p = Json::object();
+    for (const auto& [k, v] : x.finding.parameters) p[k] = v;
+    j["dropped"].push_back(
+        {{"cause", to_string(x.finding.cause)},
+         {"scope", to_string(x.finding.scope)},
+         {"output", x.finding.output.empty() ? Json(nullptr) : Json(x.finding.output)},
+         {"input", x.finding.input.empty() ? Json(nullptr) : Json(x.finding.input)},
+         {"parameters", p},
+         {"pairs", x.finding.pairs},
+         {"reason", x.reason}});
+  }
+  j["unexplained"] = Json::array();
+  for (const auto& u : d.unexplained) {
+    j["unexplained"].push_back({{"pair", u.pair},
+                                {"band_hz", {u.band_hz[0], u.band_hz[1]}},
+                                {"residual", u.residual},
+                                {"chi2", u.chi2},
+                                {"explanation", u.explanation}});
+  }
   j["summary"] = {
       {"metric", d.metric}, {"error_before", d.error_before}, {"error_after", d.error_after}};
   if (d.validation_before >= 0) {

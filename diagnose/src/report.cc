@@ -80,6 +80,25 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
     for (size_t i = 0; i < f.pairs.size(); ++i) md << (i ? ", " : "") << f.pairs[i];
     md << ".\n";
   }
+  if (!d.dropped.empty()) {
+    md << "\n## Dropped (fitted, but did not earn their place)\n\n";
+    for (const auto& x : d.dropped) {
+      md << "- " << to_string(x.finding.cause) << " (" << to_string(x.finding.scope);
+      if (!x.finding.input.empty()) md << ", input " << x.finding.input;
+      if (!x.finding.output.empty()) md << ", output " << x.finding.output;
+      md << "):";
+      for (const auto& [k, v] : x.finding.parameters) md << " " << k << " = " << v;
+      md << ": " << x.reason << ".\n";
+    }
+  }
+  if (!d.unexplained.empty()) {
+    md << "\n## Unexplained (beyond the uncertainty, no cause of the catalogue fits)\n\n";
+    for (const auto& u : d.unexplained) {
+      md << "- " << u.pair << ": " << u.band_hz[0] << "-" << u.band_hz[1]
+         << " Hz, largest |ln(measured/model)| " << u.residual << ", chi2 " << u.chi2 << ": "
+         << u.explanation << ".\n";
+    }
+  }
   md << "\n## Pairs\n\n| pair | beyond uncertainty | chi2 sim | chi2 extended | error sim | error "
         "extended |\n|---|---|---|---|---|---|\n";
   for (const auto& p : d.pairs) {

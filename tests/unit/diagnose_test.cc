@@ -248,6 +248,47 @@ TEST(Diagnose, DelaySearchRangeIsAnOption) {
   EXPECT_NEAR(d.findings[0].parameters.at("delay_s"), 0.08, 0.5e-3);
 }
 
+// A fit that the independent validation measurement does not confirm is dropped, with the figures:
+// here the fitting run saw a +1 dB gain on u:y that the validation run (the simulation's truth)
+// does not.
+TEST(Diagnose, AFindingTheValidationDoesNotConfirmIsDropped) {
+  Model seen = simulation();
+  path(seen, "y").tf.gain *= std::pow(10.0, 1.0 / 20);
+  auto data = measure(seen);
+  const auto truth = measure(simulation());
+  for (size_t i = 0; i < data.size(); ++i) data[i].validation = truth[i].frd;
+  const Diagnosis d = diagnose(simulation(), data);
+  EXPECT_THAT(d.findings, IsEmpty());
+  ASSERT_EQ(d.dropped.size(), 1u);
+  EXPECT_EQ(d.dropped[0].finding.cause, CauseKind::kGainMismatch);
+  EXPECT_THAT(d.dropped[0].reason, HasSubstr("does not lower the validation error"));
+  EXPECT_LE(d.validation_after, d.validation_before);  // never worse than the simulation
+  EXPECT_EQ(diagnosis_to_json(d)["dropped"][0]["cause"], "gain_mismatch");
+}
+
+// A residual no cause of the catalogue describes (a gain ripple across the band) is reported as
+// unexplained with its band, not forced into findings that leave it beyond the uncertainty.
+TEST(Diagnose, WhatTheCatalogueCannotExplainIsSaid) {
+  auto data = measure(simulation());
+  for (auto& mp : data) {
+    if (mp.pair != "u:y") continue;
+    for (auto* f : {&mp.frd, &mp.validation})
+      for (auto& p : f->points) p.mag *= 1.0 + 0.2 * std::sin(4 * std::log(p.w));
+  }
+  const Diagnosis d = diagnose(simulation(), data);
+  ASSERT_EQ(d.unexplained.size(), 1u);
+  const Unexplained& u = d.unexplained[0];
+  EXPECT_EQ(u.pair, "u:y");
+  EXPECT_GE(u.band_hz[0], 0.05 / (2 * M_PI) - 1e-12);
+  EXPECT_LE(u.band_hz[1], 200 / (2 * M_PI) + 1e-9);
+  EXPECT_GT(u.band_hz[1], u.band_hz[0]);
+  EXPECT_GT(u.residual, 0.05);
+  EXPECT_FALSE(u.explanation.empty());
+  const Json j = diagnosis_to_json(d);
+  EXPECT_EQ(j["unexplained"][0]["pair"], "u:y");
+  EXPECT_EQ(j["unexplained"][0]["band_hz"].size(), 2u);
+}
+
 // Data as fralab's plant emulator measures an engine identical to the simulation: every chain held
 // by the first-order hold at 1 kHz and sampled (lti.h's exact sampled response, images included),
 // 0.1-100 Hz, clean channels (sigma 0.1 %).
