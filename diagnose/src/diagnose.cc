@@ -27,6 +27,8 @@ constexpr std::pair<CauseKind, const char*> kCauseNames[] = {
     {CauseKind::kHysteresis, "hysteresis"},
     {CauseKind::kDeadband, "deadband"},
     {CauseKind::kMeasurementCoupling, "measurement_coupling"},
+    {CauseKind::kDampingError, "damping_error"},
+    {CauseKind::kSignError, "sign_error"},
 };
 constexpr std::pair<Scope, const char*> kScopeNames[] = {{Scope::kPath, "path"},
                                                          {Scope::kOutput, "output"},

@@ -200,6 +200,29 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
 }
 
+TEST(Diagnose, DampingErrorOfASimulatedPair) {
+  Model truth = simulation();
+  path(truth, "z").tf.poles[1] = Root::Pair(30, 0.08);  // the simulation says 0.3
+  const Diagnosis d = diagnose(simulation(), measure(truth));
+  const Finding f = only_finding(d);
+  EXPECT_EQ(f.cause, CauseKind::kDampingError);
+  EXPECT_EQ(f.output, "z");
+  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 30, 1e-12);
+  EXPECT_NEAR(f.parameters.at("to_zeta"), 0.08, 0.1 * 0.08);
+  for (const auto& p : d.extended.paths)
+    if (p.output == "z") EXPECT_NEAR(p.tf.poles[1].zeta, 0.08, 0.1 * 0.08);
+}
+
+TEST(Diagnose, SignError) {
+  Model truth = simulation();
+  path(truth, "y").tf.gain = -path(truth, "y").tf.gain;
+  const Diagnosis d = diagnose(simulation(), measure(truth));
+  const Finding f = only_finding(d);
+  EXPECT_EQ(f.cause, CauseKind::kSignError);
+  EXPECT_EQ(f.output, "y");
+  EXPECT_LT(d.error_after, 1e-6);
+}
+
 TEST(Diagnose, NamesAtTheEdgeRoundTrip) {
   for (CauseKind c :
        {CauseKind::kTimeDelay, CauseKind::kMissingLag, CauseKind::kMissingLead,

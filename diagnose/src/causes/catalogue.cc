@@ -8,7 +8,8 @@ namespace fralab::diag {
 const std::vector<const LinearCause*>& linear_catalogue() {
   static const std::vector<const LinearCause*> v{&gain_mismatch_cause(),     &time_delay_cause(),
                                                  &missing_lag_cause(),       &missing_lead_cause(),
-                                                 &missing_resonance_cause(), &pole_shift_cause()};
+                                                 &missing_resonance_cause(), &pole_shift_cause(),
+                                                 &damping_error_cause(),     &sign_error_cause()};
   return v;
 }
 

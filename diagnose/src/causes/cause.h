@@ -46,5 +46,7 @@ const LinearCause& missing_lag_cause();
 const LinearCause& missing_lead_cause();
 const LinearCause& missing_resonance_cause();
 const LinearCause& pole_shift_cause();
+const LinearCause& damping_error_cause();
+const LinearCause& sign_error_cause();
 
 }  // namespace fralab::diag

@@ -18,6 +18,9 @@
 //                       its inverse, reported with zeta < 0 ... as "notch": true)
 //   pole_shift          F = D_from(s) / D_to(s), one real pole or pair of the simulated chain moved
 //                       (pairs keep their damping)          from_rad_s, to_rad_s
+//   damping_error       F = D_sim(s) / D(s; wn, to_zeta), a simulated pair's damping wrong
+//                                                            wn_rad_s, from_zeta, to_zeta
+//   sign_error          F = -1                                   sign = -1
 //   gain_mismatch       F = k                                    gain_db = 20 log10 k
 //   hysteresis/deadband the actuator's describing function N(A) at the measured amplitude (odd
 //                       harmonics in the position are the trigger)    width (input units);
@@ -67,6 +70,8 @@ enum class CauseKind {
   kHysteresis,
   kDeadband,
   kMeasurementCoupling,
+  kDampingError,
+  kSignError,
 };
 /// Where a finding sits: one path, every path into an output (its sensor), every path from an
 /// input (its actuator or calibration), every path (the plant).

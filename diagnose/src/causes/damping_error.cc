@@ -1,0 +1,75 @@
+// damping_error: a pole pair of the simulated chain at the right frequency with the wrong damping,
+// F = D_sim(s) / D(s; wn, to_zeta) with D = s^2/wn^2 + 2 zeta s/wn + 1; parameters wn_rad_s,
+// from_zeta, to_zeta. Search: ln zeta over [ln 0.002, ln 2] (grid then golden section), one
+// candidate per simulated pair. Consistent across pairs: wn and to_zeta within
+// DiagnoseOptions::consistent_rel. Extension: the pair nearest wn takes to_zeta.
+#include <cmath>
+
+#include "cause.h"
+
+namespace fralab::diag {
+namespace {
+
+std::vector<Root> chain_pairs(const Model& m, const PairFit& p) {
+  std::vector<Root> v;
+  auto add = [&](const Tf& t) {
+    for (const Root& r : t.poles)
+      if (r.pair) v.push_back(r);
+  };
+  const int i = m.input_index(p.input);
+  if (p.output.empty()) {
+    if (m.inputs[i].actuator) add(*m.inputs[i].actuator);
+    return v;
+  }
+  if (const ModelPath* mp = m.path(p.output, p.input)) add(mp->tf);
+  const int o = m.output_index(p.output);
+  if (m.outputs[o].sensor) add(*m.outputs[o].sensor);
+  return v;
+}
+
+class DampingError final : public LinearCause {
+ public:
+  CauseKind kind() const override { return CauseKind::kDampingError; }
+  void fit(const Model& m, const PairFit& p, const DiagnoseOptions&,
+           std::vector<Cause>* out) const override {
+    constexpr int kGrid = 80;
+    for (const Root& r : chain_pairs(m, p)) {
+      auto F = [&](double lz) {
+        Root q = r;
+        q.zeta = std::exp(lz);
+        return factor_of(p.w, [&](C s) { return r.factor(s) / q.factor(s); });
+      };
+      const double lz = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(0.002),
+                                    std::log(2.0), kGrid);
+      Cause c{kind(), {{"wn_rad_s", r.wn}, {"from_zeta", r.zeta}, {"to_zeta", std::exp(lz)}},
+              F(lz),  0,
+              1,      ""};
+      c.chi2 = chi2(p, c.F);
+      out->push_back(std::move(c));
+    }
+  }
+  bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
+    return params_within(a, b, {"wn_rad_s", "to_zeta"}, opt.consistent_rel);
+  }
+  void extend(Tf& t, const Finding& f) const override {
+    const double wn = f.parameters.at("wn_rad_s");
+    Root* best = nullptr;
+    for (Root& r : t.poles)
+      if (r.pair && (!best || std::abs(r.wn - wn) < std::abs(best->wn - wn))) best = &r;
+    if (best) best->zeta = f.parameters.at("to_zeta");
+  }
+  std::string explain(const Finding& f) const override {
+    return "the simulated pair at " + fmt(f.parameters.at("wn_rad_s")) + " rad/s is damped " +
+           fmt(f.parameters.at("to_zeta")) + " in the data, not " +
+           fmt(f.parameters.at("from_zeta"));
+  }
+};
+
+}  // namespace
+
+const LinearCause& damping_error_cause() {
+  static const DampingError c;
+  return c;
+}
+
+}  // namespace fralab::diag
