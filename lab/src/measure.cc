@@ -32,14 +32,14 @@ std::vector<std::string> pairs_for_input(const std::string& x,
 
 namespace {
 
-// Reads the tape back as the logger writes it (each call reads only what was added since the last):
-// every command and tape block of the run, without gaps, and the final "done" status.
+// Reads the tape back as the recorder writes it (each call reads only what was added since the
+// last): every command and tape block of the run, without gaps, and the final "done" status.
 class TapeCheck {
  public:
   TapeCheck(std::string path, std::string run_id)
       : path_(std::move(path)), run_id_(std::move(run_id)) {}
 
-  // The number of tape blocks; -1 while incomplete (logger still writing), -2 when a block was
+  // The number of tape blocks; -1 while incomplete (recorder still writing), -2 when a block was
   // lost.
   int64_t update(std::string* problem) {
     try {
@@ -133,14 +133,11 @@ MeasureResult run_measure(const MeasureOptions& o) {
   auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
 
   Supervisor sup;
-  sup.start({"logger",
-             {"lcm-logger", "--lcm-url=" + url, "-f", "--flush-interval=50", "-v", "-c",
-              "FRALAB_ACK", tape},
-             log("logger")});
-  for (int i = 0; i < 100 && !fs::exists(tape); ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  if (!fs::exists(tape)) sup.wait_for({"logger"}, 0.1);  // surfaces its error
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // The recorder: inside the flow control (a consumer the acquisition waits for), so a busy machine
+  // slows the run instead of losing tape blocks.
+  sup.start({"recorder",
+             {module_path("fralab-record"), "--lcm-url", url, "--run-id", r.run_id, "--out", tape},
+             log("recorder")});
 
   std::vector<std::string> plant_args = {module_path("fralab-plant"),
                                          "--model",
@@ -158,7 +155,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
 
   std::vector<std::string> outs;
   for (const auto& out : model.outputs) outs.push_back(out.name);
-  std::vector<std::string> consumers = {"plant"}, waits = {"plant"};
+  std::vector<std::string> consumers = {"plant", "recorder"}, waits = {"plant"};
   for (int i : excite) {
     const std::string x = model.inputs[i].name;
     auto pairs = pairs_for_input(x, outs);
@@ -169,7 +166,7 @@ MeasureResult run_measure(const MeasureOptions& o) {
     groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
     for (const auto& g : groups) {
       std::string name = "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
-      // Analysers run at lower priority: they are flow-controlled, the logger and plant are not.
+      // Analysers run at lower priority: they are flow-controlled like the plant and recorder.
       std::vector<std::string> args = {"nice",      "-n", "5",        module_path("fralab-analyze"),
                                        "--lcm-url", url,  "--run-id", r.run_id,
                                        "--name",    name, "--out",    o.out};
@@ -215,27 +212,17 @@ MeasureResult run_measure(const MeasureOptions& o) {
   sup.wait_for({"identify"}, o.timeout_s);
   r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
 
-  // The logger: stop it only once the tape holds the whole run (lcm-logger 1.3.1 drops its queue on
-  // SIGINT), and fail loudly if anything was lost.
-  // lcm-logger 1.3.1 flushes only when a message arrives: a small heartbeat on FRALAB_FLUSH keeps
-  // it writing while the tape is checked (the heartbeats are recorded too; readers ignore them).
+  // The recorder acknowledged every tape block once on disk; the tape is read back and checked
+  // (every command and tape block, the done status) before the recorder is stopped.
   std::string problem;
   int64_t n = -1;
   TapeCheck check(tape, r.run_id);
-  {
-    lcm::LCM lcm(url);
-    ack_t beat;
-    beat.run_id = r.run_id;
-    beat.consumer = "launcher";
-    for (int i = 0; i < 200 && n < 0; ++i) {
-      beat.seq = i;
-      lcm.publish("FRALAB_FLUSH", &beat);
-      std::this_thread::sleep_for(std::chrono::milliseconds(60));
-      n = check.update(&problem);
-      if (n == -2) break;
-    }
+  for (int i = 0; i < 200 && n < 0; ++i) {
+    n = check.update(&problem);
+    if (n == -1) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (n == -2) break;
   }
-  sup.stop("logger", SIGINT, 5.0);
+  sup.stop("recorder", SIGINT, 5.0);
   if (n < 0) throw InputError(tape + ": " + problem);
   r.tape_blocks = n;
   Json acq_summary = json_load_file(o.out + "/acquire.json");

@@ -5,10 +5,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "acquisition_node.h"
 #include "analyzer_node.h"
 #include "fralab/acquire/acquisition.h"
 #include "plant_node.h"
+#include "recorder_node.h"
 #include "test_util.h"
 
 namespace fralab {
@@ -52,12 +55,16 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   sim.seed = 3;
   PlantNode plant(bus, bus, LockstepPlant(m, sim, "memq-run"));
   AnalyzerNode analyser(bus, bus, {"u:y", "u_u:u"}, {}, "analyze", "memq-run");
+  const std::string tape =
+      (std::filesystem::temp_directory_path() / "lab_loop_test.lcmlog").string();
+  RecorderNode recorder(bus, bus, tape, "memq-run");
   AcquisitionLoopOptions lo;
   lo.run_id = "memq-run";
-  lo.consumers = {"analyze"};
+  lo.consumers = {"analyze", "recorder"};
   AcquisitionNode acquisition(bus, bus, *camp, lo);
   plant.announce_ready();
   analyser.announce_ready();
+  recorder.announce_ready();
   const Json summary = acquisition.run();
   EXPECT_EQ(summary["samples"], camp->total_samples());
   EXPECT_EQ(plant.error(), "");
@@ -65,6 +72,15 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   EXPECT_TRUE(plant.done());
   ASSERT_TRUE(analyser.done());
   const std::vector<Frd> live = analyser.finish();
+  EXPECT_EQ(recorder.error(), "");
+  // The recorder's tape, read back, gives the live numbers too (tape = live).
+  const auto from_tape = analyze_tape_file(tape, {"u:y", "u_u:u"}, {});
+  ASSERT_EQ(from_tape.size(), live.size());
+  for (size_t k = 0; k < live.size(); ++k) {
+    ASSERT_EQ(from_tape[k].points.size(), live[k].points.size());
+    for (size_t i = 0; i < live[k].points.size(); ++i)
+      EXPECT_EQ(from_tape[k].points[i].mag, live[k].points[i].mag);
+  }
 
   const auto offline = fralab::testing::simulate_tape(m, {"u"}, so, true, 3);
   for (const Frd& f : live) {

@@ -8,7 +8,7 @@
 namespace fralab::diag {
 namespace {
 
-constexpr int kGrid = 280;  // grid points over the delay range before the golden section
+constexpr double kGridStepS = 0.25e-3;  // the grid before the golden section (9 deg at 100 Hz)
 
 class TimeDelay final : public LinearCause {
  public:
@@ -16,8 +16,9 @@ class TimeDelay final : public LinearCause {
   void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
     auto F = [&](double tau) { return factor_of(p.w, [&](C s) { return std::exp(-s * tau); }); };
-    const double tau = minimise_1d([&](double t) { return chi2(p, F(t)); }, opt.delay_min_s,
-                                   opt.delay_max_s, kGrid);
+    const double tau =
+        minimise_1d([&](double t) { return chi2(p, F(t)); }, opt.delay_min_s, opt.delay_max_s,
+                    int(std::ceil((opt.delay_max_s - opt.delay_min_s) / kGridStepS)));
     Cause c{kind(), {{"delay_s", tau}}, F(tau), 0, 1, ""};
     c.chi2 = chi2(p, c.F);
     out->push_back(std::move(c));

@@ -90,7 +90,7 @@ struct DiagnoseOptions {
   double max_rel_sigma = 0.3;  // points measured worse than this (sigma / |G|) are not used
   // Search ranges.
   double delay_min_s = -0.02;  // time_delay searched over [delay_min_s, delay_max_s], s
-  double delay_max_s = 0.05;
+  double delay_max_s = 0.2;
   double corner_decades_beyond = 1;  // lag/lead corners: the band widened by this many decades
   double pole_shift_range = 30;      // a pole moves within [from / range, from * range]
   // Scope: the same cause on several paths is one effect when the parameters agree within these.

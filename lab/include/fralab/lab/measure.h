@@ -1,4 +1,4 @@
-// The lab launcher behind `fralab run` and `fralab measure`: starts lcm-logger, the plant, one
+// The lab launcher behind `fralab run` and `fralab measure`: starts the recorder, the plant, one
 // analyser per channel pair and the acquisition as separate processes on a private LCM URL,
 // supervises them, verifies the tape holds every block, and stops them cleanly.
 #pragma once
@@ -27,7 +27,7 @@ struct MeasureOptions {
 struct MeasureResult {
   std::vector<std::string> pairs;
   double engine_time_s = 0;
-  double wall_time_s = 0;  // acquisition and analysis (plant, acquire, analysers, logger)
+  double wall_time_s = 0;  // acquisition and analysis (plant, acquire, analysers, recorder)
   double fit_time_s = 0;   // the identifier, after the analysers finished
   int64_t tape_blocks = 0;
   std::string run_id;

@@ -1,0 +1,53 @@
+// fralab-record: the lab's tape recorder, inside the flow control. Writes every message of the LCM
+// URL to a standard LCM log (what lcm-logplayer replays) and acknowledges each tape block once it
+// is on disk (FRALAB_ACK, consumer "recorder"). Runs until SIGINT or SIGTERM.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <csignal>
+#include <iostream>
+
+#include "fralab/lcm_io.h"
+#include "recorder_node.h"
+
+using namespace fralab;
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fralab-record: the tape recorder inside the flow control"};
+  std::string url, ctl_url, run_id, out, name = "recorder";
+  app.add_option("--lcm-url", url, "LCM URL");
+  app.add_option("--control-url", ctl_url,
+                 "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
+  app.add_option("--run-id", run_id, "acknowledge only this run's blocks");
+  app.add_option("--out", out, "the tape (LCM log) to write")->required();
+  app.add_option("--name", name, "consumer name for flow control")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  try {
+    lcm::LCM lcm(resolve_lcm_url(url));
+    if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
+                                 : resolve_lcm_url(ctl_url));
+    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    RecorderNode rec(lcm, ctl, out, run_id, name);
+    auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+    while (!g_stop) {
+      if (!rec.started() &&
+          std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+        rec.announce_ready();
+        last_ready = std::chrono::steady_clock::now();
+      }
+      lcm.handleTimeout(100);
+      if (!rec.error().empty()) throw InputError(rec.error());
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "fralab-record: " << e.what() << "\n";
+    return 1;
+  }
+}

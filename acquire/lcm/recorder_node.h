@@ -1,0 +1,44 @@
+// The tape recorder inside the flow control (issue 12): every message on the data instance is
+// written to a standard LCM log file (lcm-logplayer and lcm::LogFile read it), flushed, and each
+// tape block is acknowledged under the recorder's name on the control instance only once it is on
+// disk. The acquisition counts the recorder among its consumers, so a busy machine slows the run
+// instead of losing tape blocks (lcm-logger, outside the flow control, dropped them).
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+
+namespace fralab {
+
+class RecorderNode {
+ public:
+  /// Creates (truncates) `path`; InputError naming it when it cannot. run_id "": the first tape
+  /// block's run id is taken (blocks of another run are written but not acknowledged).
+  RecorderNode(lcm::LCM& data, lcm::LCM& control, const std::string& path, std::string run_id = "",
+               std::string name = "recorder");
+  ~RecorderNode();
+  RecorderNode(const RecorderNode&) = delete;
+  RecorderNode& operator=(const RecorderNode&) = delete;
+
+  /// "Ready" (ack -1 under the recorder's name).
+  void announce_ready();
+  /// A tape block of the run has been written and acknowledged (no more "ready" needed).
+  bool started() const { return blocks_ > 0; }
+  int64_t events() const { return events_; }
+  /// The first error met (a write that failed, a malformed tape block); "" while all is well.
+  const std::string& error() const { return error_; }
+
+ private:
+  void on_any(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void ack(int64_t seq);
+  lcm::LCM& data_;
+  lcm::LCM& control_;
+  std::string path_, run_id_, name_;
+  std::unique_ptr<lcm::LogFile> log_;
+  lcm::Subscription* sub_ = nullptr;
+  int64_t events_ = 0, blocks_ = 0;
+  std::string error_;
+};
+
+}  // namespace fralab

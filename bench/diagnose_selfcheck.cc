@@ -1,0 +1,96 @@
+// fralab-bench-diagnose: the diagnosis's randomised self-check (issue 11). N random plants
+// (tests/util/random_plant.h), each hiding 0-2 effects, go through the real processes
+// (`fralab diagnose --engine`, measurement and validation included); prints per case the findings
+// that were not hidden and the hidden effects that were missed, then precision (true findings /
+// all findings) and recall (hidden effects named at their place within tolerance / hidden).
+// Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "random_plant.h"
+
+using namespace fralab;
+using namespace fralab::testing;
+
+namespace {
+
+std::vector<Finding> read_findings(const std::string& file) {
+  const Json j = json_load_file(file);
+  std::vector<Finding> v;
+  for (const auto& jf : j.at("findings")) {
+    Finding f;
+    f.cause = cause_from_string(jf.at("cause"));
+    f.scope = scope_from_string(jf.at("scope"));
+    if (jf.at("input").is_string()) f.input = jf.at("input");
+    if (jf.at("output").is_string()) f.output = jf.at("output");
+    for (const auto& [k, val] : jf.at("parameters").items())
+      if (val.is_number()) f.parameters[k] = val;
+    v.push_back(f);
+  }
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fralab-bench-diagnose: precision and recall of the diagnosis on random plants"};
+  int cases = 60, first = 0;
+  uint64_t seed = 1;
+  std::string out = "out/selfcheck", band = "0.1:20";
+  int ppd = 5;
+  double min_precision = 0, min_recall = 0;
+  app.add_option("--min-precision", min_precision, "exit 1 below this (ctest)");
+  app.add_option("--min-recall", min_recall, "exit 1 below this (ctest)");
+  app.add_option("--cases", cases)->capture_default_str();
+  app.add_option("--first", first, "index of the first case")->capture_default_str();
+  app.add_option("--seed", seed, "generator seed")->capture_default_str();
+  app.add_option("--out", out)->capture_default_str();
+  app.add_option("--band", band, "measure band, Hz")->capture_default_str();
+  app.add_option("--points-per-decade", ppd)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const std::string bin =
+      std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
+  Score total;
+  int failing = 0;
+  for (int i = first; i < first + cases; ++i) {
+    const RandomCase c = random_case(seed, i);
+    const std::string dir = out + "/" + c.name;
+    std::filesystem::create_directories(dir);
+    save_model(dir + "/simulation.json", c.simulation);
+    save_model(dir + "/engine.json", c.engine);
+    const std::string cmd = bin + " diagnose --simulation " + dir + "/simulation.json --engine " +
+                            dir + "/engine.json --out " + dir + "/diagnosis --no-plots --band " +
+                            band + " --points-per-decade " + std::to_string(ppd) + " --seed 5 > " +
+                            dir + "/log.txt 2>&1";
+    if (std::system(cmd.c_str()) != 0) {
+      std::printf("%s: fralab diagnose failed (see %s/log.txt)\n", c.name.c_str(), dir.c_str());
+      ++failing;
+      total.hidden += int(c.hidden.size());
+      total.findings += 1;  // a failed run counts against precision too
+      continue;
+    }
+    const Score s = score(c, read_findings(dir + "/diagnosis/diagnosis.json"));
+    total.findings += s.findings;
+    total.true_findings += s.true_findings;
+    total.hidden += s.hidden;
+    total.found += s.found;
+    const bool ok = s.false_findings.empty() && s.missed.empty();
+    failing += !ok;
+    std::printf("%s: %zu inputs x %zu outputs, %d hidden, %d findings, %s\n", c.name.c_str(),
+                c.simulation.inputs.size(), c.simulation.outputs.size(), s.hidden, s.findings,
+                ok ? "ok" : "FAILING");
+    for (const auto& f : s.false_findings) std::printf("    false: %s\n", f.c_str());
+    for (const auto& m : s.missed) std::printf("    missed: %s\n", m.c_str());
+    std::fflush(stdout);
+  }
+  const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
+  const double recall = total.hidden ? double(total.found) / total.hidden : 1.0;
+  std::printf(
+      "selfcheck: %d cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d findings), "
+      "recall %.3f (%d of %d hidden effects), %d failing cases\n",
+      cases, (unsigned long long)seed, band.c_str(), ppd, precision, total.true_findings,
+      total.findings, recall, total.found, total.hidden, failing);
+  return precision >= min_precision && recall >= min_recall ? 0 : 1;
+}

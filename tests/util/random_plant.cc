@@ -1,0 +1,171 @@
+#include "random_plant.h"
+
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace fralab::testing {
+
+namespace {
+
+Tf lag(double a, double gain = 1.0) {
+  Tf t;
+  t.gain = gain;
+  t.poles = {Root::Real(-a)};
+  return t;
+}
+
+std::string name_of(std::mt19937_64& g, const char* prefix, int i) {
+  static const char* syl[] = {"ka", "ro", "mi", "tu", "ze", "lo", "fa", "ni", "su", "ve"};
+  return std::string(prefix) + syl[g() % 10] + syl[g() % 10] + std::to_string(i);
+}
+
+ModelPath* find_path(Model& m, const std::string& out, const std::string& in) {
+  for (auto& p : m.paths)
+    if (p.output == out && p.input == in) return &p;
+  return nullptr;
+}
+
+}  // namespace
+
+std::string HiddenEffect::describe() const {
+  std::ostringstream s;
+  s << to_string(cause) << " [" << to_string(scope) << (input.empty() ? "" : " " + input)
+    << (output.empty() ? "" : " " + output) << "] " << param << "=" << value;
+  return s.str();
+}
+
+bool HiddenEffect::matches(const Finding& f) const {
+  if (f.cause != cause || f.scope != scope || f.input != input || f.output != output) return false;
+  const auto it = f.parameters.find(param);
+  if (it == f.parameters.end()) return param.empty();
+  const double tol = std::max(tol_abs, tol_rel * std::abs(value));
+  return std::abs(it->second - value) <= tol;
+}
+
+RandomCase random_case(uint64_t seed, int index, int n_hidden) {
+  std::mt19937_64 g(seed * 1000003u + uint64_t(index));
+  std::uniform_real_distribution<double> u(0, 1);
+  auto logu = [&](double lo, double hi) { return lo * std::pow(hi / lo, u(g)); };
+  RandomCase c;
+  c.name = "case" + std::to_string(index);
+  Model& m = c.simulation;
+  m.name = "random plant " + std::to_string(index);
+  const int ni = 1 + int(g() % 3), no = 2 + int(g() % 3);
+  for (int i = 0; i < ni; ++i) {
+    ModelInput in;
+    in.name = name_of(g, "U", i);
+    in.units = "1";
+    in.full_scale = 10.0;
+    in.noise_rms = u(g) < 0.5 ? 0.0 : 0.001;  // clean or noisy position channel
+    in.actuator = lag(logu(15, 60));
+    m.inputs.push_back(in);
+    m.steady_state[in.name] = 5.0;
+  }
+  for (int o = 0; o < no; ++o) {
+    ModelOutput out;
+    out.name = name_of(g, "Y", o);
+    out.units = "1";
+    out.noise_rms = logu(0.0005, 0.003);
+    if (u(g) < 0.3) out.sensor = lag(logu(40, 120));
+    m.outputs.push_back(out);
+    m.steady_state[out.name] = 50.0;
+  }
+  for (const auto& in : m.inputs)
+    for (const auto& out : m.outputs) {
+      Tf t = lag(logu(0.5, 8), (u(g) < 0.3 ? -1 : 1) * logu(0.5, 3));
+      if (u(g) < 0.4) t.poles.push_back(Root::Real(-logu(10, 40)));
+      if (u(g) < 0.2) t.poles.push_back(Root::Pair(logu(8, 30), logu(0.15, 0.5)));
+      m.paths.push_back({out.name, in.name, t, Json::object()});
+    }
+  c.engine = m;
+  const int nh = n_hidden >= 0 ? n_hidden : int(g() % 3);
+  std::vector<std::string> used;  // one effect per path or input, so each is identifiable
+  for (int h = 0; h < nh; ++h) {
+    const std::string in = m.inputs[g() % ni].name, out = m.outputs[g() % no].name;
+    ModelPath* ep = find_path(c.engine, out, in);
+    const int kind = int(g() % 6);
+    const bool at_input = kind == 4 || kind == 5;
+    const std::string key = at_input ? "in:" + in : in + ":" + out;
+    bool clash = false;
+    for (const auto& k : used)
+      clash |= k == key || k == "in:" + in || (at_input && k.rfind(in + ":", 0) == 0);
+    if (clash) continue;
+    used.push_back(key);
+    HiddenEffect e{};
+    e.input = in;
+    e.output = out;
+    e.scope = Scope::kPath;
+    switch (kind) {
+      case 0:  // a delay in one path
+        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
+        ep->tf.delay_s = e.value;
+        break;
+      case 1:  // a lag the simulation lacks
+        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(2, 30);
+        e.tol_rel = 0.1;
+        ep->tf.poles.push_back(Root::Real(-e.value));
+        break;
+      case 2: {  // a gain error
+        const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
+        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        ep->tf.gain *= std::pow(10.0, db / 20);
+        break;
+      }
+      case 3: {  // a path pole in the wrong place
+        const double from = -ep->tf.poles[0].real, to = from * logu(1.6, 3);
+        e.cause = CauseKind::kPoleShift, e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        ep->tf.poles[0].real = -to;
+        break;
+      }
+      case 4: {  // the actuator's pole
+        ModelInput& ein = c.engine.inputs[c.engine.input_index(in)];
+        const double from = -ein.actuator->poles[0].real, to = from * logu(1.8, 3);
+        e.cause = CauseKind::kPoleShift, e.scope = Scope::kInput, e.output = "";
+        e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        ein.actuator->poles[0].real = -to;
+        break;
+      }
+      case 5: {  // the actuator's backlash (2 % amplitude = 0.2: width 0.03-0.08)
+        ModelInput& ein = c.engine.inputs[c.engine.input_index(in)];
+        e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
+        e.param = "width", e.value = logu(0.03, 0.08), e.tol_rel = 0.25;
+        ein.nonlinearity.push_back({"hysteresis", e.value});
+        break;
+      }
+    }
+    c.hidden.push_back(e);
+  }
+  return c;
+}
+
+Score score(const RandomCase& c, const std::vector<Finding>& findings) {
+  Score s;
+  s.findings = int(findings.size());
+  s.hidden = int(c.hidden.size());
+  for (const auto& f : findings) {
+    bool ok = false;
+    for (const auto& h : c.hidden) ok |= h.matches(f);
+    if (ok) {
+      ++s.true_findings;
+    } else {
+      std::ostringstream d;
+      d << to_string(f.cause) << " [" << to_string(f.scope) << " " << f.input << " " << f.output
+        << "]";
+      for (const auto& [k, v] : f.parameters) d << " " << k << "=" << v;
+      s.false_findings.push_back(d.str());
+    }
+  }
+  for (const auto& h : c.hidden) {
+    bool ok = false;
+    for (const auto& f : findings) ok |= h.matches(f);
+    if (ok)
+      ++s.found;
+    else
+      s.missed.push_back(h.describe());
+  }
+  return s;
+}
+
+}  // namespace fralab::testing

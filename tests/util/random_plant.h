@@ -1,0 +1,46 @@
+// A generator of random plants for the diagnosis's self-check (issue 11): sizes 1-3 inputs x 2-4
+// outputs, random names, dynamics, actuators with and without position noise, sensors, noise
+// levels; each case hides 0-2 effects drawn from the catalogue into the engine and says what the
+// diagnosis must find (cause, place, parameter, tolerance). Deterministic in the seed.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fralab/diagnose/diagnose.h"
+#include "fralab/plant/model.h"
+
+namespace fralab::testing {
+
+/// One hidden effect: the finding that names it (cause, scope, input/output as in contracts 6) and
+/// its parameter `param` with value and tolerance (absolute `tol_abs` or relative `tol_rel`).
+struct HiddenEffect {
+  CauseKind cause;
+  Scope scope;
+  std::string input, output;
+  std::string param;
+  double value = 0;
+  double tol_abs = 0, tol_rel = 0;
+  std::string describe() const;
+  /// Whether a finding names this effect at its place within tolerance.
+  bool matches(const Finding& f) const;
+};
+
+struct RandomCase {
+  std::string name;
+  Model simulation, engine;
+  std::vector<HiddenEffect> hidden;
+};
+
+/// Case `index` of the sequence drawn from `seed`; n_hidden < 0: 0-2 at random.
+RandomCase random_case(uint64_t seed, int index, int n_hidden = -1);
+
+/// Precision and recall of a diagnosis against a case's hidden effects.
+struct Score {
+  int findings = 0, true_findings = 0, hidden = 0, found = 0;
+  std::vector<std::string> false_findings, missed;
+};
+Score score(const RandomCase& c, const std::vector<Finding>& findings);
+
+}  // namespace fralab::testing
