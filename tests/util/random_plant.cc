@@ -84,12 +84,19 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
   for (int h = 0; h < nh; ++h) {
     const std::string in = m.inputs[g() % ni].name, out = m.outputs[g() % no].name;
     ModelPath* ep = find_path(c.engine, out, in);
-    const int kind = int(g() % 6);
+    const int kind = int(g() % 11);
     const bool at_input = kind == 4 || kind == 5;
-    const std::string key = at_input ? "in:" + in : in + ":" + out;
+    const bool at_output = kind == 10;
+    const std::string key = at_input ? "in:" + in : at_output ? "out:" + out : in + ":" + out;
     bool clash = false;
-    for (const auto& k : used)
+    for (const auto& k : used) {
+      const bool k_input = k.rfind("in:", 0) == 0, k_output = k.rfind("out:", 0) == 0;
       clash |= k == key || k == "in:" + in || (at_input && k.rfind(in + ":", 0) == 0);
+      // an output's sensor touches every path into it
+      clash |= k_output || (at_output && !k_input && k.size() > out.size() &&
+                            k.compare(k.size() - out.size() - 1, out.size() + 1, ":" + out) == 0);
+      clash |= at_output && k_input;
+    }
     if (clash) continue;
     used.push_back(key);
     HiddenEffect e{};
@@ -132,6 +139,48 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
         e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
         e.param = "width", e.value = logu(0.03, 0.08), e.tol_rel = 0.25;
         ein.nonlinearity.push_back({"hysteresis", e.value});
+        break;
+      }
+      case 6: {  // a lead (a real zero) the simulation lacks
+        e.cause = CauseKind::kMissingLead, e.param = "corner_rad_s", e.value = logu(2, 20);
+        e.tol_rel = 0.1;
+        ep->tf.zeros.push_back(Root::Real(-e.value));
+        break;
+      }
+      case 7: {  // a resonance the simulation lacks
+        e.cause = CauseKind::kMissingResonance, e.param = "wn_rad_s", e.value = logu(3, 40);
+        e.tol_rel = 0.1;
+        ep->tf.poles.push_back(Root::Pair(e.value, logu(0.1, 0.3)));
+        break;
+      }
+      case 8: {  // the path's sign
+        e.cause = CauseKind::kSignError, e.param = "sign", e.value = -1, e.tol_abs = 1e-9;
+        ep->tf.gain = -ep->tf.gain;
+        break;
+      }
+      case 9: {  // the damping of a pair (one is added to both models when the path has none)
+        Root* pr = nullptr;
+        for (auto& r : ep->tf.poles)
+          if (r.pair) pr = &r;
+        if (!pr) {
+          const Root pair = Root::Pair(logu(5, 25), 0.4);
+          ep->tf.poles.push_back(pair);
+          find_path(c.simulation, out, in)->tf.poles.push_back(pair);
+          pr = &ep->tf.poles.back();
+        }
+        e.cause = CauseKind::kDampingError, e.param = "to_zeta",
+        e.value = pr->zeta * logu(0.15, 0.4);
+        e.tol_rel = 0.15;
+        pr->zeta = e.value;
+        break;
+      }
+      case 10: {  // a sensor lag: every path into the output, reported once (scope output)
+        ModelOutput& eo = c.engine.outputs[c.engine.output_index(out)];
+        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(3, 30);
+        e.tol_rel = 0.1;
+        if (ni > 1) e.scope = Scope::kOutput, e.input = "";  // one path alone: that path's
+        if (!eo.sensor) eo.sensor = Tf{};
+        eo.sensor->poles.push_back(Root::Real(-e.value));
         break;
       }
     }
