@@ -497,6 +497,73 @@ std::vector<C> remove_delay(const Data& d, double tau) {
   return g;
 }
 
+// Valid points of `pts` into d (sorted by frequency, weights); false with res set when there is
+// nothing to fit (too few points, or no response above the measured noise).
+bool prepare_data(const std::vector<FrdPoint>& pts, const FitOptions& o, Data& d, FitResult& res) {
+  std::vector<FrdPoint> v;
+  for (const auto& p : pts)
+    if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
+  std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  res.n_points = int(v.size());
+  if (v.size() < 3) {
+    res.message = "need at least 3 valid points, have " + std::to_string(v.size());
+    return false;
+  }
+  d.has_sigma = o.use_sigma;
+  for (const auto& p : v) d.has_sigma = d.has_sigma && p.sigma > 0;
+  for (const auto& p : v) {
+    d.w.push_back(p.w);
+    d.g.push_back(p.value());
+    d.sigma.push_back(p.sigma);
+    double mag2 = std::max(std::norm(p.value()), 1e-300);
+    d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
+  }
+  if (d.has_sigma) {
+    int clear = 0;
+    for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
+    if (clear < 3) {
+      res.status = FitResult::Status::kNoResponse;
+      res.message = "no response above the noise: " + std::to_string(clear) + " of " +
+                    std::to_string(v.size()) + " points measured to better than 30 %";
+      return false;
+    }
+  }
+  return true;
+}
+
+// The result's figures, roots, Pade sets and sigmas for the chosen model.
+void fill_result(FitResult& res, const Data& d, const Tf& tf, bool free_delay, const Score& s,
+                 double chi2dof, bool adequate, int iterations, double e_phi, int reflected) {
+  res.tf = tf;
+  res.num_order = tf.num_order();
+  res.den_order = tf.den_order();
+  res.iterations = iterations;
+  res.e_phi = e_phi;
+  res.e_n = s.e_n;
+  res.chi2_per_dof = chi2dof;
+  res.rms_rel_error = s.rms_rel;
+  res.max_rel_error = s.max_rel;
+  res.unstable_reflected = reflected;
+  res.pade = find_pade_sets(res.tf);
+  for (const auto& p : res.pade) res.pade_delay_s += p.delay_s;
+  res.zero_info = root_info(res.tf.zeros);
+  res.pole_info = root_info(res.tf.poles);
+  Sigmas sg = parameter_sigmas(d, res.tf, free_delay, s.sse);
+  for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i)
+    res.zero_info[i].rel_sigma = sg.zeros[i];
+  for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i)
+    res.pole_info[i].rel_sigma = sg.poles[i];
+  res.gain_rel_sigma = sg.gain;
+  res.delay_sigma_s = sg.delay;
+  res.status = adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
+                res.status_str().c_str(), res.num_order, res.den_order,
+                d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
+                res.tf.delay_s, res.iterations);
+  res.message = buf;
+}
+
 }  // namespace
 
 void FitOptions::validate() const {
@@ -571,35 +638,8 @@ std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
 FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   o.validate();
   Data d;
-  std::vector<FrdPoint> v;
-  for (const auto& p : pts)
-    if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
-  std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   FitResult res;
-  res.n_points = int(v.size());
-  if (v.size() < 3) {
-    res.message = "need at least 3 valid points, have " + std::to_string(v.size());
-    return res;
-  }
-  d.has_sigma = o.use_sigma;
-  for (const auto& p : v) d.has_sigma = d.has_sigma && p.sigma > 0;
-  for (const auto& p : v) {
-    d.w.push_back(p.w);
-    d.g.push_back(p.value());
-    d.sigma.push_back(p.sigma);
-    double mag2 = std::max(std::norm(p.value()), 1e-300);
-    d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
-  }
-  if (d.has_sigma) {
-    int clear = 0;
-    for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
-    if (clear < 3) {
-      res.status = FitResult::Status::kNoResponse;
-      res.message = "no response above the noise: " + std::to_string(clear) + " of " +
-                    std::to_string(v.size()) + " points measured to better than 30 %";
-      return res;
-    }
-  }
+  if (!prepare_data(pts, o, d, res)) return res;
   const double ws = std::sqrt(d.w.front() * d.w.back());
   const int max_n = std::min(o.max_den_order, int(d.w.size()) - 1);
 
@@ -767,37 +807,25 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     refine_cand(r, 0);
     if (r.s.sse <= fin.s.sse) fin = r;
   }
-  pick = &fin;
-  res.tf = pick->tf;
-  res.num_order = pick->tf.num_order();
-  res.den_order = pick->tf.den_order();
-  res.iterations = pick->iterations;
-  res.e_phi = pick->e_phi;
-  res.e_n = pick->s.e_n;
-  res.chi2_per_dof = pick->chi2dof;
-  res.rms_rel_error = pick->s.rms_rel;
-  res.max_rel_error = pick->s.max_rel;
-  res.unstable_reflected = pick->reflected;
-  res.pade = find_pade_sets(res.tf);
-  for (const auto& s : res.pade) res.pade_delay_s += s.delay_s;
-  res.zero_info = root_info(res.tf.zeros);
-  res.pole_info = root_info(res.tf.poles);
-  {
-    Sigmas sg = parameter_sigmas(d, res.tf, pick->free_delay, pick->s.sse);
-    for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i)
-      res.zero_info[i].rel_sigma = sg.zeros[i];
-    for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i)
-      res.pole_info[i].rel_sigma = sg.poles[i];
-    res.gain_rel_sigma = sg.gain;
-    res.delay_sigma_s = sg.delay;
-  }
-  res.status = pick->adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
-                res.status_str().c_str(), res.num_order, res.den_order,
-                d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
-                res.tf.delay_s, res.iterations);
-  res.message = buf;
+  fill_result(res, d, fin.tf, fin.free_delay, fin.s, fin.chi2dof, fin.adequate, fin.iterations,
+              fin.e_phi, fin.reflected);
+  return res;
+}
+
+FitResult refine_tf(const std::vector<FrdPoint>& pts, const Tf& start, const FitOptions& o) {
+  o.validate();
+  Data d;
+  FitResult res;
+  if (!prepare_data(pts, o, d, res)) return res;
+  Tf t = start;
+  const bool free_delay = o.delay == FitOptions::Delay::kAuto;
+  if (o.delay == FitOptions::Delay::kFixed) t.delay_s = o.delay_s;
+  if (o.delay == FitOptions::Delay::kNone) t.delay_s = 0;
+  if (o.refine) t = refine(d, t, free_delay);
+  const Score s = score(d, t);
+  double chi2dof = -1;
+  const double mf = misfit(d, s, n_params(t, free_delay), o, &chi2dof);
+  fill_result(res, d, t, free_delay, s, chi2dof, mf <= 1.0, 0, 0, 0);
   return res;
 }
 

@@ -98,6 +98,12 @@ struct FitResult {
 /// Identifies a tf from valid points of `data` (invalid points are skipped). Needs >= 3 points.
 FitResult fit_tf(const std::vector<FrdPoint>& data, const FitOptions& opt);
 
+/// Output-error refinement (weighted Levenberg-Marquardt, as fit_tf's last stage) of `start` on the
+/// valid points of `data`: its orders and root kinds are kept; the delay is opt.delay_s (kFixed),
+/// 0 (kNone) or fitted jointly from start.delay_s (kAuto). Status, figures and sigmas as fit_tf's.
+/// (An oracle's fit in the benchmark: the true structure from the true start.)
+FitResult refine_tf(const std::vector<FrdPoint>& data, const Tf& start, const FitOptions& opt);
+
 /// Root table of a tf (locations, frequency and damping).
 std::vector<RootInfo> root_info(const std::vector<Root>& roots);
 
