@@ -22,6 +22,8 @@ struct Data {
   std::vector<double> W;  // weights
   std::vector<double> sigma;
   bool has_sigma = false;
+  double chi2_slack = 1;  // > 1 when sigma is estimated: the estimate's own uncertainty
+  double max_delay = INFINITY;
 };
 
 // An orthonormal polynomial basis on the weighted points (Arnoldi); see tfns.h.
@@ -210,6 +212,7 @@ struct Param {
   double g0;
   bool free_delay;
   double fixed_delay;
+  double max_delay = INFINITY;  // a free delay stays in [0, max_delay]
   int size() const {
     int k = 1 + (free_delay ? 1 : 0);
     for (const Root& z : shape.zeros) k += z.order();
@@ -260,7 +263,7 @@ struct Param {
         p.real = -std::max(std::exp(x(k++)), 1e-12);
       }
     }
-    t.delay_s = free_delay ? std::abs(x(k++)) : fixed_delay;
+    t.delay_s = free_delay ? std::min(std::abs(x(k++)), max_delay) : fixed_delay;
     return t;
   }
 };
@@ -321,7 +324,8 @@ struct OeFunctor {
           put(-G * (s / q.real) / F);  // F = 1 - s/r, r = -e^th: dF/dth = s/r
         }
       }
-      if (p->free_delay) put(-s * G * (x(k) >= 0 ? 1.0 : -1.0));
+      if (p->free_delay)
+        put(std::abs(x(k)) >= p->max_delay ? C(0.0) : -s * G * (x(k) >= 0 ? 1.0 : -1.0));
     }
     return 0;
   }
@@ -336,7 +340,7 @@ Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations =
   // A zero at exactly s = 0 cannot be packed; such starts are returned unrefined.
   for (const Root& z : start.zeros)
     if (!z.pair && z.real == 0) return start;
-  Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s};
+  Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s, d.max_delay};
   OeFunctor f{&d, &p};
   Eigen::LevenbergMarquardt<OeFunctor> lm(f);
   lm.parameters.maxfev = max_evaluations > 0 ? max_evaluations : 200 * (p.size() + 1);
@@ -407,7 +411,7 @@ struct Sigmas {
 };
 Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse) {
   Sigmas out;
-  Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s};
+  Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s, d.max_delay};
   for (const Root& z : t.zeros)
     if (!z.pair && z.real == 0) return out;
   OeFunctor f{&d, &p};
@@ -467,7 +471,7 @@ double misfit(const Data& d, const Score& s, int params, const FitOptions& o, do
     const double N = double(d.w.size());
     const double dof = std::max(1.0, N - params / 2.0);
     *chi2dof = s.chi2 / dof;
-    return *chi2dof / (1.0 + 3.0 / std::sqrt(N));
+    return *chi2dof / ((1.0 + 3.0 / std::sqrt(N)) * d.chi2_slack);
   }
   return s.e_n / o.c_n;
 }
@@ -577,6 +581,8 @@ void FitOptions::validate() const {
   if (max_iterations < 2) bad("max_iterations must be >= 2");
   if (delay == Delay::kFixed && !(delay_s >= 0)) bad("a fixed delay must be >= 0 s");
   if (!(max_delay_s > 0)) bad("max_delay_s must be > 0");
+  if (!(tolerance >= 0) || !(noise_floor > 0)) bad("tolerance must be >= 0, noise_floor > 0");
+  if (min_num_order < 0) bad("min_num_order must be >= 0");
 }
 
 std::string FitResult::status_str() const {
@@ -640,6 +646,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   Data d;
   FitResult res;
   if (!prepare_data(pts, o, d, res)) return res;
+  d.max_delay = o.max_delay_s;
   const double ws = std::sqrt(d.w.front() * d.w.back());
   const int max_n = std::min(o.max_den_order, int(d.w.size()) - 1);
 
@@ -672,14 +679,72 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     sk.tf.delay_s = tau;
     return std::make_pair(score(d, sk.tf).sse, sk);
   };
-  const double tau_window = o.max_delay_s / 100;  // 0.5 ms at the default range
+  const double tau_window = std::min(o.max_delay_s / 100, 0.5e-3);
+  // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first (a
+  // short rational cannot imitate a large high-frequency phase lag, so the error has a clear
+  // minimum near the delay), then per order in order_loop, then jointly in refine(). The grid's
+  // step keeps the phase step at the top frequency below ~1.5 rad. Computed once.
+  double coarse_tau = -1;
+  auto coarse_delay = [&]() {
+    if (coarse_tau >= 0) return coarse_tau;
+    FitOptions quick = o;
+    quick.max_iterations = 6;
+    auto err_at = [&](double tau) {
+      return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
+    };
+    const int G = std::clamp(int(std::ceil(o.max_delay_s * d.w.back() / 1.5)) + 1, 26, 200);
+    double bt = 0, be = err_at(0.0);
+    for (int k = 1; k < G; ++k) {
+      double t = o.max_delay_s * k / (G - 1), e = err_at(t);
+      if (e < be) be = e, bt = t;
+    }
+    const double step = o.max_delay_s / (G - 1);
+    const double lo = std::max(0.0, bt - step), hi = std::min(o.max_delay_s, bt + step);
+    coarse_tau = detail::golden(err_at, lo, hi, 20);
+    return coarse_tau;
+  };
+  // Without sigma: the noise level from deliberately over-fitted models (SK at orders well above
+  // any the loop will accept, without and with the coarse delay removed); the reduced chi^2
+  // against it is the stop rule, with a slack for the estimate's own uncertainty.
+  if (!d.has_sigma && (o.estimate_noise || o.tolerance > 0)) {
+    double s2 = o.tolerance * o.tolerance;
+    double dof_est = 1e9;
+    if (!(o.tolerance > 0)) {
+      s2 = INFINITY;
+      const int N = int(d.w.size());
+      const int n_hi = std::min(14, (N - 3) / 2);
+      std::vector<double> taus = {0.0};
+      if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay());
+      if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
+      FitOptions oo = o;
+      oo.max_iterations = 30;
+      for (double tau : taus) {
+        for (int n = n_hi; n >= std::max(1, n_hi - 2); --n) {
+          auto [sse, sk] = sk_err(tau, n, n, oo);
+          const double dof = N - (2 * n + 1) / 2.0;
+          if (dof < 2 || !(sse < 1e300)) continue;
+          if (sse / dof < s2) s2 = sse / dof, dof_est = dof;
+        }
+      }
+    }
+    if (std::isfinite(s2)) {
+      const double s = std::max(std::sqrt(s2), o.noise_floor);
+      res.noise_rel = s;
+      d.has_sigma = true;
+      d.chi2_slack = 1.0 + 2.0 / std::sqrt(dof_est);
+      for (size_t i = 0; i < d.w.size(); ++i) {
+        d.sigma[i] = s * std::max(std::abs(d.g[i]), 1e-300);
+        d.W[i] = 1.0 / (d.sigma[i] * d.sigma[i]);
+      }
+    }
+  }
   // max_params: stop once every candidate of an order would have at least this many parameters
   // (an alternative only wins with fewer parameters than an adequate fit already found).
   auto order_loop = [&](double tau0, bool free_delay, int max_params) {
     Cand best;
     int stalled = 0;
     for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
-      if (n + std::max(0, n - 3) + 1 + (free_delay ? 1 : 0) >= max_params) break;
+      if (n + std::max(0, o.min_num_order) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
       // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
       // of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the joint
@@ -692,7 +757,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         std::vector<std::pair<double, double>> grid;  // (err, tau)
         for (int k = -10; k <= 10; ++k) {
           const double t = tau0 + k * tau_window;
-          if (t >= 0) grid.push_back({sk_err(t, n, n, quick).first, t});
+          if (t >= 0 && t <= o.max_delay_s) grid.push_back({sk_err(t, n, n, quick).first, t});
         }
         std::sort(grid.begin(), grid.end());
         starts.clear();
@@ -703,7 +768,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           if (starts.size() == 3) break;
         }
       }
-      for (int m = n; m >= std::max(0, n - 3); --m) {
+      for (int m = n; m >= std::min(n, std::max(0, o.min_num_order)); --m) {
         if (n == o.den_order_start && m < o.num_order_start) continue;
         Cand c;
         for (double tau : starts) {
@@ -762,23 +827,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     bool rhp_zeros = false;
     for (const Root& z : cands[0].tf.zeros) rhp_zeros |= z.pair ? z.zeta < 0 : z.real > 0;
     if (o.delay == FitOptions::Delay::kAuto && cands[0].ok && (!cands[0].adequate || rhp_zeros)) {
-      // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first
-      // (a short rational cannot imitate a large high-frequency phase lag, so the error has a
-      // clear minimum near the delay), then per order in order_loop, then jointly in refine().
-      FitOptions quick = o;
-      quick.max_iterations = 6;
-      auto err_at = [&](double tau) {
-        return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
-      };
-      const int G = 26;
-      double bt = 0, be = err_at(0.0);
-      for (int k = 1; k < G; ++k) {
-        double t = o.max_delay_s * k / (G - 1), e = err_at(t);
-        if (e < be) be = e, bt = t;
-      }
-      const double step = o.max_delay_s / (G - 1);
-      const double lo = std::max(0.0, bt - step), hi = bt + step;
-      const double tau0 = detail::golden(err_at, lo, hi, 20);
+      const double tau0 = coarse_delay();
       if (tau0 * d.w.back() > 0.05) {
         cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
       }
@@ -817,6 +866,7 @@ FitResult refine_tf(const std::vector<FrdPoint>& pts, const Tf& start, const Fit
   Data d;
   FitResult res;
   if (!prepare_data(pts, o, d, res)) return res;
+  d.max_delay = o.max_delay_s;
   Tf t = start;
   const bool free_delay = o.delay == FitOptions::Delay::kAuto;
   if (o.delay == FitOptions::Delay::kFixed) t.delay_s = o.delay_s;
