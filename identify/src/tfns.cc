@@ -434,7 +434,10 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
   }
   for (int k = 0; k < J.cols(); ++k)
     if (unidentified[k]) cov(k, k) = INFINITY;
-  if (!d.has_sigma) cov *= sse / std::max(1.0, double(f.values() - f.inputs()));
+  const double var = sse / std::max(1.0, double(f.values() - f.inputs()));
+  // Without sigma: scaled by the residual variance; with sigma (measured or estimated), by the
+  // reduced chi^2 when it exceeds 1 (the data scatter more than sigma says).
+  cov *= d.has_sigma ? std::max(1.0, var) : var;
   auto sd = [&](int k) { return std::sqrt(std::max(0.0, cov(k, k))); };
   int k = 0;
   out.gain = sd(k++);  // x0 = gain / g0 ~ 1: relative
@@ -499,6 +502,26 @@ std::vector<C> remove_delay(const Data& d, double tau) {
   std::vector<C> g(d.g);
   for (size_t i = 0; i < g.size(); ++i) g[i] *= std::polar(1.0, d.w[i] * tau);
   return g;
+}
+
+// A model the data cannot support physically: an (almost) undamped pole or zero pair (|zeta| <
+// 1e-3: the refinement's floor is 1e-9; a resonance that sharp between two points of a grid is not
+// resolved by them), or a pole and zero of the same kind within 1e-3 of each other (a cancelling
+// dipole). Such candidates are refused: any physical candidate is preferred.
+bool nonphysical(const Tf& t) {
+  for (const Root& p : t.poles)
+    if (p.pair && std::abs(p.zeta) < 1e-3) return true;
+  for (const Root& z : t.zeros)
+    if (z.pair && std::abs(z.zeta) < 1e-3) return true;
+  for (const Root& z : t.zeros) {
+    for (const Root& p : t.poles) {
+      if (z.pair != p.pair) continue;
+      const C lz = z.locations()[0], lp = p.locations()[0];
+      const C lz2 = std::conj(lz);
+      if (std::min(std::abs(lz - lp), std::abs(lz2 - lp)) < 1e-3 * std::abs(lp)) return true;
+    }
+  }
+  return false;
 }
 
 // Valid points of `pts` into d (sorted by frequency, weights); false with res set when there is
@@ -632,6 +655,9 @@ std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
       const double wz = z.pair ? z.wn : z.real, wp = p.pair ? p.wn : -p.real;
       if (std::abs(wz - wp) > tol * wp) continue;
       if (z.pair && std::abs(-z.zeta - p.zeta) > std::max(0.35 * p.zeta, 0.05)) continue;
+      // A Pade approximant's pairs are damped (|zeta| >= ~0.04 up to order 8): an undamped pair
+      // mirrored onto an undamped zero pair is a spurious dipole, not a delay.
+      if (z.pair && (p.zeta < 0.02 || -z.zeta < 0.02)) continue;
       PadeSet s{z, p, z.pair ? 2 * (-z.zeta) / z.wn + 2 * p.zeta / p.wn : 1 / wz + 1 / wp};
       used[k] = true;
       out.push_back(s);
@@ -656,6 +682,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     bool ok = false, adequate = false, free_delay = false;
     bool unfinished = false;  // its refinement stopped at the screening budget
     double chi2dof = -1, misfit = 0;
+    double rank = 0;  // sse, times 1e6 for a non-physical model (ranked below any physical one)
+    bool nonphysical = false;
     int params = 0, iterations = 0, reflected = 0;
     double e_phi = 0;
   };
@@ -663,7 +691,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     c.s = score(d, c.tf);
     c.params = n_params(c.tf, c.free_delay);
     c.misfit = misfit(d, c.s, c.params, o, &c.chi2dof);
-    c.adequate = c.misfit <= 1.0;
+    c.nonphysical = nonphysical(c.tf);
+    c.adequate = c.misfit <= 1.0 && !c.nonphysical;
+    c.rank = c.s.sse * (c.nonphysical ? 1e6 : 1.0);
   };
   // Output-error refinement of a candidate in place: `budget` residual evaluations (0: the full
   // budget); c.unfinished tells whether the budget stopped it.
@@ -793,27 +823,31 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
             refine_cand(r, kScreenEvaluations);
             // Stopped by the screening budget while close to adequate: finish it before judging.
             if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
-            if (r.s.sse <= t.s.sse) t = r;
+            if (r.rank <= t.rank) t = r;
           }
-          if (!c.ok || t.s.sse < c.s.sse) c = t;
+          if (!c.ok || t.rank < c.rank) c = t;
           if (c.adequate) break;  // an adequate start: the others cannot be preferred at this order
         }
         if (!c.ok) continue;
         if (!best_n.ok || (c.adequate && !best_n.adequate) ||
             (c.adequate == best_n.adequate &&
-             (c.adequate ? c.params < best_n.params : c.s.sse < best_n.s.sse))) {
+             (c.adequate ? c.params < best_n.params : c.rank < best_n.rank))) {
           best_n = c;
         }
+        // Lower numerator orders have fewer parameters: continue while they may still pass; stop
+        // when one misses clearly (chi^2 10x the threshold, its refinement finished) with an error
+        // 10x this order's best.
+        if (c.misfit > 10 && c.rank > 10 * best_n.rank && !c.unfinished) break;
       }
       if (!best_n.ok) continue;
       // Two orders in a row without a 5 % error improvement: higher orders only chase noise or a
       // nonlinearity (e.g. a backlash's describing function); stop raising.
-      if (n > 3 && best.ok && !best_n.adequate && best_n.s.sse > 0.95 * best.s.sse) {
+      if (n > 3 && best.ok && !best_n.adequate && best_n.rank > 0.95 * best.rank) {
         if (++stalled >= 2) return best;
       } else {
         stalled = 0;
       }
-      if (!best.ok || best_n.s.sse < best.s.sse || best_n.adequate) best = best_n;
+      if (!best.ok || best_n.rank < best.rank || best_n.adequate) best = best_n;
       if (best_n.adequate) return best_n;
     }
     return best;
@@ -840,8 +874,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     if (!pick || (c.adequate && !pick->adequate) ||
         (c.adequate == pick->adequate &&
          (c.adequate
-              ? (c.params < pick->params || (c.params == pick->params && c.s.sse < pick->s.sse))
-              : c.s.sse < pick->s.sse))) {
+              ? (c.params < pick->params || (c.params == pick->params && c.rank < pick->rank))
+              : c.rank < pick->rank))) {
       pick = &c;
     }
   }
@@ -854,7 +888,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   if (fin.unfinished) {  // the winner's screening refinement was cut short: finish it
     Cand r = fin;
     refine_cand(r, 0);
-    if (r.s.sse <= fin.s.sse) fin = r;
+    if (r.rank <= fin.rank) fin = r;
   }
   fill_result(res, d, fin.tf, fin.free_delay, fin.s, fin.chi2dof, fin.adequate, fin.iterations,
               fin.e_phi, fin.reflected);

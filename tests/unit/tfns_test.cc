@@ -319,3 +319,16 @@ TEST(Tfns, DelayRangeIsAnOptionAndNeverExceeded) {
   EXPECT_LE(q.tf.delay_s, o.max_delay_s) << q.message;
   EXPECT_GE(q.tf.delay_s, 0.0) << q.message;
 }
+
+TEST(Tfns, AnUndampedDipoleIsNotAPadeDelay) {
+  // A zero pair mirrored onto a pole pair, both undamped (zeta 1e-3, far below any Pade
+  // approximant's): a spurious dipole, not a delay.
+  Tf t;
+  t.zeros = {Root::Pair(100.0, -1e-3)};
+  t.poles = {Root::Real(-2.0), Root::Pair(100.5, 1e-3)};
+  EXPECT_TRUE(find_pade_sets(t).empty());
+  // The same set damped as a Pade approximant is one.
+  t.zeros = {Root::Pair(100.0, -0.5)};
+  t.poles = {Root::Real(-2.0), Root::Pair(100.5, 0.5)};
+  EXPECT_EQ(find_pade_sets(t).size(), 1u);
+}
