@@ -829,6 +829,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           if (c.adequate) break;  // an adequate start: the others cannot be preferred at this order
         }
         if (!c.ok) continue;
+        // Numerator orders below n - 3 start from the delay of this order's best candidate so far
+        // (the separated grid starts serve to find that basin at the higher numerator orders).
+        if (free_delay && m <= n - 3 && best_n.ok) starts = {best_n.tf.delay_s};
         if (!best_n.ok || (c.adequate && !best_n.adequate) ||
             (c.adequate == best_n.adequate &&
              (c.adequate ? c.params < best_n.params : c.rank < best_n.rank))) {
