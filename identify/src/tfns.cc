@@ -747,9 +747,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay());
       if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
       FitOptions oo = o;
-      oo.max_iterations = 30;
+      oo.max_iterations = 12;
       for (double tau : taus) {
-        for (int n = n_hi; n >= std::max(1, n_hi - 2); --n) {
+        for (int n = n_hi; n >= std::max(1, n_hi - 2); n -= 2) {
           auto [sse, sk] = sk_err(tau, n, n, oo);
           const double dof = N - (2 * n + 1) / 2.0;
           if (dof < 2 || !(sse < 1e300)) continue;
