@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "fralab/analyze/frd.h"
-#include "fralab/plant/tf.h"
+#include "fralab/core/frd.h"
+#include "fralab/core/tf.h"
 
 namespace fralab::testing {
 
