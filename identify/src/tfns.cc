@@ -714,23 +714,28 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   // short rational cannot imitate a large high-frequency phase lag, so the error has a clear
   // minimum near the delay), then per order in order_loop, then jointly in refine(). The grid's
   // step keeps the phase step at the top frequency below ~1.5 rad. Computed once.
-  double coarse_tau = -1;
-  auto coarse_delay = [&]() {
-    if (coarse_tau >= 0) return coarse_tau;
+  // `top` (<= max_delay_s) bounds the search: the whole range unless a cheaper hint says where a
+  // delay can be. The last search is remembered.
+  double coarse_tau = -1, coarse_top = -1;
+  auto coarse_delay = [&](double top) {
+    top = std::min(top, o.max_delay_s);
+    if (coarse_tau >= 0 && top == coarse_top) return coarse_tau;
     FitOptions quick = o;
     quick.max_iterations = 6;
     auto err_at = [&](double tau) {
       return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
     };
-    const int G = std::clamp(int(std::ceil(o.max_delay_s * d.w.back() / 1.5)) + 1, 26, 200);
+    const int G =
+        std::clamp(int(std::ceil(top * d.w.back() / 1.5)) + 1, top < o.max_delay_s ? 8 : 26, 200);
     double bt = 0, be = err_at(0.0);
     for (int k = 1; k < G; ++k) {
-      double t = o.max_delay_s * k / (G - 1), e = err_at(t);
+      double t = top * k / (G - 1), e = err_at(t);
       if (e < be) be = e, bt = t;
     }
-    const double step = o.max_delay_s / (G - 1);
-    const double lo = std::max(0.0, bt - step), hi = std::min(o.max_delay_s, bt + step);
+    const double step = top / (G - 1);
+    const double lo = std::max(0.0, bt - step), hi = std::min(top, bt + step);
     coarse_tau = detail::golden(err_at, lo, hi, 20);
+    coarse_top = top;
     return coarse_tau;
   };
   // Without sigma: the noise level from deliberately over-fitted models (SK at orders well above
@@ -744,7 +749,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       const int N = int(d.w.size());
       const int n_hi = std::min(14, (N - 3) / 2);
       std::vector<double> taus = {0.0};
-      if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay());
+      if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay(o.max_delay_s));
       if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
       FitOptions oo = o;
       oo.max_iterations = 12;
@@ -800,6 +805,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       }
       for (int m = n; m >= std::min(n, std::max(0, o.min_num_order)); --m) {
         if (n == o.den_order_start && m < o.num_order_start) continue;
+        // Cannot win against an adequate fit already found (it needs fewer parameters).
+        if (n + m + 1 + (free_delay ? 1 : 0) >= max_params) continue;
         Cand c;
         for (double tau : starts) {
           Sk sk = sk_err(tau, n, m, o).second;
@@ -861,10 +868,30 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     cands.push_back(order_loop(o.delay_s, false, 1 << 20));
   } else {
     cands.push_back(order_loop(0.0, false, 1 << 20));
+    // The delay right-half-plane zeros can imitate: the largest over the band of their all-pass
+    // phase lag over w, or their group delay at low frequency (2/z for a real zero, 4 |zeta| / wn
+    // for a pair).
     bool rhp_zeros = false;
-    for (const Root& z : cands[0].tf.zeros) rhp_zeros |= z.pair ? z.zeta < 0 : z.real > 0;
+    double rhp_tau = 0;
+    std::vector<double> lag(d.w.size(), 0.0);
+    for (const Root& z : cands[0].tf.zeros) {
+      if (!(z.pair ? z.zeta < 0 : z.real > 0)) continue;
+      rhp_zeros = true;
+      rhp_tau += z.pair ? 4 * std::abs(z.zeta) / z.wn : 2 / z.real;
+      for (size_t i = 0; i < d.w.size(); ++i) {
+        const double w = d.w[i];
+        lag[i] += z.pair ? 2 * std::atan2(2 * std::abs(z.zeta) * z.wn * w, z.wn * z.wn - w * w)
+                         : 2 * std::atan(w / z.real);
+      }
+    }
+    for (size_t i = 0; i < d.w.size(); ++i) rhp_tau = std::max(rhp_tau, lag[i] / d.w[i]);
     if (o.delay == FitOptions::Delay::kAuto && cands[0].ok && (!cands[0].adequate || rhp_zeros)) {
-      const double tau0 = coarse_delay();
+      // An adequate delay-free fit with right-half-plane zeros: a delayed model only wins with
+      // fewer parameters, by replacing those zeros; the delay is searched up to twice the delay
+      // they can imitate (cheaper, and a wider search can mistake a high relative degree's phase
+      // lag for a delay).
+      const double tau0 =
+          coarse_delay(cands[0].adequate ? 2 * rhp_tau + 3.0 / d.w.back() : o.max_delay_s);
       if (tau0 * d.w.back() > 0.05) {
         cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
       }
