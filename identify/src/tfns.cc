@@ -774,17 +774,18 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     }
   }
   // max_params: stop once every candidate of an order would have at least this many parameters
-  // (an alternative only wins with fewer parameters than an adequate fit already found).
-  auto order_loop = [&](double tau0, bool free_delay, int max_params) {
+  // (an alternative only wins with fewer parameters than an adequate fit already found); top_n: the
+  // highest denominator order tried.
+  auto order_loop = [&](double tau0, bool free_delay, int max_params, int top_n, size_t n_starts) {
     Cand best;
     int stalled = 0;
-    for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
+    for (int n = std::max(o.den_order_start, 0); n <= std::min(max_n, top_n); ++n) {
       if (n + std::max(0, o.min_num_order) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
-      // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
-      // of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the joint
-      // refinement from several starts finds the basin that one start can miss); every numerator
-      // order of this n starts from them.
+      // Delay starts: tau0 itself, or with a free delay the n_starts best separated points of a
+      // grid of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the
+      // joint refinement from several starts finds the basin that one start can miss); every
+      // numerator order of this n starts from them.
       std::vector<double> starts = {tau0};
       if (free_delay) {
         FitOptions quick = o;
@@ -800,7 +801,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           bool far = true;
           for (double u : starts) far = far && std::abs(u - t) > 1.5 * tau_window;
           if (far) starts.push_back(t);
-          if (starts.size() == 3) break;
+          if (starts.size() == n_starts) break;
         }
       }
       for (int m = n; m >= std::min(n, std::max(0, o.min_num_order)); --m) {
@@ -865,27 +866,34 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
 
   std::vector<Cand> cands;
   if (o.delay == FitOptions::Delay::kFixed) {
-    cands.push_back(order_loop(o.delay_s, false, 1 << 20));
+    cands.push_back(order_loop(o.delay_s, false, 1 << 20, max_n, 1));
   } else {
-    cands.push_back(order_loop(0.0, false, 1 << 20));
-    // The delay right-half-plane zeros can imitate: the largest over the band of their all-pass
-    // phase lag over w, or their group delay at low frequency (2/z for a real zero, 4 |zeta| / wn
-    // for a pair).
+    cands.push_back(order_loop(0.0, false, 1 << 20, max_n, 1));
+    // The delay right-half-plane zeros can imitate: per zero, the largest over the band of its
+    // all-pass phase lag over w, or its group delay at low frequency (2/z for a real zero,
+    // 4 |zeta| / wn for a pair); a zero imitating more than max_delay_s is not a delay's.
     bool rhp_zeros = false;
     double rhp_tau = 0;
-    std::vector<double> lag(d.w.size(), 0.0);
     for (const Root& z : cands[0].tf.zeros) {
       if (!(z.pair ? z.zeta < 0 : z.real > 0)) continue;
-      rhp_zeros = true;
-      rhp_tau += z.pair ? 4 * std::abs(z.zeta) / z.wn : 2 / z.real;
-      for (size_t i = 0; i < d.w.size(); ++i) {
-        const double w = d.w[i];
-        lag[i] += z.pair ? 2 * std::atan2(2 * std::abs(z.zeta) * z.wn * w, z.wn * z.wn - w * w)
-                         : 2 * std::atan(w / z.real);
+      double tz = z.pair ? 4 * std::abs(z.zeta) / z.wn : 2 / z.real;
+      for (const double w : d.w) {
+        const double lag =
+            z.pair ? 2 * std::atan2(2 * std::abs(z.zeta) * z.wn * w, z.wn * z.wn - w * w)
+                   : 2 * std::atan(w / z.real);
+        tz = std::max(tz, lag / w);
       }
+      if (tz > o.max_delay_s) continue;
+      rhp_zeros = true;
+      rhp_tau += tz;
     }
-    for (size_t i = 0; i < d.w.size(); ++i) rhp_tau = std::max(rhp_tau, lag[i] / d.w[i]);
-    if (o.delay == FitOptions::Delay::kAuto && cands[0].ok && (!cands[0].adequate || rhp_zeros)) {
+    // An adequate delay-free fit: a delayed model must have fewer parameters (and, replacing the
+    // rational's imitation of a delay, no more poles).
+    const bool adequate0 = cands[0].adequate;
+    const bool fewer_possible =
+        cands[0].params > std::max(o.den_order_start, 0) + std::max(0, o.min_num_order) + 2;
+    if (o.delay == FitOptions::Delay::kAuto && cands[0].ok &&
+        (!adequate0 || (rhp_zeros && fewer_possible))) {
       // An adequate delay-free fit with right-half-plane zeros: a delayed model only wins with
       // fewer parameters, by replacing those zeros; the delay is searched up to twice the delay
       // they can imitate (cheaper, and a wider search can mistake a high relative degree's phase
@@ -893,7 +901,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       const double tau0 =
           coarse_delay(cands[0].adequate ? 2 * rhp_tau + 3.0 / d.w.back() : o.max_delay_s);
       if (tau0 * d.w.back() > 0.05) {
-        cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
+        cands.push_back(order_loop(tau0, true, adequate0 ? cands[0].params : 1 << 20,
+                                   adequate0 ? cands[0].tf.den_order() : max_n, adequate0 ? 2 : 3));
       }
     }
   }
