@@ -970,6 +970,7 @@ Json fit_to_json(const FitResult& r, const std::string& pair) {
   if (r.chi2_per_dof >= 0) j["fit"]["chi2_per_dof"] = r.chi2_per_dof;
   if (r.gain_rel_sigma >= 0) j["fit"]["gain_rel_sigma"] = r.gain_rel_sigma;
   if (r.delay_sigma_s >= 0) j["fit"]["delay_sigma_s"] = r.delay_sigma_s;
+  if (r.noise_rel >= 0) j["fit"]["noise_rel"] = r.noise_rel;
   auto roots = [](const std::vector<RootInfo>& v) {
     Json a = Json::array();
     for (const auto& i : v) {

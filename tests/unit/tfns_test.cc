@@ -302,6 +302,33 @@ TEST(Tfns, NoiseLevelWithoutSigmaIsEstimatedAndStopsAtTheRightOrder) {
   EXPECT_EQ(r.num_order, 1) << r.message;
 }
 
+TEST(Tfns, WithoutSigmaTheStopRuleAndNumeratorOrdersAreOptions) {
+  // `fralab fit --tolerance / --no-noise-estimate / --min-num-order`: the tolerance imposed is the
+  // noise level used (and written to the JSON); without the estimate, TFNS's E_N rule (no level);
+  // the numerator orders tried start at min_num_order.
+  Tf t;
+  t.gain = 0.7;
+  t.zeros = {Root::Real(-30.0)};
+  t.poles = {Root::Real(-2.0), Root::Pair(15.0, 0.25), Root::Real(-150.0)};
+  auto pts = tf_points(t, 0.05, 100, 10, 0.02, 7);
+  for (auto& p : pts) p.sigma = -1;
+  FitOptions o;
+  o.tolerance = 0.03;
+  FitResult r = fit_tf(pts, o);
+  EXPECT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_DOUBLE_EQ(r.noise_rel, 0.03);
+  EXPECT_DOUBLE_EQ(fit_to_json(r, "")["fit"]["noise_rel"].get<double>(), 0.03);
+  o = FitOptions{};
+  o.estimate_noise = false;
+  r = fit_tf(pts, o);
+  EXPECT_LT(r.noise_rel, 0.0);
+  EXPECT_FALSE(fit_to_json(r, "")["fit"].contains("noise_rel"));
+  o = FitOptions{};
+  o.min_num_order = 2;
+  r = fit_tf(pts, o);
+  EXPECT_GE(r.num_order, 2) << r.message;
+}
+
 TEST(Tfns, DelayRangeIsAnOptionAndNeverExceeded) {
   constexpr double kDelayTol = 0.5e-3;  // s
   Tf t;
