@@ -713,7 +713,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first (a
   // short rational cannot imitate a large high-frequency phase lag, so the error has a clear
   // minimum near the delay), then per order in order_loop, then jointly in refine(). The grid's
-  // step keeps the phase step at the top frequency below ~1.5 rad. Computed once.
+  // step keeps the phase step at the top frequency below ~3 rad (the golden section then searches
+  // +-1 step).
   // `top` (<= max_delay_s) bounds the search: the whole range unless a cheaper hint says where a
   // delay can be. The last search is remembered.
   double coarse_tau = -1, coarse_top = -1;
@@ -726,7 +727,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
     };
     const int G =
-        std::clamp(int(std::ceil(top * d.w.back() / 1.5)) + 1, top < o.max_delay_s ? 8 : 26, 200);
+        std::clamp(int(std::ceil(top * d.w.back() / 3.0)) + 1, top < o.max_delay_s ? 6 : 16, 100);
     double bt = 0, be = err_at(0.0);
     for (int k = 1; k < G; ++k) {
       double t = top * k / (G - 1), e = err_at(t);
