@@ -777,10 +777,16 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   // max_params: stop once every candidate of an order would have at least this many parameters
   // (an alternative only wins with fewer parameters than an adequate fit already found); top_n: the
   // highest denominator order tried.
-  auto order_loop = [&](double tau0, bool free_delay, int max_params, int top_n, size_t n_starts) {
+  auto order_loop = [&](double tau0, bool free_delay, int max_params, int top_n, size_t n_starts,
+                        bool one_more) {
     Cand best;
     int stalled = 0;
+    // The first adequate order's best; with one_more (the delayed loop), one more order is tried
+    // for an adequate candidate with fewer parameters (a higher relative degree that the lower
+    // order imitated with extra zeros and extra delay).
+    Cand found;
     for (int n = std::max(o.den_order_start, 0); n <= std::min(max_n, top_n); ++n) {
+      if (found.ok) max_params = std::min(max_params, found.params);
       if (n + std::max(0, o.min_num_order) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
       // Delay starts: tau0 itself, or with a free delay the n_starts best separated points of a
@@ -788,7 +794,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       // joint refinement from several starts finds the basin that one start can miss); every
       // numerator order of this n starts from them.
       std::vector<double> starts = {tau0};
-      if (free_delay) {
+      // The one more order starts from the adequate candidate's delay (its basin is known).
+      if (free_delay && found.ok) starts = {found.tf.delay_s};
+      if (free_delay && !found.ok) {
         FitOptions quick = o;
         quick.max_iterations = 6;
         std::vector<std::pair<double, double>> grid;  // (err, tau)
@@ -851,6 +859,10 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         // 10x this order's best.
         if (c.misfit > 10 && c.rank > 10 * best_n.rank && !c.unfinished) break;
       }
+      if (found.ok) {  // the one more order: it wins only adequate (and so with fewer parameters)
+        if (best_n.ok && best_n.adequate) found = best_n;
+        break;
+      }
       if (!best_n.ok) continue;
       // Two orders in a row without a 5 % error improvement: higher orders only chase noise or a
       // nonlinearity (e.g. a backlash's describing function); stop raising.
@@ -860,16 +872,19 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         stalled = 0;
       }
       if (!best.ok || best_n.rank < best.rank || best_n.adequate) best = best_n;
-      if (best_n.adequate) return best_n;
+      if (best_n.adequate) {
+        if (!one_more) return best_n;
+        found = best_n;
+      }
     }
-    return best;
+    return found.ok ? found : best;
   };
 
   std::vector<Cand> cands;
   if (o.delay == FitOptions::Delay::kFixed) {
-    cands.push_back(order_loop(o.delay_s, false, 1 << 20, max_n, 1));
+    cands.push_back(order_loop(o.delay_s, false, 1 << 20, max_n, 1, false));
   } else {
-    cands.push_back(order_loop(0.0, false, 1 << 20, max_n, 1));
+    cands.push_back(order_loop(0.0, false, 1 << 20, max_n, 1, false));
     // The delay right-half-plane zeros can imitate: per zero, the largest over the band of its
     // all-pass phase lag over w, or its group delay at low frequency (2/z for a real zero,
     // 4 |zeta| / wn for a pair); a zero imitating more than max_delay_s is not a delay's.
@@ -903,7 +918,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           coarse_delay(cands[0].adequate ? 2 * rhp_tau + 3.0 / d.w.back() : o.max_delay_s);
       if (tau0 * d.w.back() > 0.05) {
         cands.push_back(order_loop(tau0, true, adequate0 ? cands[0].params : 1 << 20,
-                                   adequate0 ? cands[0].tf.den_order() : max_n, adequate0 ? 2 : 3));
+                                   adequate0 ? cands[0].tf.den_order() : max_n, adequate0 ? 2 : 3,
+                                   true));
       }
     }
   }
