@@ -22,6 +22,8 @@ struct Data {
   std::vector<double> W;  // weights
   std::vector<double> sigma;
   bool has_sigma = false;
+  double chi2_slack = 1;  // > 1 when sigma is estimated: the estimate's own uncertainty
+  double max_delay = INFINITY;
 };
 
 // An orthonormal polynomial basis on the weighted points (Arnoldi); see tfns.h.
@@ -210,6 +212,7 @@ struct Param {
   double g0;
   bool free_delay;
   double fixed_delay;
+  double max_delay = INFINITY;  // a free delay stays in [0, max_delay]
   int size() const {
     int k = 1 + (free_delay ? 1 : 0);
     for (const Root& z : shape.zeros) k += z.order();
@@ -260,7 +263,7 @@ struct Param {
         p.real = -std::max(std::exp(x(k++)), 1e-12);
       }
     }
-    t.delay_s = free_delay ? std::abs(x(k++)) : fixed_delay;
+    t.delay_s = free_delay ? std::min(std::abs(x(k++)), max_delay) : fixed_delay;
     return t;
   }
 };
@@ -321,7 +324,8 @@ struct OeFunctor {
           put(-G * (s / q.real) / F);  // F = 1 - s/r, r = -e^th: dF/dth = s/r
         }
       }
-      if (p->free_delay) put(-s * G * (x(k) >= 0 ? 1.0 : -1.0));
+      if (p->free_delay)
+        put(std::abs(x(k)) >= p->max_delay ? C(0.0) : -s * G * (x(k) >= 0 ? 1.0 : -1.0));
     }
     return 0;
   }
@@ -336,7 +340,7 @@ Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations =
   // A zero at exactly s = 0 cannot be packed; such starts are returned unrefined.
   for (const Root& z : start.zeros)
     if (!z.pair && z.real == 0) return start;
-  Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s};
+  Param p{start, start.gain == 0 ? 1.0 : start.gain, free_delay, start.delay_s, d.max_delay};
   OeFunctor f{&d, &p};
   Eigen::LevenbergMarquardt<OeFunctor> lm(f);
   lm.parameters.maxfev = max_evaluations > 0 ? max_evaluations : 200 * (p.size() + 1);
@@ -407,7 +411,7 @@ struct Sigmas {
 };
 Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse) {
   Sigmas out;
-  Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s};
+  Param p{t, t.gain == 0 ? 1.0 : t.gain, free_delay, t.delay_s, d.max_delay};
   for (const Root& z : t.zeros)
     if (!z.pair && z.real == 0) return out;
   OeFunctor f{&d, &p};
@@ -430,7 +434,10 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
   }
   for (int k = 0; k < J.cols(); ++k)
     if (unidentified[k]) cov(k, k) = INFINITY;
-  if (!d.has_sigma) cov *= sse / std::max(1.0, double(f.values() - f.inputs()));
+  const double var = sse / std::max(1.0, double(f.values() - f.inputs()));
+  // Without sigma: scaled by the residual variance; with sigma (measured or estimated), by the
+  // reduced chi^2 when it exceeds 1 (the data scatter more than sigma says).
+  cov *= d.has_sigma ? std::max(1.0, var) : var;
   auto sd = [&](int k) { return std::sqrt(std::max(0.0, cov(k, k))); };
   int k = 0;
   out.gain = sd(k++);  // x0 = gain / g0 ~ 1: relative
@@ -467,7 +474,7 @@ double misfit(const Data& d, const Score& s, int params, const FitOptions& o, do
     const double N = double(d.w.size());
     const double dof = std::max(1.0, N - params / 2.0);
     *chi2dof = s.chi2 / dof;
-    return *chi2dof / (1.0 + 3.0 / std::sqrt(N));
+    return *chi2dof / ((1.0 + 3.0 / std::sqrt(N)) * d.chi2_slack);
   }
   return s.e_n / o.c_n;
 }
@@ -497,6 +504,93 @@ std::vector<C> remove_delay(const Data& d, double tau) {
   return g;
 }
 
+// A model the data cannot support physically: an (almost) undamped pole or zero pair (|zeta| <
+// 1e-3: the refinement's floor is 1e-9; a resonance that sharp between two points of a grid is not
+// resolved by them), or a pole and zero of the same kind within 1e-3 of each other (a cancelling
+// dipole). Such candidates are refused: any physical candidate is preferred.
+bool nonphysical(const Tf& t) {
+  for (const Root& p : t.poles)
+    if (p.pair && std::abs(p.zeta) < 1e-3) return true;
+  for (const Root& z : t.zeros)
+    if (z.pair && std::abs(z.zeta) < 1e-3) return true;
+  for (const Root& z : t.zeros) {
+    for (const Root& p : t.poles) {
+      if (z.pair != p.pair) continue;
+      const C lz = z.locations()[0], lp = p.locations()[0];
+      const C lz2 = std::conj(lz);
+      if (std::min(std::abs(lz - lp), std::abs(lz2 - lp)) < 1e-3 * std::abs(lp)) return true;
+    }
+  }
+  return false;
+}
+
+// Valid points of `pts` into d (sorted by frequency, weights); false with res set when there is
+// nothing to fit (too few points, or no response above the measured noise).
+bool prepare_data(const std::vector<FrdPoint>& pts, const FitOptions& o, Data& d, FitResult& res) {
+  std::vector<FrdPoint> v;
+  for (const auto& p : pts)
+    if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
+  std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  res.n_points = int(v.size());
+  if (v.size() < 3) {
+    res.message = "need at least 3 valid points, have " + std::to_string(v.size());
+    return false;
+  }
+  d.has_sigma = o.use_sigma;
+  for (const auto& p : v) d.has_sigma = d.has_sigma && p.sigma > 0;
+  for (const auto& p : v) {
+    d.w.push_back(p.w);
+    d.g.push_back(p.value());
+    d.sigma.push_back(p.sigma);
+    double mag2 = std::max(std::norm(p.value()), 1e-300);
+    d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
+  }
+  if (d.has_sigma) {
+    int clear = 0;
+    for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
+    if (clear < 3) {
+      res.status = FitResult::Status::kNoResponse;
+      res.message = "no response above the noise: " + std::to_string(clear) + " of " +
+                    std::to_string(v.size()) + " points measured to better than 30 %";
+      return false;
+    }
+  }
+  return true;
+}
+
+// The result's figures, roots, Pade sets and sigmas for the chosen model.
+void fill_result(FitResult& res, const Data& d, const Tf& tf, bool free_delay, const Score& s,
+                 double chi2dof, bool adequate, int iterations, double e_phi, int reflected) {
+  res.tf = tf;
+  res.num_order = tf.num_order();
+  res.den_order = tf.den_order();
+  res.iterations = iterations;
+  res.e_phi = e_phi;
+  res.e_n = s.e_n;
+  res.chi2_per_dof = chi2dof;
+  res.rms_rel_error = s.rms_rel;
+  res.max_rel_error = s.max_rel;
+  res.unstable_reflected = reflected;
+  res.pade = find_pade_sets(res.tf);
+  for (const auto& p : res.pade) res.pade_delay_s += p.delay_s;
+  res.zero_info = root_info(res.tf.zeros);
+  res.pole_info = root_info(res.tf.poles);
+  Sigmas sg = parameter_sigmas(d, res.tf, free_delay, s.sse);
+  for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i)
+    res.zero_info[i].rel_sigma = sg.zeros[i];
+  for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i)
+    res.pole_info[i].rel_sigma = sg.poles[i];
+  res.gain_rel_sigma = sg.gain;
+  res.delay_sigma_s = sg.delay;
+  res.status = adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
+                res.status_str().c_str(), res.num_order, res.den_order,
+                d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
+                res.tf.delay_s, res.iterations);
+  res.message = buf;
+}
+
 }  // namespace
 
 void FitOptions::validate() const {
@@ -510,6 +604,8 @@ void FitOptions::validate() const {
   if (max_iterations < 2) bad("max_iterations must be >= 2");
   if (delay == Delay::kFixed && !(delay_s >= 0)) bad("a fixed delay must be >= 0 s");
   if (!(max_delay_s > 0)) bad("max_delay_s must be > 0");
+  if (!(tolerance >= 0) || !(noise_floor > 0)) bad("tolerance must be >= 0, noise_floor > 0");
+  if (min_num_order < 0) bad("min_num_order must be >= 0");
 }
 
 std::string FitResult::status_str() const {
@@ -559,6 +655,9 @@ std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
       const double wz = z.pair ? z.wn : z.real, wp = p.pair ? p.wn : -p.real;
       if (std::abs(wz - wp) > tol * wp) continue;
       if (z.pair && std::abs(-z.zeta - p.zeta) > std::max(0.35 * p.zeta, 0.05)) continue;
+      // A Pade approximant's pairs are damped (|zeta| >= ~0.04 up to order 8): an undamped pair
+      // mirrored onto an undamped zero pair is a spurious dipole, not a delay.
+      if (z.pair && (p.zeta < 0.02 || -z.zeta < 0.02)) continue;
       PadeSet s{z, p, z.pair ? 2 * (-z.zeta) / z.wn + 2 * p.zeta / p.wn : 1 / wz + 1 / wp};
       used[k] = true;
       out.push_back(s);
@@ -571,35 +670,9 @@ std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
 FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   o.validate();
   Data d;
-  std::vector<FrdPoint> v;
-  for (const auto& p : pts)
-    if (p.valid && p.w > 0 && std::isfinite(p.mag) && std::isfinite(p.phase_deg)) v.push_back(p);
-  std::sort(v.begin(), v.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   FitResult res;
-  res.n_points = int(v.size());
-  if (v.size() < 3) {
-    res.message = "need at least 3 valid points, have " + std::to_string(v.size());
-    return res;
-  }
-  d.has_sigma = o.use_sigma;
-  for (const auto& p : v) d.has_sigma = d.has_sigma && p.sigma > 0;
-  for (const auto& p : v) {
-    d.w.push_back(p.w);
-    d.g.push_back(p.value());
-    d.sigma.push_back(p.sigma);
-    double mag2 = std::max(std::norm(p.value()), 1e-300);
-    d.W.push_back(d.has_sigma ? 1.0 / (p.sigma * p.sigma) : 1.0 / mag2);
-  }
-  if (d.has_sigma) {
-    int clear = 0;
-    for (const auto& p : v) clear += p.sigma <= 0.3 * p.mag;
-    if (clear < 3) {
-      res.status = FitResult::Status::kNoResponse;
-      res.message = "no response above the noise: " + std::to_string(clear) + " of " +
-                    std::to_string(v.size()) + " points measured to better than 30 %";
-      return res;
-    }
-  }
+  if (!prepare_data(pts, o, d, res)) return res;
+  d.max_delay = o.max_delay_s;
   const double ws = std::sqrt(d.w.front() * d.w.back());
   const int max_n = std::min(o.max_den_order, int(d.w.size()) - 1);
 
@@ -609,6 +682,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     bool ok = false, adequate = false, free_delay = false;
     bool unfinished = false;  // its refinement stopped at the screening budget
     double chi2dof = -1, misfit = 0;
+    double rank = 0;  // sse, times 1e6 for a non-physical model (ranked below any physical one)
+    bool nonphysical = false;
     int params = 0, iterations = 0, reflected = 0;
     double e_phi = 0;
   };
@@ -616,7 +691,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     c.s = score(d, c.tf);
     c.params = n_params(c.tf, c.free_delay);
     c.misfit = misfit(d, c.s, c.params, o, &c.chi2dof);
-    c.adequate = c.misfit <= 1.0;
+    c.nonphysical = nonphysical(c.tf);
+    c.adequate = c.misfit <= 1.0 && !c.nonphysical;
+    c.rank = c.s.sse * (c.nonphysical ? 1e6 : 1.0);
   };
   // Output-error refinement of a candidate in place: `budget` residual evaluations (0: the full
   // budget); c.unfinished tells whether the budget stopped it.
@@ -632,27 +709,100 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     sk.tf.delay_s = tau;
     return std::make_pair(score(d, sk.tf).sse, sk);
   };
-  const double tau_window = o.max_delay_s / 100;  // 0.5 ms at the default range
+  const double tau_window = std::min(o.max_delay_s / 100, 0.5e-3);
+  // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first (a
+  // short rational cannot imitate a large high-frequency phase lag, so the error has a clear
+  // minimum near the delay), then per order in order_loop, then jointly in refine(). The grid's
+  // step keeps the phase step at the top frequency below ~3 rad (the golden section then searches
+  // +-1 step).
+  // `top` (<= max_delay_s) bounds the search: the whole range unless a cheaper hint says where a
+  // delay can be. The last search is remembered.
+  double coarse_tau = -1, coarse_top = -1;
+  auto coarse_delay = [&](double top) {
+    top = std::min(top, o.max_delay_s);
+    if (coarse_tau >= 0 && top == coarse_top) return coarse_tau;
+    FitOptions quick = o;
+    quick.max_iterations = 6;
+    auto err_at = [&](double tau) {
+      return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
+    };
+    const int G =
+        std::clamp(int(std::ceil(top * d.w.back() / 3.0)) + 1, top < o.max_delay_s ? 6 : 16, 100);
+    double bt = 0, be = err_at(0.0);
+    for (int k = 1; k < G; ++k) {
+      double t = top * k / (G - 1), e = err_at(t);
+      if (e < be) be = e, bt = t;
+    }
+    const double step = top / (G - 1);
+    const double lo = std::max(0.0, bt - step), hi = std::min(top, bt + step);
+    coarse_tau = detail::golden(err_at, lo, hi, 20);
+    coarse_top = top;
+    return coarse_tau;
+  };
+  // Without sigma: the noise level from deliberately over-fitted models (SK at orders well above
+  // any the loop will accept, without and with the coarse delay removed); the reduced chi^2
+  // against it is the stop rule, with a slack for the estimate's own uncertainty.
+  if (!d.has_sigma && (o.estimate_noise || o.tolerance > 0)) {
+    double s2 = o.tolerance * o.tolerance;
+    double dof_est = 1e9;
+    if (!(o.tolerance > 0)) {
+      s2 = INFINITY;
+      const int N = int(d.w.size());
+      const int n_hi = std::min(14, (N - 3) / 2);
+      std::vector<double> taus = {0.0};
+      if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay(o.max_delay_s));
+      if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
+      FitOptions oo = o;
+      oo.max_iterations = 12;
+      for (double tau : taus) {
+        for (int n = n_hi; n >= std::max(1, n_hi - 2); n -= 2) {
+          auto [sse, sk] = sk_err(tau, n, n, oo);
+          const double dof = N - (2 * n + 1) / 2.0;
+          if (dof < 2 || !(sse < 1e300)) continue;
+          if (sse / dof < s2) s2 = sse / dof, dof_est = dof;
+        }
+      }
+    }
+    if (std::isfinite(s2)) {
+      const double s = std::max(std::sqrt(s2), o.noise_floor);
+      res.noise_rel = s;
+      d.has_sigma = true;
+      d.chi2_slack = 1.0 + 2.0 / std::sqrt(dof_est);
+      for (size_t i = 0; i < d.w.size(); ++i) {
+        d.sigma[i] = s * std::max(std::abs(d.g[i]), 1e-300);
+        d.W[i] = 1.0 / (d.sigma[i] * d.sigma[i]);
+      }
+    }
+  }
   // max_params: stop once every candidate of an order would have at least this many parameters
-  // (an alternative only wins with fewer parameters than an adequate fit already found).
-  auto order_loop = [&](double tau0, bool free_delay, int max_params) {
+  // (an alternative only wins with fewer parameters than an adequate fit already found); top_n: the
+  // highest denominator order tried.
+  auto order_loop = [&](double tau0, bool free_delay, int max_params, int top_n, size_t n_starts,
+                        bool one_more) {
     Cand best;
     int stalled = 0;
-    for (int n = std::max(o.den_order_start, 0); n <= max_n; ++n) {
-      if (n + std::max(0, n - 3) + 1 + (free_delay ? 1 : 0) >= max_params) break;
+    // The first adequate order's best; with one_more (the delayed loop), one more order is tried
+    // for an adequate candidate with fewer parameters (a higher relative degree that the lower
+    // order imitated with extra zeros and extra delay).
+    Cand found;
+    for (int n = std::max(o.den_order_start, 0); n <= std::min(max_n, top_n); ++n) {
+      if (found.ok) max_params = std::min(max_params, found.params);
+      if (n + std::max(0, o.min_num_order) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
-      // Delay starts: tau0 itself, or with a free delay the three best separated points of a grid
-      // of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the joint
-      // refinement from several starts finds the basin that one start can miss); every numerator
-      // order of this n starts from them.
+      // Delay starts: tau0 itself, or with a free delay the n_starts best separated points of a
+      // grid of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the
+      // joint refinement from several starts finds the basin that one start can miss); every
+      // numerator order of this n starts from them.
       std::vector<double> starts = {tau0};
-      if (free_delay) {
+      // The one more order starts from the adequate candidate's delay (its basin is known).
+      if (free_delay && found.ok) starts = {found.tf.delay_s};
+      if (free_delay && !found.ok) {
         FitOptions quick = o;
         quick.max_iterations = 6;
         std::vector<std::pair<double, double>> grid;  // (err, tau)
         for (int k = -10; k <= 10; ++k) {
           const double t = tau0 + k * tau_window;
-          if (t >= 0) grid.push_back({sk_err(t, n, n, quick).first, t});
+          if (t >= 0 && t <= o.max_delay_s) grid.push_back({sk_err(t, n, n, quick).first, t});
         }
         std::sort(grid.begin(), grid.end());
         starts.clear();
@@ -660,11 +810,13 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           bool far = true;
           for (double u : starts) far = far && std::abs(u - t) > 1.5 * tau_window;
           if (far) starts.push_back(t);
-          if (starts.size() == 3) break;
+          if (starts.size() == n_starts) break;
         }
       }
-      for (int m = n; m >= std::max(0, n - 3); --m) {
+      for (int m = n; m >= std::min(n, std::max(0, o.min_num_order)); --m) {
         if (n == o.den_order_start && m < o.num_order_start) continue;
+        // Cannot win against an adequate fit already found (it needs fewer parameters).
+        if (n + m + 1 + (free_delay ? 1 : 0) >= max_params) continue;
         Cand c;
         for (double tau : starts) {
           Sk sk = sk_err(tau, n, m, o).second;
@@ -688,59 +840,86 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
             refine_cand(r, kScreenEvaluations);
             // Stopped by the screening budget while close to adequate: finish it before judging.
             if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
-            if (r.s.sse <= t.s.sse) t = r;
+            if (r.rank <= t.rank) t = r;
           }
-          if (!c.ok || t.s.sse < c.s.sse) c = t;
+          if (!c.ok || t.rank < c.rank) c = t;
           if (c.adequate) break;  // an adequate start: the others cannot be preferred at this order
         }
         if (!c.ok) continue;
+        // Numerator orders below n - 3 start from the delay of this order's best candidate so far
+        // (the separated grid starts serve to find that basin at the higher numerator orders).
+        if (free_delay && m <= n - 3 && best_n.ok) starts = {best_n.tf.delay_s};
         if (!best_n.ok || (c.adequate && !best_n.adequate) ||
             (c.adequate == best_n.adequate &&
-             (c.adequate ? c.params < best_n.params : c.s.sse < best_n.s.sse))) {
+             (c.adequate ? c.params < best_n.params : c.rank < best_n.rank))) {
           best_n = c;
         }
+        // Lower numerator orders have fewer parameters: continue while they may still pass; stop
+        // when one misses clearly (chi^2 10x the threshold, its refinement finished) with an error
+        // 10x this order's best.
+        if (c.misfit > 10 && c.rank > 10 * best_n.rank && !c.unfinished) break;
+      }
+      if (found.ok) {  // the one more order: it wins only adequate (and so with fewer parameters)
+        if (best_n.ok && best_n.adequate) found = best_n;
+        break;
       }
       if (!best_n.ok) continue;
       // Two orders in a row without a 5 % error improvement: higher orders only chase noise or a
       // nonlinearity (e.g. a backlash's describing function); stop raising.
-      if (n > 3 && best.ok && !best_n.adequate && best_n.s.sse > 0.95 * best.s.sse) {
+      if (n > 3 && best.ok && !best_n.adequate && best_n.rank > 0.95 * best.rank) {
         if (++stalled >= 2) return best;
       } else {
         stalled = 0;
       }
-      if (!best.ok || best_n.s.sse < best.s.sse || best_n.adequate) best = best_n;
-      if (best_n.adequate) return best_n;
+      if (!best.ok || best_n.rank < best.rank || best_n.adequate) best = best_n;
+      if (best_n.adequate) {
+        if (!one_more) return best_n;
+        found = best_n;
+      }
     }
-    return best;
+    return found.ok ? found : best;
   };
 
   std::vector<Cand> cands;
   if (o.delay == FitOptions::Delay::kFixed) {
-    cands.push_back(order_loop(o.delay_s, false, 1 << 20));
+    cands.push_back(order_loop(o.delay_s, false, 1 << 20, max_n, 1, false));
   } else {
-    cands.push_back(order_loop(0.0, false, 1 << 20));
+    cands.push_back(order_loop(0.0, false, 1 << 20, max_n, 1, false));
+    // The delay right-half-plane zeros can imitate: per zero, the largest over the band of its
+    // all-pass phase lag over w, or its group delay at low frequency (2/z for a real zero,
+    // 4 |zeta| / wn for a pair); a zero imitating more than max_delay_s is not a delay's.
     bool rhp_zeros = false;
-    for (const Root& z : cands[0].tf.zeros) rhp_zeros |= z.pair ? z.zeta < 0 : z.real > 0;
-    if (o.delay == FitOptions::Delay::kAuto && cands[0].ok && (!cands[0].adequate || rhp_zeros)) {
-      // A delay shows as right-half-plane zeros or as a misfit: search it at a low order first
-      // (a short rational cannot imitate a large high-frequency phase lag, so the error has a
-      // clear minimum near the delay), then per order in order_loop, then jointly in refine().
-      FitOptions quick = o;
-      quick.max_iterations = 6;
-      auto err_at = [&](double tau) {
-        return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
-      };
-      const int G = 26;
-      double bt = 0, be = err_at(0.0);
-      for (int k = 1; k < G; ++k) {
-        double t = o.max_delay_s * k / (G - 1), e = err_at(t);
-        if (e < be) be = e, bt = t;
+    double rhp_tau = 0;
+    for (const Root& z : cands[0].tf.zeros) {
+      if (!(z.pair ? z.zeta < 0 : z.real > 0)) continue;
+      double tz = z.pair ? 4 * std::abs(z.zeta) / z.wn : 2 / z.real;
+      for (const double w : d.w) {
+        const double lag =
+            z.pair ? 2 * std::atan2(2 * std::abs(z.zeta) * z.wn * w, z.wn * z.wn - w * w)
+                   : 2 * std::atan(w / z.real);
+        tz = std::max(tz, lag / w);
       }
-      const double step = o.max_delay_s / (G - 1);
-      const double lo = std::max(0.0, bt - step), hi = bt + step;
-      const double tau0 = detail::golden(err_at, lo, hi, 20);
+      if (tz > o.max_delay_s) continue;
+      rhp_zeros = true;
+      rhp_tau += tz;
+    }
+    // An adequate delay-free fit: a delayed model must have fewer parameters (and, replacing the
+    // rational's imitation of a delay, no more poles).
+    const bool adequate0 = cands[0].adequate;
+    const bool fewer_possible =
+        cands[0].params > std::max(o.den_order_start, 0) + std::max(0, o.min_num_order) + 2;
+    if (o.delay == FitOptions::Delay::kAuto && cands[0].ok &&
+        (!adequate0 || (rhp_zeros && fewer_possible))) {
+      // An adequate delay-free fit with right-half-plane zeros: a delayed model only wins with
+      // fewer parameters, by replacing those zeros; the delay is searched up to twice the delay
+      // they can imitate (cheaper, and a wider search can mistake a high relative degree's phase
+      // lag for a delay).
+      const double tau0 =
+          coarse_delay(cands[0].adequate ? 2 * rhp_tau + 3.0 / d.w.back() : o.max_delay_s);
       if (tau0 * d.w.back() > 0.05) {
-        cands.push_back(order_loop(tau0, true, cands[0].adequate ? cands[0].params : 1 << 20));
+        cands.push_back(order_loop(tau0, true, adequate0 ? cands[0].params : 1 << 20,
+                                   adequate0 ? cands[0].tf.den_order() : max_n, adequate0 ? 2 : 3,
+                                   true));
       }
     }
   }
@@ -751,8 +930,8 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     if (!pick || (c.adequate && !pick->adequate) ||
         (c.adequate == pick->adequate &&
          (c.adequate
-              ? (c.params < pick->params || (c.params == pick->params && c.s.sse < pick->s.sse))
-              : c.s.sse < pick->s.sse))) {
+              ? (c.params < pick->params || (c.params == pick->params && c.rank < pick->rank))
+              : c.rank < pick->rank))) {
       pick = &c;
     }
   }
@@ -765,39 +944,28 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   if (fin.unfinished) {  // the winner's screening refinement was cut short: finish it
     Cand r = fin;
     refine_cand(r, 0);
-    if (r.s.sse <= fin.s.sse) fin = r;
+    if (r.rank <= fin.rank) fin = r;
   }
-  pick = &fin;
-  res.tf = pick->tf;
-  res.num_order = pick->tf.num_order();
-  res.den_order = pick->tf.den_order();
-  res.iterations = pick->iterations;
-  res.e_phi = pick->e_phi;
-  res.e_n = pick->s.e_n;
-  res.chi2_per_dof = pick->chi2dof;
-  res.rms_rel_error = pick->s.rms_rel;
-  res.max_rel_error = pick->s.max_rel;
-  res.unstable_reflected = pick->reflected;
-  res.pade = find_pade_sets(res.tf);
-  for (const auto& s : res.pade) res.pade_delay_s += s.delay_s;
-  res.zero_info = root_info(res.tf.zeros);
-  res.pole_info = root_info(res.tf.poles);
-  {
-    Sigmas sg = parameter_sigmas(d, res.tf, pick->free_delay, pick->s.sse);
-    for (size_t i = 0; i < sg.zeros.size() && i < res.zero_info.size(); ++i)
-      res.zero_info[i].rel_sigma = sg.zeros[i];
-    for (size_t i = 0; i < sg.poles.size() && i < res.pole_info.size(); ++i)
-      res.pole_info[i].rel_sigma = sg.poles[i];
-    res.gain_rel_sigma = sg.gain;
-    res.delay_sigma_s = sg.delay;
-  }
-  res.status = pick->adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
-                res.status_str().c_str(), res.num_order, res.den_order,
-                d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
-                res.tf.delay_s, res.iterations);
-  res.message = buf;
+  fill_result(res, d, fin.tf, fin.free_delay, fin.s, fin.chi2dof, fin.adequate, fin.iterations,
+              fin.e_phi, fin.reflected);
+  return res;
+}
+
+FitResult refine_tf(const std::vector<FrdPoint>& pts, const Tf& start, const FitOptions& o) {
+  o.validate();
+  Data d;
+  FitResult res;
+  if (!prepare_data(pts, o, d, res)) return res;
+  d.max_delay = o.max_delay_s;
+  Tf t = start;
+  const bool free_delay = o.delay == FitOptions::Delay::kAuto;
+  if (o.delay == FitOptions::Delay::kFixed) t.delay_s = o.delay_s;
+  if (o.delay == FitOptions::Delay::kNone) t.delay_s = 0;
+  if (o.refine) t = refine(d, t, free_delay);
+  const Score s = score(d, t);
+  double chi2dof = -1;
+  const double mf = misfit(d, s, n_params(t, free_delay), o, &chi2dof);
+  fill_result(res, d, t, free_delay, s, chi2dof, mf <= 1.0, 0, 0, 0);
   return res;
 }
 
@@ -819,6 +987,7 @@ Json fit_to_json(const FitResult& r, const std::string& pair) {
   if (r.chi2_per_dof >= 0) j["fit"]["chi2_per_dof"] = r.chi2_per_dof;
   if (r.gain_rel_sigma >= 0) j["fit"]["gain_rel_sigma"] = r.gain_rel_sigma;
   if (r.delay_sigma_s >= 0) j["fit"]["delay_sigma_s"] = r.delay_sigma_s;
+  if (r.noise_rel >= 0) j["fit"]["noise_rel"] = r.noise_rel;
   auto roots = [](const std::vector<RootInfo>& v) {
     Json a = Json::array();
     for (const auto& i : v) {

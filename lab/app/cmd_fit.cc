@@ -16,6 +16,10 @@ struct FitCommand {
   std::string in, out, delay = "auto", plot;
   std::vector<std::string> deletions;
   int max_order = -1;
+  double delay_max = -1;   // < 0: FitOptions' default
+  double tolerance = -1;   // < 0: estimated without sigma
+  int min_num_order = -1;  // < 0: any relative degree
+  bool no_noise_estimate = false;
 };
 
 void run(const FitCommand& c) {
@@ -23,6 +27,10 @@ void run(const FitCommand& c) {
   FitOptions o = in.has_control ? in.options : FitOptions{};
   parse_delay_option(c.delay, &o);
   if (c.max_order > 0) o.max_den_order = c.max_order;
+  if (c.delay_max >= 0) o.max_delay_s = c.delay_max;
+  if (c.tolerance >= 0) o.tolerance = c.tolerance;
+  if (c.min_num_order >= 0) o.min_num_order = c.min_num_order;
+  if (c.no_noise_estimate) o.estimate_noise = false;
   const FitResult r = fit_tf(in.frd.points, o);
   if (r.status == FitResult::Status::kFailed) throw InputError(c.in + ": " + r.message);
   std::vector<std::string> del = in.deletions;
@@ -57,6 +65,19 @@ void add_fit_command(CLI::App& app) {
   c->add_option("--out", fc->out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")
       ->required();
   c->add_option("--max-order", fc->max_order, "highest denominator order");
+  c->add_option("--delay-max", fc->delay_max,
+                "with --delay auto: the delay is searched in [0, SECONDS] (default 0.2)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--tolerance", fc->tolerance,
+                "data without sigma: the relative noise accepted (rms |G - G_fit| / |G|) instead "
+                "of the level estimated from the data")
+      ->check(CLI::PositiveNumber);
+  c->add_flag("--no-noise-estimate", fc->no_noise_estimate,
+              "data without sigma: TFNS's stop rule (real error E_N <= c_n) instead of the noise "
+              "level estimated from the data");
+  c->add_option("--min-num-order", fc->min_num_order,
+                "lowest numerator order tried at each denominator order (default 0)")
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--delete", fc->deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)")
       ->delimiter(',');
   c->add_option("--plot", fc->plot,

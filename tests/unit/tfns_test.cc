@@ -268,3 +268,94 @@ TEST(Tfns, AZeroPathIsReportedAsNoResponse) {
   EXPECT_EQ(r.status_str(), "no_response");
   EXPECT_THAT(r.message, ::testing::HasSubstr("no response above the noise")) << r.message;
 }
+
+// Issue 14: without sigma the stop rule uses the noise level estimated from the data; noise-free
+// data come back exact at the right orders, whatever the relative degree.
+TEST(Tfns, NoiseFreeRelativeDegreeFiveWithoutSigmaIsExactAtTheRightOrders) {
+  constexpr double kExact = 1e-9;  // rms relative error of an exact fit (noise floor 1e-10)
+  Tf t;
+  t.gain = 2.0;
+  t.poles = {Root::Real(-1.5), Root::Pair(12.0, 0.3), Root::Pair(80.0, 0.5)};
+  auto pts = tf_points(t, 0.05, 100, 10, 0.0, 1);
+  FitResult r = fit_tf(pts, FitOptions{});
+  EXPECT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_EQ(r.den_order, 5) << r.message;
+  EXPECT_EQ(r.num_order, 0) << r.message;
+  EXPECT_LT(r.rms_rel_error, kExact) << r.message;
+  EXPECT_LT(worst_root_error(t.poles, r.tf.poles, 0.3, 700), kExact);
+}
+
+TEST(Tfns, NoiseLevelWithoutSigmaIsEstimatedAndStopsAtTheRightOrder) {
+  // 2 % noise, sigma withheld: the estimate is near 2 % and the order is that of the truth.
+  constexpr double kNoise = 0.02;
+  Tf t;
+  t.gain = 0.7;
+  t.zeros = {Root::Real(-30.0)};
+  t.poles = {Root::Real(-2.0), Root::Pair(15.0, 0.25), Root::Real(-150.0)};
+  auto pts = tf_points(t, 0.05, 100, 10, kNoise, 7);
+  for (auto& p : pts) p.sigma = -1;
+  FitResult r = fit_tf(pts, FitOptions{});
+  EXPECT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_GT(r.noise_rel, 0.6 * kNoise) << r.noise_rel;
+  EXPECT_LT(r.noise_rel, 1.5 * kNoise) << r.noise_rel;
+  EXPECT_EQ(r.den_order, 4) << r.message;
+  EXPECT_EQ(r.num_order, 1) << r.message;
+}
+
+TEST(Tfns, WithoutSigmaTheStopRuleAndNumeratorOrdersAreOptions) {
+  // `fralab fit --tolerance / --no-noise-estimate / --min-num-order`: the tolerance imposed is the
+  // noise level used (and written to the JSON); without the estimate, TFNS's E_N rule (no level);
+  // the numerator orders tried start at min_num_order.
+  Tf t;
+  t.gain = 0.7;
+  t.zeros = {Root::Real(-30.0)};
+  t.poles = {Root::Real(-2.0), Root::Pair(15.0, 0.25), Root::Real(-150.0)};
+  auto pts = tf_points(t, 0.05, 100, 10, 0.02, 7);
+  for (auto& p : pts) p.sigma = -1;
+  FitOptions o;
+  o.tolerance = 0.03;
+  FitResult r = fit_tf(pts, o);
+  EXPECT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_DOUBLE_EQ(r.noise_rel, 0.03);
+  EXPECT_DOUBLE_EQ(fit_to_json(r, "")["fit"]["noise_rel"].get<double>(), 0.03);
+  o = FitOptions{};
+  o.estimate_noise = false;
+  r = fit_tf(pts, o);
+  EXPECT_LT(r.noise_rel, 0.0);
+  EXPECT_FALSE(fit_to_json(r, "")["fit"].contains("noise_rel"));
+  o = FitOptions{};
+  o.min_num_order = 2;
+  r = fit_tf(pts, o);
+  EXPECT_GE(r.num_order, 2) << r.message;
+}
+
+TEST(Tfns, DelayRangeIsAnOptionAndNeverExceeded) {
+  constexpr double kDelayTol = 0.5e-3;  // s
+  Tf t;
+  t.gain = 1.0;
+  t.poles = {Root::Real(-3.0), Root::Pair(40.0, 0.4)};
+  t.delay_s = 0.12;  // beyond the former fixed 50 ms search range
+  auto pts = tf_points(t, 0.05, 50, 10, 0.0, 1);
+  FitResult r = fit_tf(pts, FitOptions{});  // default range: [0, 0.2] s
+  EXPECT_NEAR(r.tf.delay_s, t.delay_s, kDelayTol) << r.message;
+  EXPECT_EQ(r.den_order, 3) << r.message;
+  EXPECT_EQ(r.num_order, 0) << r.message;
+  FitOptions o;
+  o.max_delay_s = 0.05;  // the truth lies outside: the fit stays inside
+  FitResult q = fit_tf(pts, o);
+  EXPECT_LE(q.tf.delay_s, o.max_delay_s) << q.message;
+  EXPECT_GE(q.tf.delay_s, 0.0) << q.message;
+}
+
+TEST(Tfns, AnUndampedDipoleIsNotAPadeDelay) {
+  // A zero pair mirrored onto a pole pair, both undamped (zeta 1e-3, far below any Pade
+  // approximant's): a spurious dipole, not a delay.
+  Tf t;
+  t.zeros = {Root::Pair(100.0, -1e-3)};
+  t.poles = {Root::Real(-2.0), Root::Pair(100.5, 1e-3)};
+  EXPECT_TRUE(find_pade_sets(t).empty());
+  // The same set damped as a Pade approximant is one.
+  t.zeros = {Root::Pair(100.0, -0.5)};
+  t.poles = {Root::Real(-2.0), Root::Pair(100.5, 0.5)};
+  EXPECT_EQ(find_pade_sets(t).size(), 1u);
+}

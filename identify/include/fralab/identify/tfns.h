@@ -47,13 +47,22 @@ struct FitOptions {
   int num_order_start = 0;  // numerator starting order (<= den)
   int max_den_order = 10;
   double c_phi = 0.01;       // equation error tolerance (B-9)
-  double c_n = 0.01;         // real error tolerance (used when the data carry no sigma)
+  double c_n = 0.01;         // real error tolerance (without sigma, when estimate_noise is false)
   int max_iterations = 100;  // SK iterations per order
   enum class Delay { kNone, kAuto, kFixed } delay = Delay::kAuto;
-  double delay_s = 0.0;       // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
-  double max_delay_s = 0.05;  // kAuto search range [0, max_delay_s]
-  bool refine = true;         // output-error refinement
-  bool use_sigma = true;      // weight by 1/sigma^2 when present
+  double delay_s = 0.0;      // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
+  double max_delay_s = 0.2;  // kAuto: the delay is searched and fitted in [0, max_delay_s], never
+                             // outside
+  // Without sigma (issue 14): the stop rule is the reduced chi^2 against sigma_i = s |G_i|, s the
+  // data's relative noise level: `tolerance` when > 0, else estimated from the data (the residual
+  // of deliberately over-fitted models, delay removed), never below noise_floor. false: TFNS's
+  // E_N <= c_n.
+  bool estimate_noise = true;
+  double tolerance = 0;        // assumed relative noise (rms |G - G_a| / |G| accepted); 0: estimate
+  double noise_floor = 1e-10;  // lowest estimated relative noise (noise-free data fit to ~this)
+  int min_num_order = 0;       // numerator orders tried at each n: n down to max(this, 0)
+  bool refine = true;          // output-error refinement
+  bool use_sigma = true;       // weight by 1/sigma^2 when present
   /// Throws InputError naming the bad option.
   void validate() const;
 };
@@ -92,11 +101,18 @@ struct FitResult {
   std::vector<RootInfo> zero_info, pole_info;  // with rel_sigma from the fit's covariance
   double gain_rel_sigma = -1;                  // relative standard deviation of the DC gain
   double delay_sigma_s = -1;                   // standard deviation of a fitted delay
+  double noise_rel = -1;  // without sigma: the relative noise level the stop rule used (< 0: c_n)
   std::string status_str() const;
 };
 
 /// Identifies a tf from valid points of `data` (invalid points are skipped). Needs >= 3 points.
 FitResult fit_tf(const std::vector<FrdPoint>& data, const FitOptions& opt);
+
+/// Output-error refinement (weighted Levenberg-Marquardt, as fit_tf's last stage) of `start` on the
+/// valid points of `data`: its orders and root kinds are kept; the delay is opt.delay_s (kFixed),
+/// 0 (kNone) or fitted jointly from start.delay_s (kAuto). Status, figures and sigmas as fit_tf's.
+/// (An oracle's fit in the benchmark: the true structure from the true start.)
+FitResult refine_tf(const std::vector<FrdPoint>& data, const Tf& start, const FitOptions& opt);
 
 /// Root table of a tf (locations, frequency and damping).
 std::vector<RootInfo> root_info(const std::vector<Root>& roots);

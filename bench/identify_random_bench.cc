@@ -1,0 +1,148 @@
+// Issue 14: the identifier on randomised frequency responses it has never seen (tests/util/
+// random_frd.h: orders 1-8 with 0..n zeros, close light resonances, right-half-plane zeros, poles
+// over four decades, a pole outside the band, sparse grids, delays), at six noise conditions,
+// against an oracle told the true orders and delay (refine_tf from the truth: weighted
+// Levenberg-Marquardt on the same data). Prints per condition: model error rms |G_fit - G_true| /
+// |G_true| over the band (median / p90, fralab and oracle), both orders right, in-band roots within
+// 2 % (fralab / oracle), 3-sigma coverage (in-band roots within max(2 %, 3 of their own sigma)),
+// median and p90 milliseconds per fit (delay auto). Then Google Benchmark timings.
+//   ./build/bin/fralab-bench-identify-random [--cases N] [--seed S] [--verbose] [benchmark flags]
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "fralab/identify/tfns.h"
+#include "random_frd.h"
+
+using namespace fralab;
+using fralab::testing::model_error;
+using fralab::testing::random_frd_case;
+using fralab::testing::RandomFrdCase;
+
+namespace {
+
+struct Condition {
+  double noise;
+  bool sigma;
+};
+const Condition kConditions[] = {{0.0, false}, {0.005, true}, {0.02, true},
+                                 {0.05, true}, {0.10, true},  {0.02, false}};
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(q * (v.size() - 1) + 0.5))];
+}
+
+// Counts in-band true roots; *within: nearest fitted root within 2 %; *covered: within
+// max(2 %, 3 sigma) of that root's own sigma.
+void root_counts(const std::vector<Root>& truth, const std::vector<Root>& fit,
+                 const std::vector<RootInfo>& info, double lo, double hi, int* total, int* within,
+                 int* covered) {
+  for (const Root& t : truth) {
+    const double wt = t.pair ? t.wn : std::abs(t.real);
+    if (wt < lo || wt > hi) continue;
+    std::complex<double> lt = t.locations()[0];
+    if (lt.imag() < 0) lt = std::conj(lt);
+    double best = INFINITY, sig = 0;
+    for (size_t k = 0; k < fit.size(); ++k) {
+      std::complex<double> lf = fit[k].locations()[0];
+      if (lf.imag() < 0) lf = std::conj(lf);
+      const double e = std::abs(lf - lt) / std::abs(lt);
+      if (e < best) best = e, sig = k < info.size() ? std::max(0.0, info[k].rel_sigma) : 0.0;
+    }
+    ++*total;
+    *within += best < 0.02;
+    *covered += best < std::max(0.02, 3 * sig);
+  }
+}
+
+FitOptions oracle_options(const RandomFrdCase& c) {
+  FitOptions o;
+  o.delay = FitOptions::Delay::kFixed;
+  o.delay_s = c.truth.delay_s;
+  return o;
+}
+
+}  // namespace
+
+static void BM_RandomCaseFits(benchmark::State& state) {
+  std::vector<RandomFrdCase> cases;
+  for (int i = 0; i < 32; ++i) cases.push_back(random_frd_case(i, 0.02, true, 1));
+  for (auto _ : state)
+    for (const auto& c : cases) benchmark::DoNotOptimize(fit_tf(c.points, FitOptions{}).tf.gain);
+  state.counters["fits"] = double(cases.size());
+}
+BENCHMARK(BM_RandomCaseFits)->Unit(benchmark::kMillisecond);
+
+int main(int argc, char** argv) {
+  int n_cases = 32;
+  uint64_t seed = 1;
+  bool verbose = false;
+  std::vector<char*> rest{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--cases") && i + 1 < argc) {
+      n_cases = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) {
+      seed = std::strtoull(argv[++i], nullptr, 10);
+    } else if (!std::strcmp(argv[i], "--verbose")) {
+      verbose = true;
+    } else {
+      rest.push_back(argv[i]);
+    }
+  }
+  std::printf(
+      "| noise | sigma | fralab median / p90 | oracle median / p90 | ratio median / p90 | orders "
+      "right | roots within 2 %% (fralab / oracle) | 3-sigma coverage | ms per fit median / p90 "
+      "|\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const Condition& k : kConditions) {
+    std::vector<double> ef, eo, ms;
+    int right = 0, tot = 0, within = 0, covered = 0, tot_o = 0, within_o = 0, covered_o = 0;
+    for (int i = 0; i < n_cases; ++i) {
+      const RandomFrdCase c = random_frd_case(i, k.noise, k.sigma, seed);
+      const auto t0 = std::chrono::steady_clock::now();
+      const FitResult r = fit_tf(c.points, FitOptions{});
+      ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      const FitResult o = refine_tf(c.points, c.truth, oracle_options(c));
+      ef.push_back(model_error(r.tf, c.truth, c.w_lo, c.w_hi));
+      eo.push_back(model_error(o.tf, c.truth, c.w_lo, c.w_hi));
+      const bool ok = r.num_order == c.truth.num_order() && r.den_order == c.truth.den_order();
+      right += ok;
+      root_counts(c.truth.poles, r.tf.poles, r.pole_info, c.w_lo, c.w_hi, &tot, &within, &covered);
+      root_counts(c.truth.zeros, r.tf.zeros, r.zero_info, c.w_lo, c.w_hi, &tot, &within, &covered);
+      root_counts(c.truth.poles, o.tf.poles, o.pole_info, c.w_lo, c.w_hi, &tot_o, &within_o,
+                  &covered_o);
+      root_counts(c.truth.zeros, o.tf.zeros, o.zero_info, c.w_lo, c.w_hi, &tot_o, &within_o,
+                  &covered_o);
+      if (verbose)
+        std::printf(
+            "  %2d %-20s N=%2zu truth %d/%d tau %.3f | fit %d/%d tau %.4f %-18s err %.2e oracle "
+            "%.2e %.1f ms\n",
+            i, c.category.c_str(), c.points.size(), c.truth.num_order(), c.truth.den_order(),
+            c.truth.delay_s, r.num_order, r.den_order, r.tf.delay_s, r.status_str().c_str(),
+            ef.back(), eo.back(), ms.back());
+    }
+    const double mf = quantile(ef, 0.5), pf = quantile(ef, 0.9), mo = quantile(eo, 0.5),
+                 po = quantile(eo, 0.9);
+    std::printf(
+        "| %.1f %% | %s | %.2g / %.2g | %.2g / %.2g | %.2f / %.2f | %.0f %% | %d / %d of %d (%.0f "
+        "%%) | %.0f %% (oracle %.0f %%) | %.1f / %.1f |\n",
+        100 * k.noise, k.sigma ? "yes" : "no", mf, pf, mo, po, mf / mo, pf / po,
+        100.0 * right / n_cases, within, within_o, tot, 100.0 * within / std::max(1, within_o),
+        100.0 * covered / std::max(1, tot), 100.0 * covered_o / std::max(1, tot_o),
+        quantile(ms, 0.5), quantile(ms, 0.9));
+    std::fflush(stdout);
+  }
+  int bargc = int(rest.size());
+  benchmark::Initialize(&bargc, rest.data());
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
