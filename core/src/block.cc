@@ -1,6 +1,6 @@
 #include "fralab/core/block.h"
 
-#include <utility>
+#include "fralab/core/text.h"
 
 namespace fralab {
 namespace {
@@ -17,27 +17,17 @@ constexpr std::pair<RunState, const char*> kStateWords[] = {{RunState::kStart, "
 
 }  // namespace
 
-const char* status_word(Excitation e) {
-  for (const auto& [k, w] : kExcitationWords)
-    if (k == e) return w;
-  return "?";
-}
+const char* status_word(Excitation e) { return enum_word(kExcitationWords, e); }
 
-const char* to_string(RunState s) {
-  for (const auto& [k, w] : kStateWords)
-    if (k == s) return w;
-  return "?";
-}
+const char* to_string(RunState s) { return enum_word(kStateWords, s); }
 
 Excitation excitation_from_status_word(const std::string& word) {
-  for (const auto& [k, w] : kExcitationWords)
-    if (word == w) return k;
+  if (const auto e = enum_from_word(kExcitationWords, word)) return *e;
   throw InputError("excitation \"" + word + "\": stepped_sine, sweep or multisine");
 }
 
 RunState run_state_from_string(const std::string& word) {
-  for (const auto& [k, w] : kStateWords)
-    if (word == w) return k;
+  if (const auto s = enum_from_word(kStateWords, word)) return *s;
   throw InputError("state \"" + word + "\": start, settle, integrate, done or abort");
 }
 

@@ -8,6 +8,7 @@
 #include "causes/measurement_coupling.h"
 #include "causes/nonlinear.h"
 #include "fralab/core/numerics.h"
+#include "fralab/core/text.h"
 #include "fralab/plant/nonlinearity.h"
 #include "pair_fit.h"
 
@@ -108,27 +109,17 @@ std::string explain(const Finding& f) {
 
 }  // namespace
 
-const char* to_string(CauseKind c) {
-  for (const auto& [k, n] : kCauseNames)
-    if (k == c) return n;
-  return "?";
-}
+const char* to_string(CauseKind c) { return enum_word(kCauseNames, c); }
 
-const char* to_string(Scope s) {
-  for (const auto& [k, n] : kScopeNames)
-    if (k == s) return n;
-  return "?";
-}
+const char* to_string(Scope s) { return enum_word(kScopeNames, s); }
 
 CauseKind cause_from_string(const std::string& s) {
-  for (const auto& [k, n] : kCauseNames)
-    if (s == n) return k;
+  if (const auto c = enum_from_word(kCauseNames, s)) return *c;
   throw InputError("unknown diagnosis cause '" + s + "'");
 }
 
 Scope scope_from_string(const std::string& s) {
-  for (const auto& [k, n] : kScopeNames)
-    if (s == n) return k;
+  if (const auto k = enum_from_word(kScopeNames, s)) return *k;
   throw InputError("unknown diagnosis scope '" + s + "' (path, output, input or plant)");
 }
 

@@ -2,13 +2,31 @@
 // (flags passed to child processes, where std::to_string's 6 decimals would round).
 #pragma once
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fralab {
 
 /// Splits on `sep`, dropping empty items: "a,b,,c" -> {"a", "b", "c"}.
 std::vector<std::string> split_list(const std::string& text, char sep = ',');
+
+/// Enums inside, words at the edges: the word of `e` in a table {{value, "word"}, ...} ("?" when
+/// absent), and the value of a word (nullopt when absent).
+template <class E, size_t N>
+const char* enum_word(const std::pair<E, const char*> (&table)[N], E e) {
+  for (const auto& [k, w] : table)
+    if (k == e) return w;
+  return "?";
+}
+template <class E, size_t N>
+std::optional<E> enum_from_word(const std::pair<E, const char*> (&table)[N],
+                                const std::string& word) {
+  for (const auto& [k, w] : table)
+    if (word == w) return k;
+  return std::nullopt;
+}
 
 /// The shortest decimal text that reads back as exactly `v` (std::to_chars round trip).
 std::string lossless(double v);
