@@ -750,7 +750,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       const int N = int(d.w.size());
       const int n_hi = std::min(14, (N - 3) / 2);
       std::vector<double> taus = {0.0};
-      if (o.delay == FitOptions::Delay::kAuto) taus.push_back(coarse_delay(o.max_delay_s));
+      // A coarse delay below 0.05 rad at the top frequency is no delay: tau = 0 serves.
+      if (o.delay == FitOptions::Delay::kAuto && coarse_delay(o.max_delay_s) * d.w.back() > 0.05)
+        taus.push_back(coarse_delay(o.max_delay_s));
       if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
       FitOptions oo = o;
       oo.max_iterations = 12;
