@@ -54,10 +54,7 @@ int main(int argc, char** argv) {
     AcquisitionLoopOptions lo;
     lo.run_id = run_id;
     lo.consumers = split_list(consumers_csv);
-    lo.block = o.block;
-    lo.window = o.window;
-    lo.speed = o.speed;
-    lo.sample_rate_hz = o.sample_rate_hz;
+    lo.acquire = o;
     lo.ready_timeout_s = ready_timeout;
     lo.stall_timeout_s = stall_timeout;
     AcquisitionNode node(lcm, ctl, camp, lo);

@@ -47,9 +47,9 @@ Json AcquisitionNode::run() {
   lcm::LCM& data = data_;
   lcm::LCM& control = control_;
   const Campaign& campaign = campaign_;
-  const AcquisitionLoopOptions& o = o_;
+  const AcquireOptions& o = o_.acquire;
   Acks& acq = *acks_;
-  std::vector<std::string> consumers = o.consumers;
+  std::vector<std::string> consumers = o_.consumers;
   if (std::find(consumers.begin(), consumers.end(), "plant") == consumers.end())
     consumers.push_back("plant");
 
@@ -66,9 +66,9 @@ Json AcquisitionNode::run() {
         throw InputError(why());
     }
   };
-  wait_acks(-1, o.ready_timeout_s, 50, [&] {
-    return "consumer \"" + lag + "\" never said ready within " + std::to_string(o.ready_timeout_s) +
-           " s (is it running on the same LCM URL?)";
+  wait_acks(-1, o_.ready_timeout_s, 50, [&] {
+    return "consumer \"" + lag + "\" never said ready within " +
+           std::to_string(o_.ready_timeout_s) + " s (is it running on the same LCM URL?)";
   });
   auto publish_status = [&](const StatusEvent& e) {
     excitation_status_t m = to_status_msg(e);
@@ -86,12 +86,12 @@ Json AcquisitionNode::run() {
   const int64_t nblocks = command_block_count(campaign, o.block);
   size_t ev = 0;
   for (int64_t b = 0; b < nblocks; ++b) {
-    wait_acks(b - o.window, o.stall_timeout_s, 20, [&] {
+    wait_acks(b - o.window, o_.stall_timeout_s, 20, [&] {
       return "consumer \"" + lag + "\" stopped acknowledging at block " +
              std::to_string(acq.acks.min_ack(consumers, nullptr)) + " (sent up to " +
              std::to_string(b - 1) + ")";
     });
-    const Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o.run_id);
+    const Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
     if (o.speed > 0) {
       auto due =
           t0 + std::chrono::duration<double>(double(blk.start_sample) / o.sample_rate_hz / o.speed);
@@ -107,13 +107,13 @@ Json AcquisitionNode::run() {
     data.publish(kCmdChannel, &m);
   }
   // Wait for everyone to take the last block.
-  wait_acks(nblocks - 1, o.stall_timeout_s, 20, [&] {
+  wait_acks(nblocks - 1, o_.stall_timeout_s, 20, [&] {
     return "consumer \"" + lag + "\" did not acknowledge the final block " +
            std::to_string(nblocks - 1);
   });
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   const double engine_s = double(total) / o.sample_rate_hz;
-  Json sj{{"run_id", o.run_id},
+  Json sj{{"run_id", o_.run_id},
           {"engine_time_s", engine_s},
           {"wall_time_s", wall},
           {"speedup", engine_s / std::max(wall, 1e-9)},

@@ -19,10 +19,7 @@ namespace fralab {
 struct AcquisitionLoopOptions {
   std::string run_id = "run";
   std::vector<std::string> consumers = {"plant"};  // who must acknowledge ("plant" is added)
-  int block = 100;
-  int window = 2;
-  double speed = 0;
-  double sample_rate_hz = 1000.0;
+  AcquireOptions acquire;                          // block, window, speed and sample rate are its
   double ready_timeout_s = 30;
   double stall_timeout_s = 60;
 };
