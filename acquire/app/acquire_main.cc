@@ -39,6 +39,13 @@ int main(int argc, char** argv) {
                  "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--ready-timeout", ready_timeout, "seconds to wait for consumers to be ready")
       ->capture_default_str();
+  app.add_option("--stall-timeout", stall_timeout,
+                 "seconds a stream may stand still, retransmitted, before the run fails")
+      ->capture_default_str();
+  FlowOptions flow;
+  app.add_option("--retransmit-after", flow.retransmit_after_s,
+                 "seconds before what a consumer lacks is first retransmitted (then doubling)")
+      ->capture_default_str();
   app.add_option("--summary", summary, "write a JSON summary here");
   CLI11_PARSE(app, argc, argv);
   try {
@@ -56,7 +63,8 @@ int main(int argc, char** argv) {
     lo.consumers = split_list(consumers_csv);
     lo.acquire = o;
     lo.ready_timeout_s = ready_timeout;
-    lo.stall_timeout_s = stall_timeout;
+    lo.flow = flow;
+    lo.flow.stall_timeout_s = stall_timeout;
     AcquisitionNode node(lcm, ctl, camp, lo);
     const Json sj = node.run();
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";

@@ -15,14 +15,17 @@ using Clock = std::chrono::steady_clock;
 
 // Acknowledgements on the control instance, for this run only.
 struct AcquisitionNode::Acks {
+  Acks(std::string id, FlowControl f) : run_id(std::move(id)), flow(std::move(f)) {}
   std::string run_id;
-  AckTracker acks;
+  FlowControl flow;
+  Clock::time_point t0 = Clock::now();
   std::string error;
+  double now() const { return std::chrono::duration<double>(Clock::now() - t0).count(); }
   void on_ack(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     try {
       ack_t a = decode_checked<ack_t>(rbuf, ch);
       if (!a.run_id.empty() && a.run_id != run_id) return;
-      acks.on_ack(a.consumer, a.seq);
+      flow.on_ack(a.consumer, a.stream, a.seq, now());
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -35,8 +38,7 @@ AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campai
       control_(control),
       campaign_(campaign),
       o_(std::move(o)),
-      acks_(std::make_unique<Acks>()) {
-  acks_->run_id = o_.run_id;
+      acks_(std::make_unique<Acks>(o_.run_id, FlowControl(o_.consumers, o_.flow))) {
   sub_ = control_.subscribe(kAckChannel, &Acks::on_ack, acks_.get());
   sub_->setQueueCapacity(100000);
 }
@@ -45,72 +47,104 @@ AcquisitionNode::~AcquisitionNode() { control_.unsubscribe(sub_); }
 
 Json AcquisitionNode::run() {
   lcm::LCM& data = data_;
-  lcm::LCM& control = control_;
   const Campaign& campaign = campaign_;
   const AcquireOptions& o = o_.acquire;
   Acks& acq = *acks_;
-  std::vector<std::string> consumers = o_.consumers;
-  if (std::find(consumers.begin(), consumers.end(), "plant") == consumers.end())
-    consumers.push_back("plant");
+  FlowControl& flow = acq.flow;
+  const auto& events = campaign.events();
+  for (size_t i = 0; i < events.size(); ++i)
+    if (events[i].seq != int64_t(i))
+      throw InputError("campaign status event " + std::to_string(i) + " has seq " +
+                       std::to_string(events[i].seq) + " (the status stream needs 0, 1, ...)");
 
-  // Waits until every consumer has acknowledged `target` (-1: ready); past `timeout` seconds the
-  // error names the slowest consumer (`lag`) through `why`.
-  std::string lag;
-  auto wait_acks = [&](int64_t target, double timeout, int poll_ms,
-                       const std::function<std::string()>& why) {
-    const auto t = Clock::now();
-    while (acq.acks.min_ack(consumers, &lag) < target) {
-      handle_either(data, control, poll_ms);
-      if (!acq.error.empty()) throw InputError(acq.error);
-      if (std::chrono::duration<double>(Clock::now() - t).count() > timeout)
-        throw InputError(why());
-    }
-  };
-  wait_acks(-1, o_.ready_timeout_s, 50, [&] {
-    return "consumer \"" + lag + "\" never said ready within " +
-           std::to_string(o_.ready_timeout_s) + " s (is it running on the same LCM URL?)";
-  });
   auto publish_status = [&](const StatusEvent& e) {
     excitation_status_t m = to_status_msg(e);
     data.publish(kStatusChannel, &m);
   };
-  StatusEvent start = campaign.events().front();
+  auto publish_command = [&](int64_t b) {
+    command_block_t m =
+        to_command_msg(command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id));
+    data.publish(kCmdChannel, &m);
+  };
+  // Handles what arrived, retransmits what a consumer lacks, and fails on a stalled stream.
+  auto pump = [&](int poll_ms) {
+    handle_either(data_, control_, poll_ms);
+    if (!acq.error.empty()) throw InputError(acq.error);
+    const double now = acq.now();
+    for (Stream s : {Stream::kCommand, Stream::kTape, Stream::kStatus}) {
+      if (auto r = flow.due(s, now)) {
+        if (s == Stream::kCommand)
+          for (int64_t b = r->from; b <= r->to; ++b) publish_command(b);
+        else if (s == Stream::kStatus)
+          for (int64_t k = r->from; k <= r->to; ++k) publish_status(events[size_t(k)]);
+        else
+          publish_flow(control_, o_.run_id, "resend", "tape", r->from, r->to);
+      }
+      const std::string why = flow.stalled(s, now);
+      if (!why.empty()) throw InputError(why);
+    }
+  };
+  // Waits until `ok()`; the streams are pumped meanwhile.
+  auto wait_until = [&](const std::function<bool()>& ok) {
+    while (!ok()) pump(10);
+  };
+
+  const double t_ready = acq.now();
+  std::string missing;
+  while (!flow.all_ready(&missing)) {
+    handle_either(data_, control_, 50);
+    if (!acq.error.empty()) throw InputError(acq.error);
+    if (acq.now() - t_ready > o_.ready_timeout_s)
+      throw InputError("consumer \"" + missing + "\" never said ready within " +
+                       std::to_string(o_.ready_timeout_s) +
+                       " s (is it running on the same LCM URL?)");
+  }
+  StatusEvent start = events.front();
   start.state = RunState::kStart;
   start.seq = -1;
   start.sample = 0;
   start.n_samples = campaign.total_samples();
-  publish_status(start);
+  publish_status(start);  // outside the flow control: informative
 
   const auto t0 = Clock::now();
   const int64_t total = campaign.total_samples();
   const int64_t nblocks = command_block_count(campaign, o.block);
   size_t ev = 0;
   for (int64_t b = 0; b < nblocks; ++b) {
-    wait_acks(b - o.window, o_.stall_timeout_s, 20, [&] {
-      return "consumer \"" + lag + "\" stopped acknowledging at block " +
-             std::to_string(acq.acks.min_ack(consumers, nullptr)) + " (sent up to " +
-             std::to_string(b - 1) + ")";
-    });
     const Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
+    wait_until([&] {
+      return flow.acked(Stream::kCommand) >= b - o.window &&
+             flow.acked(Stream::kTape) >= b - o.window;
+    });
     if (o.speed > 0) {
       auto due =
           t0 + std::chrono::duration<double>(double(blk.start_sample) / o.sample_rate_hz / o.speed);
       while (Clock::now() < due)
-        handle_either(
-            data, control,
-            1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
+        pump(1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
     }
-    while (ev < campaign.events().size() &&
-           (campaign.events()[ev].sample < blk.start_sample + blk.n_samples || blk.final_block))
-      publish_status(campaign.events()[ev++]);
+    // The block's status events, held by every consumer before the block goes out: a window's
+    // definition always precedes its samples, however datagrams are lost.
+    bool new_status = false;
+    while (ev < events.size() &&
+           (events[ev].sample < blk.start_sample + blk.n_samples || blk.final_block)) {
+      publish_status(events[ev]);
+      flow.published(Stream::kStatus, events[ev].seq);
+      ++ev;
+      new_status = true;
+    }
+    if (new_status)
+      wait_until([&] { return flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus); });
     command_block_t m = to_command_msg(blk);
     data.publish(kCmdChannel, &m);
+    flow.published(Stream::kCommand, b);
   }
-  // Wait for everyone to take the last block.
-  wait_acks(nblocks - 1, o_.stall_timeout_s, 20, [&] {
-    return "consumer \"" + lag + "\" did not acknowledge the final block " +
-           std::to_string(nblocks - 1);
+  // Everyone holds everything: the run is judged by what was measured.
+  wait_until([&] {
+    return flow.acked(Stream::kCommand) >= nblocks - 1 &&
+           flow.acked(Stream::kTape) >= nblocks - 1 &&
+           flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus);
   });
+  for (int i = 0; i < 3; ++i) publish_flow(control_, o_.run_id, "close", "", 0, nblocks - 1);
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   const double engine_s = double(total) / o.sample_rate_hz;
   Json sj{{"run_id", o_.run_id},
@@ -119,7 +153,9 @@ Json AcquisitionNode::run() {
           {"speedup", engine_s / std::max(wall, 1e-9)},
           {"blocks", nblocks},
           {"samples", total},
-          {"excitation", to_string(campaign.events().front().excitation)}};
+          {"excitation", to_string(campaign.events().front().excitation)},
+          {"retransmissions", flow.retransmissions()},
+          {"items_retransmitted", flow.items_retransmitted()}};
   return sj;
 }
 

@@ -1,9 +1,12 @@
 // The acquisition on LCM (fralab-acquire's loop as a library, the transport passed in): waits for
 // every consumer's "ready", publishes the status events (FRALAB_STATUS) and command blocks
-// (FRALAB_CMD) of a campaign under flow control (at most `window` blocks ahead of the slowest
-// consumer's acknowledgement), paced at `speed` x real time when > 0. The plant and the analysers
-// may share the instances (memq:// in tests: everything runs in the caller's thread, dispatched
-// while this waits for acknowledgements).
+// (FRALAB_CMD) of a campaign under flow control (acquire/flow_control.h): a command block goes out
+// when every consumer holds the tape up to `window` blocks before it and every status event
+// published before it; paced at `speed` x real time when > 0. What a consumer lacks is
+// retransmitted (commands and status events by this node, tape blocks by the plant on request,
+// FRALAB_FLOW "resend"); when every consumer holds everything, "close" (three times) ends the
+// run. The plant and the analysers may share the instances (memq:// in tests: everything runs in
+// the caller's thread, dispatched while this waits for acknowledgements).
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
@@ -12,6 +15,7 @@
 #include <vector>
 
 #include "fralab/acquire/acquisition.h"
+#include "fralab/acquire/flow_control.h"
 #include "fralab/core/json_util.h"
 
 namespace fralab {
@@ -21,7 +25,7 @@ struct AcquisitionLoopOptions {
   std::vector<std::string> consumers = {"plant"};  // who must acknowledge ("plant" is added)
   AcquireOptions acquire;                          // block, window, speed and sample rate are its
   double ready_timeout_s = 30;
-  double stall_timeout_s = 60;
+  FlowOptions flow;  // retransmission waits and the stall timeout
 };
 
 class AcquisitionNode {
@@ -34,8 +38,9 @@ class AcquisitionNode {
   AcquisitionNode& operator=(const AcquisitionNode&) = delete;
 
   /// Runs the campaign to its end; returns the summary (run_id, engine_time_s, wall_time_s,
-  /// speedup, blocks, samples, excitation). InputError naming the consumer that never said ready
-  /// or stopped acknowledging, or a decoding error on the control channel.
+  /// speedup, blocks, samples, excitation, retransmissions, items_retransmitted). InputError
+  /// naming the consumer that never said ready or a stream that stalled (flow_control.h), or a
+  /// decoding error on the control channel.
   Json run();
 
  private:

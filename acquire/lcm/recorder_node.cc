@@ -24,14 +24,10 @@ RecorderNode::~RecorderNode() {
   if (log_) std::fflush(log_->getFilePtr());
 }
 
-void RecorderNode::announce_ready() { ack(-1); }
+void RecorderNode::announce_ready() { ack("ready", -1); }
 
-void RecorderNode::ack(int64_t seq) {
-  ack_t a;
-  a.run_id = run_id_;
-  a.consumer = name_;
-  a.seq = seq;
-  control_.publish(kAckChannel, &a);
+void RecorderNode::ack(const std::string& stream, int64_t seq) {
+  publish_ack(control_, run_id_, name_, stream, seq);
 }
 
 void RecorderNode::on_any(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -47,12 +43,28 @@ void RecorderNode::on_any(const lcm::ReceiveBuffer* rbuf, const std::string& cha
       throw InputError(path_ + ": write failed at event " + std::to_string(events_) +
                        " (disk full?)");
     ++events_;
-    if (channel != kTapeChannel) return;
-    const tape_block_t m = decode_checked<tape_block_t>(rbuf, channel);
-    if (run_id_.empty()) run_id_ = m.run_id;
-    if (m.run_id != run_id_) return;
-    ++blocks_;
-    ack(m.seq);  // on disk: the acquisition may go on
+    // On disk: acknowledge the position without a gap (again for a duplicate).
+    auto advance = [&](InOrder<char>& q, int64_t seq, const char* stream) {
+      if (q.offer(seq, 0) == InOrder<char>::Offer::kNew) {
+        const int64_t before = q.delivered();
+        while (q.pop()) {
+        }
+        if (q.delivered() == before) return;
+      }
+      ack(stream, q.delivered());
+    };
+    if (channel == kTapeChannel) {
+      const tape_block_t m = decode_checked<tape_block_t>(rbuf, channel);
+      if (run_id_.empty()) run_id_ = m.run_id;
+      if (m.run_id != run_id_) return;
+      ++blocks_;
+      advance(tape_, m.seq, "tape");
+    } else if (channel == kStatusChannel) {
+      const excitation_status_t m = decode_checked<excitation_status_t>(rbuf, channel);
+      if (run_id_.empty()) run_id_ = m.run_id;
+      if (m.run_id != run_id_ || m.seq < 0) return;
+      advance(status_, m.seq, "status");
+    }
   } catch (const std::exception& e) {
     error_ = e.what();
   }

@@ -1,13 +1,18 @@
 // The tape recorder inside the flow control (issue 12): every message on the data instance is
-// written to a standard LCM log file (lcm-logplayer and lcm::LogFile read it), flushed, and each
-// tape block is acknowledged under the recorder's name on the control instance only once it is on
-// disk. The acquisition counts the recorder among its consumers, so a busy machine slows the run
-// instead of losing tape blocks (lcm-logger, outside the flow control, dropped them).
+// written to a standard LCM log file (lcm-logplayer and lcm::LogFile read it) in arrival order,
+// retransmitted duplicates included, flushed, and the last tape block and status event on disk
+// without a gap are acknowledged under the recorder's name on the control instance (streams
+// "tape" and "status"; again on every duplicate). The acquisition counts the recorder among its
+// consumers, so a busy machine slows the run instead of losing tape blocks, and a lost datagram is
+// retransmitted until the tape holds it. Readers put retransmitted blocks back in order
+// (TapeFeeder).
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
+
+#include "fralab/core/in_order.h"
 
 namespace fralab {
 
@@ -21,7 +26,7 @@ class RecorderNode {
   RecorderNode(const RecorderNode&) = delete;
   RecorderNode& operator=(const RecorderNode&) = delete;
 
-  /// "Ready" (ack -1 under the recorder's name).
+  /// "Ready" (stream "ready", seq -1, under the recorder's name).
   void announce_ready();
   /// A tape block of the run has been written and acknowledged (no more "ready" needed).
   bool started() const { return blocks_ > 0; }
@@ -31,13 +36,14 @@ class RecorderNode {
 
  private:
   void on_any(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void ack(int64_t seq);
+  void ack(const std::string& stream, int64_t seq);
   lcm::LCM& data_;
   lcm::LCM& control_;
   std::string path_, run_id_, name_;
   std::unique_ptr<lcm::LogFile> log_;
   lcm::Subscription* sub_ = nullptr;
   int64_t events_ = 0, blocks_ = 0;
+  InOrder<char> tape_{0}, status_{0};  // what is on disk, by seq (contents not kept)
   std::string error_;
 };
 

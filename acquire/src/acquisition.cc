@@ -102,25 +102,4 @@ Block command_block(const Campaign& c, int64_t seq, int block, double sample_rat
   return blk;
 }
 
-void AckTracker::on_ack(const std::string& consumer, int64_t seq) {
-  auto it = acked_.find(consumer);
-  if (it == acked_.end())
-    acked_[consumer] = seq;
-  else
-    it->second = std::max(it->second, seq);
-}
-
-int64_t AckTracker::min_ack(const std::vector<std::string>& who, std::string* laggard) const {
-  int64_t m = INT64_MAX;
-  for (const auto& c : who) {
-    auto it = acked_.find(c);
-    const int64_t v = it == acked_.end() ? -2 : it->second;
-    if (v < m) {
-      m = v;
-      if (laggard) *laggard = c;
-    }
-  }
-  return m;
-}
-
 }  // namespace fralab

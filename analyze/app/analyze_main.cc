@@ -34,6 +34,16 @@ int main(int argc, char** argv) {
   app.add_option("--name", name, "consumer name for flow control (default: first pair)");
   app.add_option("--run-id", run_id, "only this run");
   app.add_option("--input", opt.input, "only steps exciting this input");
+  double linger = 0, handover = 20;
+  app.add_option("--linger", linger,
+                 "seconds to wait, once the analysis is done, for the acquisition's close (the lab "
+                 "passes it: a retransmitted block may still need acknowledging); 0: exit when "
+                 "done (following a replay)")
+      ->capture_default_str();
+  app.add_option("--handover", handover,
+                 "seconds to republish the complete curves until an identifier that announced "
+                 "itself acknowledges each")
+      ->capture_default_str();
   app.add_option("--log", log, "tape mode: read this LCM log file directly (no LCM traffic)");
   CLI11_PARSE(app, argc, argv);
   try {
@@ -49,18 +59,37 @@ int main(int argc, char** argv) {
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
     AnalyzerNode live(lcm, ctl, pairs, opt, name, run_id);
-    auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    while (!live.done()) {
-      if (!live.started() &&
-          std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+    using Clock = std::chrono::steady_clock;
+    auto last_ready = Clock::now() - std::chrono::seconds(1);
+    auto since = [](Clock::time_point t) {
+      return std::chrono::duration<double>(Clock::now() - t).count();
+    };
+    // Runs until the run is analysed and the acquisition says every consumer holds everything
+    // (until then a retransmitted block may still need acknowledging), or `linger` s after the
+    // analysis is done without the close (the acquisition gone, or none: a replay).
+    Clock::time_point done_at{};
+    while (!(live.done() && live.closed())) {
+      if (!live.started() && since(last_ready) > 0.1) {
         live.announce_ready();
-        last_ready = std::chrono::steady_clock::now();
+        last_ready = Clock::now();
       }
-      lcm.handleTimeout(100);
+      handle_either(lcm, ctl, 100);
       if (!live.error().empty()) throw InputError(live.error());
+      if (live.done() && done_at == Clock::time_point{}) done_at = Clock::now();
+      if (live.done() && since(done_at) > linger) break;
     }
     const std::vector<Frd> frds = live.finish();
     if (!out.empty()) write_frds(frds, out);
+    // Hands the complete curves to the identifier, republishing until it has acknowledged each.
+    const auto t_hand = Clock::now();
+    while (live.identifier_heard() && !live.curves_taken() && since(t_hand) < handover) {
+      handle_either(lcm, ctl, 200);
+      live.republish_untaken();
+    }
+    if (live.identifier_heard() && !live.curves_taken())
+      std::cerr << "fralab-analyze: warning: the identifier did not acknowledge every curve within "
+                << handover << " s (the files are in " << (out.empty() ? "(no --out)" : out)
+                << "/frd)\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "fralab-analyze: " << e.what() << "\n";

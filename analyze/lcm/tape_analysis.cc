@@ -11,23 +11,40 @@ TapeFeeder::TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOpti
   for (const auto& p : pairs) an_.push_back(std::make_unique<PairAnalyzer>(p, opt));
 }
 
-int64_t TapeFeeder::feed(const std::string& channel, const void* data, int size) {
+TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, int size) {
   lcm::ReceiveBuffer rb{const_cast<void*>(data), static_cast<uint32_t>(size), 0};
+  Fed fed;
   if (channel == kTapeChannel) {
     Block b = from_msg(decode_checked<tape_block_t>(&rb, channel));
     if (run_id_.empty()) run_id_ = b.run_id;
-    if (b.run_id != run_id_) return -1;
-    for (auto& a : an_) a->on_block(b);
-    final_seen_ |= b.final_block;
-    return b.seq;
-  }
-  if (channel == kStatusChannel) {
+    if (b.run_id != run_id_) return fed;
+    fed.kind = Kind::kTape;
+    const int64_t seq = b.seq;
+    fed.duplicate = tape_.offer(seq, std::move(b)) == InOrder<Block>::Offer::kDuplicate;
+  } else if (channel == kStatusChannel) {
     StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, channel));
     if (run_id_.empty()) run_id_ = e.run_id;
-    if (e.run_id != run_id_) return -1;
-    for (auto& a : an_) a->on_status(e);
+    if (e.run_id != run_id_) return fed;
+    fed.kind = Kind::kStatus;
+    if (e.seq < 0) {  // the start event: outside the sequence
+      for (auto& a : an_) a->on_status(e);
+      return fed;
+    }
+    const int64_t seq = e.seq;
+    fed.duplicate = status_.offer(seq, std::move(e)) == InOrder<StatusEvent>::Offer::kDuplicate;
   }
-  return -1;
+  deliver();
+  return fed;
+}
+
+void TapeFeeder::deliver() {
+  // Status events first: the acquisition publishes a block's events before the block.
+  while (auto e = status_.pop())
+    for (auto& a : an_) a->on_status(*e);
+  while (auto b = tape_.pop()) {
+    for (auto& a : an_) a->on_block(*b);
+    final_seen_ |= b->final_block;
+  }
 }
 
 bool TapeFeeder::all_done() const {
@@ -38,8 +55,14 @@ bool TapeFeeder::all_done() const {
   return true;
 }
 
-void TapeFeeder::flush() {
+int64_t TapeFeeder::flush() {
+  int64_t lost = 0;
+  while (status_.held() || tape_.held()) {
+    lost += status_.skip_gap() + tape_.skip_gap();
+    deliver();
+  }
   for (auto& a : an_) a->flush();
+  return lost;
 }
 
 std::vector<Frd> analyze_tape_file(const std::string& path, const std::vector<std::string>& pairs,

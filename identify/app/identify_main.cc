@@ -1,6 +1,7 @@
 // fralab-identify: the live identifier. Collects the analysers' finished curves of a run
-// (FRALAB_FRD, complete = true), fits every pair, publishes each fit (FRALAB_TF), and writes
-// DIR/tf/<E1>_<E2>.json and the transfer matrix DIR/transfer_matrix.{json,md}.
+// (FRALAB_FRD, complete = true, each acknowledged on the control URL), fits every pair, publishes
+// each fit (FRALAB_TF), and writes DIR/tf/<E1>_<E2>.json and the transfer matrix
+// DIR/transfer_matrix.{json,md}.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <iostream>
@@ -13,15 +14,20 @@ using namespace fralab;
 
 namespace {
 
+// Complete curves of the run, each acknowledged to its analyser on the control instance (consumer
+// "identify", stream "frd:<pair>"; again for every copy, so a lost acknowledgement is mended).
 struct Collector {
   std::string run_id;
+  lcm::LCM* control = nullptr;
   std::map<std::string, Frd> complete;
   std::string error;
   void on_frd(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     try {
       frd_t m = decode_checked<frd_t>(rbuf, ch);
       if (!run_id.empty() && m.run_id != run_id) return;
-      if (m.complete) complete[m.pair] = from_frd_msg(m);
+      if (!m.complete) return;
+      if (!complete.count(m.pair)) complete[m.pair] = from_frd_msg(m);
+      publish_ack(*control, m.run_id, "identify", "frd:" + m.pair, 0);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -37,6 +43,9 @@ int main(int argc, char** argv) {
   double timeout = 3600;
   app.add_option("--lcm-url", url);
   app.add_option("--run-id", run_id);
+  std::string ctl_url;
+  app.add_option("--control-url", ctl_url,
+                 "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--expect", expect, "number of pairs to wait for")->required();
   app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")
       ->required();
@@ -49,10 +58,19 @@ int main(int argc, char** argv) {
     parse_delay_option(delay, &o);
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    Collector c{run_id, {}, ""};
+    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
+                                 : resolve_lcm_url(ctl_url));
+    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    Collector c{run_id, &ctl, {}, ""};
     lcm.subscribe(kFrdChannel, &Collector::on_frd, &c)->setQueueCapacity(100000);
     const auto t0 = std::chrono::steady_clock::now();
+    auto last_ready = t0 - std::chrono::seconds(1);
     while (int(c.complete.size()) < expect) {
+      // Says it is there, so the analysers hand their curves over until acknowledged.
+      if (std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(500)) {
+        publish_ack(ctl, run_id, "identify", "ready", -1);
+        last_ready = std::chrono::steady_clock::now();
+      }
       lcm.handleTimeout(100);
       if (!c.error.empty()) throw InputError(c.error);
       if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) {
@@ -67,6 +85,9 @@ int main(int argc, char** argv) {
       tf_t m = to_tf_msg(fits[i].tf, curves[i].pair, run_id, fits[i].e_n, fits[i].status_str());
       lcm.publish(kTfChannel, &m);
     }
+    // Copies republished while fitting (an acknowledgement was lost) are acknowledged again.
+    const auto t_end = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    while (std::chrono::steady_clock::now() < t_end) lcm.handleTimeout(100);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "fralab-identify: " << e.what() << "\n";

@@ -139,6 +139,27 @@ std::string control_url_for(const std::string& url) {
   }
 }
 
+void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string& consumer,
+                 const std::string& stream, int64_t seq) {
+  ack_t a;
+  a.run_id = run_id;
+  a.consumer = consumer;
+  a.stream = stream;
+  a.seq = seq;
+  control.publish(kAckChannel, &a);
+}
+
+void publish_flow(lcm::LCM& control, const std::string& run_id, const std::string& kind,
+                  const std::string& stream, int64_t from_seq, int64_t to_seq) {
+  flow_t f;
+  f.run_id = run_id;
+  f.kind = kind;
+  f.stream = stream;
+  f.from_seq = from_seq;
+  f.to_seq = to_seq;
+  control.publish(kFlowChannel, &f);
+}
+
 void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms) {
   if (&a == &b) {  // one instance for data and control (memq:// in tests)
     a.handleTimeout(timeout_ms);

@@ -23,6 +23,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", opt.seed, "noise seed")->capture_default_str();
   app.add_flag("--no-noise", no_noise, "turn every noise source off");
+  double linger = 20;
+  app.add_option("--linger", linger,
+                 "seconds to wait after the final block for the acquisition's close")
+      ->capture_default_str();
   app.add_flag("--keep-running", keep_running, "do not exit after the final block");
   std::string run_id, ctl_url;
   app.add_option("--control-url", ctl_url,
@@ -39,16 +43,27 @@ int main(int argc, char** argv) {
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
     PlantNode plant(lcm, ctl, LockstepPlant(model, opt, run_id));
-    auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    while (keep_running || !plant.done()) {
+    using Clock = std::chrono::steady_clock;
+    auto last_ready = Clock::now() - std::chrono::seconds(1);
+    // After the final block the plant stays to republish tape blocks a consumer lost, until the
+    // acquisition's close (or `linger` s without it: the acquisition is gone).
+    Clock::time_point done_at{};
+    while (keep_running || !(plant.done() && plant.closed())) {
       if (!plant.started() &&
-          std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(100)) {
+          std::chrono::duration<double>(Clock::now() - last_ready).count() > 0.1) {
         plant.announce_ready();  // the acquisition waits for this before the first command
-        last_ready = std::chrono::steady_clock::now();
+        last_ready = Clock::now();
       }
-      lcm.handleTimeout(100);
+      handle_either(lcm, ctl, 100);
       if (!plant.error().empty()) throw InputError(plant.error());
+      if (plant.done() && done_at == Clock::time_point{}) done_at = Clock::now();
+      if (!keep_running && plant.done() &&
+          std::chrono::duration<double>(Clock::now() - done_at).count() > linger)
+        break;
     }
+    if (!plant.warnings().empty()) std::cerr << "fralab-plant: warning: " << plant.warnings();
+    if (plant.resent() > 0)
+      std::cerr << "fralab-plant: " << plant.resent() << " tape blocks republished on request\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "fralab-plant: " << e.what() << "\n";

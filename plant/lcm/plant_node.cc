@@ -1,33 +1,65 @@
 #include "plant_node.h"
 
-#include "fralab/lcm_io.h"
-
 namespace fralab {
 
-PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant)
-    : plant_(std::move(plant)), data_(data), control_(control) {
+PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks)
+    : plant_(std::move(plant)), data_(data), control_(control), keep_(keep_blocks) {
   data_.subscribe(kCmdChannel, &PlantNode::on_command, this)->setQueueCapacity(100000);
+  control_.subscribe(kFlowChannel, &PlantNode::on_flow, this)->setQueueCapacity(100000);
 }
 
-void PlantNode::announce_ready() { ack(-1); }
+void PlantNode::announce_ready() { ack("ready", -1); }
 
-void PlantNode::ack(int64_t seq) {
-  ack_t a;
-  a.run_id = plant_.run_id();
-  a.consumer = "plant";
-  a.seq = seq;
-  control_.publish(kAckChannel, &a);
+void PlantNode::ack(const std::string& stream, int64_t seq) {
+  publish_ack(control_, plant_.run_id(), "plant", stream, seq);
 }
 
 void PlantNode::on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-  if (plant_.done() || !error_.empty()) return;
+  if (!error_.empty()) return;
   try {
-    const Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
+    Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
     if (!plant_.accepts(cmd.run_id)) return;  // another run on the same URL: not ours
-    tape_block_t msg = to_tape_msg(plant_.advance(cmd));
     started_ = true;
-    data_.publish(kTapeChannel, &msg);
-    ack(cmd.seq);
+    const int64_t seq = cmd.seq;
+    if (commands_.offer(seq, std::move(cmd)) == InOrder<Block>::Offer::kDuplicate) {
+      ack("command", commands_.delivered());  // its acknowledgement was lost: say it again
+      return;
+    }
+    bool moved = false;
+    while (auto c = commands_.pop()) {
+      tape_block_t msg = to_tape_msg(plant_.advance(*c));
+      data_.publish(kTapeChannel, &msg);
+      kept_[msg.seq] = std::move(msg);
+      while (kept_.size() > keep_) kept_.erase(kept_.begin());
+      moved = true;
+    }
+    if (moved) ack("command", commands_.delivered());
+  } catch (const std::exception& e) {
+    error_ = e.what();
+  }
+}
+
+void PlantNode::on_flow(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  if (!error_.empty()) return;
+  try {
+    const flow_t f = decode_checked<flow_t>(rbuf, channel);
+    if (plant_.run_id().empty() || f.run_id != plant_.run_id()) return;
+    if (f.kind == "close") {
+      closed_ = true;
+    } else if (f.kind == "resend" && f.stream == "tape") {
+      for (int64_t s = f.from_seq; s <= f.to_seq; ++s) {
+        auto it = kept_.find(s);
+        if (it == kept_.end()) {
+          if (s < plant_.next_seq() && warnings_.size() < 2000)
+            warnings_ += "tape block " + std::to_string(s) +
+                         " was asked for again but is no longer kept (keeps the last " +
+                         std::to_string(keep_) + ")\n";
+          continue;
+        }
+        data_.publish(kTapeChannel, &it->second);
+        ++resent_;
+      }
+    }
   } catch (const std::exception& e) {
     error_ = e.what();
   }

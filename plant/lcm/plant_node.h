@@ -1,34 +1,53 @@
 // The plant on LCM (fralab-plant's loop as a library, the transport passed in): command blocks
-// from FRALAB_CMD go through LockstepPlant, tape blocks out on FRALAB_TAPE, one acknowledgement per
-// block (consumer "plant") on the control instance. Tests run it in-process over memq://.
+// from FRALAB_CMD go through LockstepPlant in sequence order (a duplicate is dropped, a block that
+// arrives early is held until the gap before it is retransmitted), tape blocks go out on
+// FRALAB_TAPE, and the last command block processed is acknowledged on the control instance
+// (consumer "plant", stream "command"; again on every duplicate). The last `keep_blocks` tape
+// blocks are kept and republished when the acquisition asks (FRALAB_FLOW "resend", stream
+// "tape": a consumer lost them); "close" ends the run. Tests run it in-process over memq://.
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <string>
 
+#include "fralab/core/in_order.h"
+#include "fralab/lcm_io.h"
 #include "fralab/plant/lockstep.h"
 
 namespace fralab {
 
 class PlantNode {
  public:
-  /// Subscribes to FRALAB_CMD on `data`; `control` carries the acknowledgements (may be `data`).
-  PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant);
-  /// "Ready" (ack -1): the acquisition waits for it before the first command.
+  /// Subscribes to FRALAB_CMD on `data` and FRALAB_FLOW on `control` (may be `data`).
+  PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks = 1024);
+  /// "Ready" (stream "ready", seq -1): the acquisition waits for it before the first command.
   void announce_ready();
   bool started() const { return started_; }
   bool done() const { return plant_.done(); }
-  /// The first error met (a gap, a wrong message); "" while all is well. Processing stops there.
+  /// The acquisition said the run is over.
+  bool closed() const { return closed_; }
+  /// Tape blocks republished on request so far.
+  int64_t resent() const { return resent_; }
+  /// Requests for tape blocks no longer kept (each named), "" when none.
+  const std::string& warnings() const { return warnings_; }
+  /// The first error met (a wrong message, a block that does not fit); "" while all is well.
+  /// Processing stops there.
   const std::string& error() const { return error_; }
 
  private:
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void ack(int64_t seq);
+  void on_flow(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void ack(const std::string& stream, int64_t seq);
   LockstepPlant plant_;
   lcm::LCM& data_;
   lcm::LCM& control_;
-  bool started_ = false;
-  std::string error_;
+  size_t keep_;
+  InOrder<Block> commands_{0};
+  std::map<int64_t, tape_block_t> kept_;
+  bool started_ = false, closed_ = false;
+  int64_t resent_ = 0;
+  std::string warnings_, error_;
 };
 
 }  // namespace fralab

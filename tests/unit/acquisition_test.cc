@@ -90,18 +90,6 @@ TEST(Acquisition, BadOptionsAreNamed) {
   EXPECT_EQ(excitation_from_string(to_string(Excitation::kSweep)), Excitation::kSweep);
 }
 
-TEST(Acquisition, AcknowledgementsNameTheSlowestConsumer) {
-  AckTracker t;
-  t.on_ack("plant", 5);
-  t.on_ack("analyze-a", 3);
-  t.on_ack("analyze-a", 2);  // a late duplicate never moves a consumer back
-  std::string lag;
-  EXPECT_EQ(t.min_ack({"plant", "analyze-a"}, &lag), 3);
-  EXPECT_EQ(lag, "analyze-a");
-  EXPECT_EQ(t.min_ack({"plant", "analyze-b"}, &lag), -2);  // never heard
-  EXPECT_EQ(lag, "analyze-b");
-}
-
 TEST(Lockstep, ThePlantEchoesCommandsAndRefusesAGap) {
   const Model m = load_model_or_embedded("j85_95");
   const auto camp = make_campaign(m, short_run(), "r");

@@ -44,7 +44,8 @@ TEST(TapeAnalysis, DecodedRecordsGiveTheLibrarysPointsExactly) {
   for (const auto& blk : r.blocks) {
     direct.on_block(blk);
     const auto b = encode(to_tape_msg(blk));
-    EXPECT_EQ(feeder.feed(kTapeChannel, b.data(), int(b.size())), blk.seq);
+    EXPECT_EQ(feeder.feed(kTapeChannel, b.data(), int(b.size())).kind, TapeFeeder::Kind::kTape);
+    EXPECT_EQ(feeder.tape_delivered(), blk.seq);
   }
   direct.flush();
   feeder.flush();
@@ -64,7 +65,7 @@ TEST(TapeAnalysis, AnotherRunIsIgnoredAndAWrongTypeIsNamed) {
   Block other = r.blocks[0];
   other.run_id = "someone-else";
   const auto b = encode(to_tape_msg(other));
-  EXPECT_EQ(feeder.feed(kTapeChannel, b.data(), int(b.size())), -1);
+  EXPECT_EQ(feeder.feed(kTapeChannel, b.data(), int(b.size())).kind, TapeFeeder::Kind::kOther);
   const auto s = encode(to_status_msg(r.events[0]));
   try {
     feeder.feed(kTapeChannel, s.data(), int(s.size()));

@@ -18,6 +18,7 @@
 #include "fralab/core/json_util.h"
 #include "fralab/core/tf.h"
 #include "fralab/excitation_status_t.hpp"
+#include "fralab/flow_t.hpp"
 #include "fralab/frd_t.hpp"
 #include "fralab/tape_block_t.hpp"
 #include "fralab/tf_t.hpp"
@@ -30,6 +31,14 @@ inline constexpr const char* kStatusChannel = "FRALAB_STATUS";
 inline constexpr const char* kAckChannel = "FRALAB_ACK";
 inline constexpr const char* kFrdChannel = "FRALAB_FRD";
 inline constexpr const char* kTfChannel = "FRALAB_TF";
+inline constexpr const char* kFlowChannel = "FRALAB_FLOW";
+
+/// Publishes an acknowledgement (ack_t.lcm: consumer, stream, seq) on the control instance.
+void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string& consumer,
+                 const std::string& stream, int64_t seq);
+/// Publishes a flow-control request (flow_t.lcm: "resend" or "close") on the control instance.
+void publish_flow(lcm::LCM& control, const std::string& run_id, const std::string& kind,
+                  const std::string& stream, int64_t from_seq, int64_t to_seq);
 
 tape_block_t to_tape_msg(const Block& b);
 command_block_t to_command_msg(const Block& b);

@@ -55,16 +55,5 @@ int64_t command_block_count(const Campaign& c, int block);
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id);
 
-/// Flow control: the last sequence number each consumer acknowledged (-1: ready).
-class AckTracker {
- public:
-  /// Records an acknowledgement (later ones never move a consumer back).
-  void on_ack(const std::string& consumer, int64_t seq);
-  /// The lowest acknowledgement among `who` (-2 for one never heard); *laggard names it.
-  int64_t min_ack(const std::vector<std::string>& who, std::string* laggard) const;
-
- private:
-  std::map<std::string, int64_t> acked_;
-};
 
 }  // namespace fralab
