@@ -6,6 +6,7 @@
 // --speed 1 additionally paces blocks at real time (a real test cell), --speed 0 goes as fast as
 // the consumers keep up. The results depend only on the samples, never on the speed.
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -23,11 +24,17 @@
 
 using namespace fralab;
 
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"fralab-acquire: excitation campaign over LCM"};
   std::string engine = "j85_95", url, ctl_url, run_id = "run", consumers_csv = "plant", summary;
   AcquireOptions o;
   double ready_timeout = 30, stall_timeout = 60;
+  int64_t lo_first_block = 0, lo_first_status = 0;
   app.add_option("--engine", engine, "engine model (file or embedded name)")->capture_default_str();
   add_acquire_flags(&app, o);
   app.add_option("--consumers", consumers_csv,
@@ -45,6 +52,11 @@ int main(int argc, char** argv) {
   FlowOptions flow;
   app.add_option("--retransmit-after", flow.retransmit_after_s,
                  "seconds before what a consumer lacks is first retransmitted (then doubling)")
+      ->capture_default_str();
+  app.add_option("--first-block", lo_first_block, "resume: start at this command block")
+      ->capture_default_str();
+  app.add_option("--first-status", lo_first_status,
+                 "resume: publish status events from this index on")
       ->capture_default_str();
   app.add_option("--summary", summary, "write a JSON summary here");
   CLI11_PARSE(app, argc, argv);
@@ -64,7 +76,12 @@ int main(int argc, char** argv) {
     lo.acquire = o;
     lo.ready_timeout_s = ready_timeout;
     lo.flow = flow;
+    lo.first_block = lo_first_block;
+    lo.first_status = lo_first_status;
     lo.flow.stall_timeout_s = stall_timeout;
+    lo.stop_requested = [] { return g_stop != 0; };
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
     AcquisitionNode node(lcm, ctl, camp, lo);
     const Json sj = node.run();
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";

@@ -25,6 +25,13 @@ int main(int argc, char** argv) {
   app.add_option("--run-id", run_id, "acknowledge only this run's blocks");
   app.add_option("--out", out, "the tape (LCM log) to write")->required();
   app.add_option("--name", name, "consumer name for flow control")->capture_default_str();
+  bool append = false;
+  int64_t first_block = 0, first_status = 0;
+  app.add_flag("--append", append, "resume: add to the existing tape");
+  app.add_option("--first-block", first_block, "resume: the first tape block expected")
+      ->capture_default_str();
+  app.add_option("--first-status", first_status, "resume: the first status event expected")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -34,7 +41,7 @@ int main(int argc, char** argv) {
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    RecorderNode rec(lcm, ctl, out, run_id, name);
+    RecorderNode rec(lcm, ctl, out, run_id, name, append, first_block, first_status);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (!g_stop) {
       if (!rec.started() &&
@@ -45,6 +52,9 @@ int main(int argc, char** argv) {
       lcm.handleTimeout(100);
       if (!rec.error().empty()) throw InputError(rec.error());
     }
+    // Stopped: what is already queued (the last blocks, an abort) still goes on the tape.
+    for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0;) ++i;
+    if (!rec.error().empty()) throw InputError(rec.error());
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "fralab-record: " << e.what() << "\n";

@@ -66,8 +66,31 @@ Json AcquisitionNode::run() {
         to_command_msg(command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id));
     data.publish(kCmdChannel, &m);
   };
+  // Stops the excitation: an "abort" status and a block commanding every actuator to its
+  // operating point, both with seq -1 (outside the run's sequences, so a resumed run continues the
+  // same numbering; readers take neither for part of the campaign).
+  int64_t next_block = 0;
+  auto abort_run = [&]() {
+    const int64_t at = next_block * o.block;
+    StatusEvent e = events.front();
+    e.state = RunState::kAbort;
+    e.seq = -1;
+    e.sample = at;
+    e.n_samples = 0;
+    e.message = "stopped by a signal";
+    const command_block_t m =
+        to_command_msg(abort_block(campaign, -1, at, o.block, o.sample_rate_hz, o_.run_id));
+    for (int i = 0; i < 3; ++i) {
+      publish_status(e);
+      data.publish(kCmdChannel, &m);
+    }
+    throw InputError("stopped by a signal at sample " + std::to_string(at) +
+                     ": the excitation is stopped and every actuator commanded back to its "
+                     "operating point");
+  };
   // Handles what arrived, retransmits what a consumer lacks, and fails on a stalled stream.
   auto pump = [&](int poll_ms) {
+    if (o_.stop_requested && o_.stop_requested()) abort_run();
     handle_either(data_, control_, poll_ms);
     if (!acq.error.empty()) throw InputError(acq.error);
     const double now = acq.now();
@@ -89,9 +112,16 @@ Json AcquisitionNode::run() {
     while (!ok()) pump(10);
   };
 
+  if (o_.first_block < 0 || o_.first_block > command_block_count(campaign, o.block) ||
+      o_.first_status < 0 || o_.first_status > int64_t(events.size()))
+    throw InputError("resume point block " + std::to_string(o_.first_block) + ", status " +
+                     std::to_string(o_.first_status) + " is outside the campaign");
+  flow.begin_at(o_.first_block, o_.first_status);
   const double t_ready = acq.now();
   std::string missing;
   while (!flow.all_ready(&missing)) {
+    if (o_.stop_requested && o_.stop_requested())
+      throw InputError("stopped by a signal before the run started");
     handle_either(data_, control_, 50);
     if (!acq.error.empty()) throw InputError(acq.error);
     if (acq.now() - t_ready > o_.ready_timeout_s)
@@ -109,8 +139,9 @@ Json AcquisitionNode::run() {
   const auto t0 = Clock::now();
   const int64_t total = campaign.total_samples();
   const int64_t nblocks = command_block_count(campaign, o.block);
-  size_t ev = 0;
-  for (int64_t b = 0; b < nblocks; ++b) {
+  size_t ev = size_t(o_.first_status);
+  next_block = o_.first_block;
+  for (int64_t b = o_.first_block; b < nblocks; ++b) {
     const Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
     wait_until([&] {
       return flow.acked(Stream::kCommand) >= b - o.window &&
@@ -137,6 +168,7 @@ Json AcquisitionNode::run() {
     command_block_t m = to_command_msg(blk);
     data.publish(kCmdChannel, &m);
     flow.published(Stream::kCommand, b);
+    next_block = b + 1;
   }
   // Everyone holds everything: the run is judged by what was measured.
   wait_until([&] {
@@ -146,12 +178,15 @@ Json AcquisitionNode::run() {
   });
   for (int i = 0; i < 3; ++i) publish_flow(control_, o_.run_id, "close", "", 0, nblocks - 1);
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  const double engine_s = double(total) / o.sample_rate_hz;
+  // Engine time of this run (a resumed run: from its first block on).
+  const double engine_s =
+      double(total - std::min(total, o_.first_block * int64_t(o.block))) / o.sample_rate_hz;
   Json sj{{"run_id", o_.run_id},
           {"engine_time_s", engine_s},
           {"wall_time_s", wall},
           {"speedup", engine_s / std::max(wall, 1e-9)},
           {"blocks", nblocks},
+          {"first_block", o_.first_block},
           {"samples", total},
           {"excitation", to_string(campaign.events().front().excitation)},
           {"retransmissions", flow.retransmissions()},

@@ -9,6 +9,7 @@
 // the caller's thread, dispatched while this waits for acknowledgements).
 #pragma once
 
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
@@ -26,6 +27,13 @@ struct AcquisitionLoopOptions {
   AcquireOptions acquire;                          // block, window, speed and sample rate are its
   double ready_timeout_s = 30;
   FlowOptions flow;  // retransmission waits and the stall timeout
+  /// Polled while running: true stops the run (a signal): an "abort" status and a block holding
+  /// every actuator at its operating point go out, then run() throws InputError saying so.
+  std::function<bool()> stop_requested;
+  /// Resume: start at this command block, and publish the status events from this index on (what
+  /// comes before is on the tape; the plant stands at the block's first sample).
+  int64_t first_block = 0;
+  int64_t first_status = 0;
 };
 
 class AcquisitionNode {

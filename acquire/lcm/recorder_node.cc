@@ -7,13 +7,16 @@
 namespace fralab {
 
 RecorderNode::RecorderNode(lcm::LCM& data, lcm::LCM& control, const std::string& path,
-                           std::string run_id, std::string name)
+                           std::string run_id, std::string name, bool append,
+                           int64_t first_block, int64_t first_status)
     : data_(data),
       control_(control),
       path_(path),
       run_id_(std::move(run_id)),
       name_(std::move(name)),
-      log_(std::make_unique<lcm::LogFile>(path, "w")) {
+      log_(std::make_unique<lcm::LogFile>(path, append ? "a" : "w")),
+      tape_(first_block),
+      status_(first_status) {
   if (!log_->good()) throw InputError(path + ": cannot create the tape file");
   sub_ = data_.subscribe(".*", &RecorderNode::on_any, this);
   sub_->setQueueCapacity(100000);

@@ -20,8 +20,11 @@ class RecorderNode {
  public:
   /// Creates (truncates) `path`; InputError naming it when it cannot. run_id "": the first tape
   /// block's run id is taken (blocks of another run are written but not acknowledged).
+  /// Resume: `append` adds to an existing tape, and the first tape block and status event expected
+  /// are `first_block` and `first_status` (what comes before is on the tape already).
   RecorderNode(lcm::LCM& data, lcm::LCM& control, const std::string& path, std::string run_id = "",
-               std::string name = "recorder");
+               std::string name = "recorder", bool append = false, int64_t first_block = 0,
+               int64_t first_status = 0);
   ~RecorderNode();
   RecorderNode(const RecorderNode&) = delete;
   RecorderNode& operator=(const RecorderNode&) = delete;
@@ -43,7 +46,7 @@ class RecorderNode {
   std::unique_ptr<lcm::LogFile> log_;
   lcm::Subscription* sub_ = nullptr;
   int64_t events_ = 0, blocks_ = 0;
-  InOrder<char> tape_{0}, status_{0};  // what is on disk, by seq (contents not kept)
+  InOrder<char> tape_, status_;  // what is on disk, by seq (contents not kept)
   std::string error_;
 };
 

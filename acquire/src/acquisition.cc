@@ -78,6 +78,25 @@ int64_t command_block_count(const Campaign& c, int block) {
   return (c.total_samples() + block - 1) / block;
 }
 
+Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
+                  double sample_rate_hz, const std::string& run_id) {
+  Block blk;
+  blk.run_id = run_id;
+  blk.seq = seq;
+  blk.start_sample = start_sample;
+  blk.sample_rate_hz = sample_rate_hz;
+  blk.n_samples = n;
+  blk.final_block = true;
+  for (const auto& in : c.inputs()) {
+    blk.channels.push_back("u_" + in.name);
+    blk.samples.insert(blk.samples.end(), size_t(n), in.dc);
+  }
+  blk.channels.push_back("ref_phase");
+  blk.channels.push_back("ref_freq_hz");
+  blk.samples.insert(blk.samples.end(), 2 * size_t(n), 0.0);
+  return blk;
+}
+
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id) {
   const int64_t s0 = seq * block;

@@ -49,6 +49,13 @@ std::vector<std::string> FlowControl::of(Stream s) const {
   return who;
 }
 
+void FlowControl::begin_at(int64_t first_block, int64_t first_status) {
+  floor_[int(Stream::kCommand)] = floor_[int(Stream::kTape)] = first_block - 1;
+  floor_[int(Stream::kStatus)] = first_status - 1;
+  st(Stream::kCommand).published = first_block - 1;
+  st(Stream::kStatus).published = first_status - 1;
+}
+
 void FlowControl::on_ack(const std::string& consumer, const std::string& stream, int64_t seq,
                          double now) {
   if (std::find(consumers_.begin(), consumers_.end(), consumer) == consumers_.end()) return;
@@ -77,7 +84,8 @@ void FlowControl::published(Stream s, int64_t seq) {
 }
 
 int64_t FlowControl::available(Stream s) const {
-  if (s == Stream::kTape) return std::max<int64_t>(acked(Stream::kCommand), -1);
+  if (s == Stream::kTape)
+    return std::max<int64_t>(acked(Stream::kCommand), floor_[int(Stream::kTape)]);
   return st(s).published;
 }
 
@@ -85,12 +93,13 @@ int64_t FlowControl::acked(Stream s, std::string* laggard) const {
   int64_t m = INT64_MAX;
   const std::string key = to_string(s);
   for (const auto& c : of(s)) {
-    int64_t v = heard_.count(c) ? -1 : -2;  // ready but nothing on this stream yet: -1
+    int64_t v = heard_.count(c) ? floor_[int(s)] : -2;  // ready, nothing on this stream yet
     auto ic = acked_.find(c);
     if (ic != acked_.end()) {
       auto is = ic->second.find(key);
       if (is != ic->second.end()) v = is->second;
     }
+    if (heard_.count(c)) v = std::max(v, floor_[int(s)]);
     if (v < m) {
       m = v;
       if (laggard) *laggard = c;
@@ -114,7 +123,7 @@ std::optional<FlowControl::Resend> FlowControl::due(Stream s, double now) {
   t.wait = std::min(2 * t.wait, o_.retransmit_max_s);
   ++t.resends_since_progress;
   ++resends_;
-  const int64_t from = std::max<int64_t>(lo + 1, 0);
+  const int64_t from = std::max<int64_t>(lo + 1, floor_[int(s)] + 1);
   items_resent_ += av - from + 1;
   return Resend{s, from, av};
 }

@@ -26,8 +26,8 @@ TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, i
     if (run_id_.empty()) run_id_ = e.run_id;
     if (e.run_id != run_id_) return fed;
     fed.kind = Kind::kStatus;
-    if (e.seq < 0) {  // the start event: outside the sequence
-      for (auto& a : an_) a->on_status(e);
+    if (e.seq < 0) {  // outside the sequence: the start (informative) or an abort (a resumed
+      // run goes on after it): neither defines a window
       return fed;
     }
     const int64_t seq = e.seq;

@@ -12,6 +12,9 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
   c->add_option("--lcm-url", m.lcm_url, "LCM URL (default: a private one per run)");
   c->add_flag("--no-noise", m.no_noise, "plant noise off");
+  c->add_option("--stall-timeout", m.stall_timeout_s,
+                "seconds a stream may stand still (retransmitted) before the run fails")
+      ->capture_default_str();
 }
 
 void print_measure(const MeasureResult& r, const std::string& out) {
@@ -26,10 +29,25 @@ void print_measure(const MeasureResult& r, const std::string& out) {
 void add_measure_command(CLI::App& app) {
   auto mo = std::make_shared<MeasureOptions>();
   auto* c = app.add_subcommand("measure", "plant, acquisition, analysers: tape and frd files");
-  c->add_option("--engine", mo->engine, "engine model file or embedded name")->required();
-  c->add_option("--out", mo->out)->required();
+  auto* engine = c->add_option("--engine", mo->engine, "engine model file or embedded name");
+  auto* out = c->add_option("--out", mo->out);
   add_measure_flags(c, *mo);
-  c->callback([mo] { print_measure(run_measure(*mo), mo->out); });
+  auto resume = std::make_shared<std::string>();
+  c->add_option("--resume", *resume,
+                "continue the interrupted or failed run in DIR from its first incomplete step "
+                "(every other option comes from DIR/run.json)")
+      ->excludes(engine)
+      ->excludes(out);
+  c->callback([mo, engine, out, resume] {
+    if (!resume->empty()) {
+      mo->resume = true;
+      mo->out = *resume;
+    } else {
+      if (engine->count() == 0) throw CLI::RequiredError("--engine");
+      if (out->count() == 0) throw CLI::RequiredError("--out");
+    }
+    print_measure(run_measure(*mo), mo->out);
+  });
 }
 
 }  // namespace fralab

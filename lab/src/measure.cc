@@ -13,7 +13,11 @@
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
 #include "fralab/core/text.h"
+#include "fralab/lab/resume.h"
 #include "fralab/lab/supervisor.h"
+#include "fralab/identify/fit_io.h"
+#include "tape_analysis.h"
+#include <CLI/CLI.hpp>
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -86,7 +90,7 @@ class TapeCheck {
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     if (ev.channel == kTapeChannel) {
       auto m = decode_checked<tape_block_t>(&rb, ev.channel);
-      if (m.run_id == run_id_) {
+      if (m.run_id == run_id_ && m.seq >= 0) {  // seq -1: an aborted run's last block
         seqs_["tape"].push_back(m.seq);
         final_tape_ |= m.final_block;
       }
@@ -116,134 +120,272 @@ MeasurementChain emulator_chain(const Model& m, double sample_rate_hz) {
   return c;
 }
 
-MeasureResult run_measure(const MeasureOptions& o) {
-  if (o.out.empty()) throw InputError("--out DIR is required");
+namespace {
+
+// The run's record, DIR/run.json: written when the run starts (state "running", with what is
+// needed to resume it), and again when it ends ("complete", "failed" with the reason,
+// "interrupted").
+void save_run(const std::string& out, const Json& run) { json_save_file(out + "/run.json", run); }
+
+// The options of the run recorded in DIR/run.json (--resume DIR).
+MeasureOptions options_from_run(const std::string& dir, const Json& run) {
+  MeasureOptions o;
+  o.out = dir;
+  o.resume = true;
+  try {
+    const Json& opt = run.at("options");
+    o.engine = dir + "/engine.json";
+    o.seed = opt.at("seed").get<uint64_t>();
+    o.no_noise = opt.at("no_noise").get<bool>();
+    o.fit_delay = opt.at("fit_delay").get<std::string>();
+    o.timeout_s = opt.value("timeout_s", o.timeout_s);
+    o.stall_timeout_s = opt.value("stall_timeout_s", o.stall_timeout_s);
+    std::vector<std::string> flags = opt.at("acquire_flags").get<std::vector<std::string>>();
+    CLI::App app;
+    add_acquire_flags(&app, o.acquire);
+    std::reverse(flags.begin(), flags.end());  // CLI11 parses a vector from its back
+    app.parse(flags);
+  } catch (const std::exception& e) {
+    throw InputError(dir + "/run.json: cannot resume from it: " + e.what());
+  }
+  return o;
+}
+
+}  // namespace
+
+MeasureResult run_measure(const MeasureOptions& given) {
+  if (given.out.empty()) throw InputError("--out DIR is required");
+  Json run;
+  MeasureOptions o = given;
+  if (given.resume) {
+    const std::string rj = given.out + "/run.json";
+    if (!fs::exists(rj))
+      throw InputError(rj + ": no such file: --resume needs the folder of a run started by "
+                            "`fralab measure`");
+    run = json_load_file(rj);
+    if (run.value("state", "") == "complete")
+      throw InputError(given.out + ": the run is complete; there is nothing to resume");
+    o = options_from_run(given.out, run);
+  }
   Model model = load_model_or_embedded(o.engine);
   o.acquire.validate();
   std::vector<int> excite = select_inputs(model, o.acquire.inputs);
   fs::create_directories(o.out + "/frd");
   fs::create_directories(o.out + "/logs");
   const std::string engine_file = o.out + "/engine.json";
-  save_model(engine_file, model);  // the exact model measured, beside its tape
+  if (!o.resume) save_model(engine_file, model);  // the exact model measured, beside its tape
 
   MeasureResult r;
   const uint64_t salt = uint64_t(getpid()) * 1000003u ^
                         uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
   const std::string url = o.lcm_url.empty() ? private_lcm_url(salt) : resolve_lcm_url(o.lcm_url);
-  r.run_id = "run-" + std::to_string(salt % 1000000007u);
+  r.run_id = o.resume ? run.at("run_id").get<std::string>()
+                      : "run-" + std::to_string(salt % 1000000007u);
   const std::string tape = o.out + "/tape.lcmlog";
-  fs::remove(tape);
-  auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
-
-  Supervisor sup;
-  // The recorder: inside the flow control (a consumer the acquisition waits for), so a busy machine
-  // slows the run instead of losing tape blocks.
-  sup.start({"recorder",
-             {module_path("fralab-record"), "--lcm-url", url, "--run-id", r.run_id, "--out", tape},
-             log("recorder")});
-
-  std::vector<std::string> plant_args = {module_path("fralab-plant"),
-                                         "--model",
-                                         engine_file,
-                                         "--lcm-url",
-                                         url,
-                                         "--seed",
-                                         std::to_string(o.seed),
-                                         "--run-id",
-                                         r.run_id,
-                                         "--sample-rate",
-                                         lossless(o.acquire.sample_rate_hz)};
-  if (o.no_noise) plant_args.push_back("--no-noise");
-  sup.start({"plant", plant_args, log("plant")});
-
-  std::vector<std::string> outs;
-  for (const auto& out : model.outputs) outs.push_back(out.name);
-  std::vector<std::string> consumers = {"plant", "recorder"}, waits = {"plant"};
-  for (int i : excite) {
-    const std::string x = model.inputs[i].name;
-    auto pairs = pairs_for_input(x, outs);
-    r.pairs.insert(r.pairs.end(), pairs.begin(), pairs.end());
-    // One process per position-relative pair, one for the command-relative ones.
-    std::vector<std::vector<std::string>> groups;
-    for (size_t k = 0; k <= outs.size(); ++k) groups.push_back({pairs[k]});
-    groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
-    for (const auto& g : groups) {
-      std::string name = "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
-      // Analysers run at lower priority: they are flow-controlled like the plant and recorder.
-      std::vector<std::string> args = {"nice",      "-n", "5",        module_path("fralab-analyze"),
-                                       "--lcm-url", url,  "--run-id", r.run_id,
-                                       "--name",    name, "--out",    o.out,
-                                       "--linger",  "30"};
-      for (const auto& p : g) {
-        args.push_back("--pair");
-        args.push_back(p);
-      }
-      sup.start({name, args, log(name)});
-      consumers.push_back(name);
-      waits.push_back(name);
-    }
-  }
-  // The identifier: fits every curve once the analysers publish them complete.
-  sup.start({"identify",
-             {module_path("fralab-identify"), "--lcm-url", url, "--run-id", r.run_id, "--expect",
-              std::to_string(r.pairs.size()), "--out", o.out, "--delay", o.fit_delay, "--title",
-              model.name + ": measured transfer matrix"},
-             log("identify")});
-  std::string consumers_csv;
-  for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
   std::string inputs_csv;
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
   AcquireOptions ao = o.acquire;
   ao.inputs = inputs_csv;
-  std::vector<std::string> acq = {module_path("fralab-acquire"),
-                                  "--engine",
-                                  engine_file,
-                                  "--lcm-url",
-                                  url,
-                                  "--run-id",
-                                  r.run_id,
-                                  "--consumers",
-                                  consumers_csv,
-                                  "--summary",
-                                  o.out + "/acquire.json"};
-  for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
-  const auto t0 = std::chrono::steady_clock::now();
-  sup.start({"acquire", acq, log("acquire")});
-  waits.push_back("acquire");
-  sup.wait_for(waits, o.timeout_s);
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto t_fit = std::chrono::steady_clock::now();
-  sup.wait_for({"identify"}, o.timeout_s);
-  r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
-
-  // The recorder acknowledged every tape block once on disk; the tape is read back and checked
-  // (every command and tape block, the done status) before the recorder is stopped.
-  std::string problem;
-  int64_t n = -1;
-  TapeCheck check(tape, r.run_id);
-  for (int i = 0; i < 200 && n < 0; ++i) {
-    n = check.update(&problem);
-    if (n == -1) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (n == -2) break;
+  std::vector<std::string> outs;
+  for (const auto& out : model.outputs) outs.push_back(out.name);
+  for (int i : excite) {
+    auto pairs = pairs_for_input(model.inputs[i].name, outs);
+    r.pairs.insert(r.pairs.end(), pairs.begin(), pairs.end());
   }
-  sup.stop("recorder", SIGINT, 5.0);
-  if (n < 0) throw InputError(tape + ": " + problem);
-  r.tape_blocks = n;
-  Json acq_summary = json_load_file(o.out + "/acquire.json");
-  r.engine_time_s = acq_summary.value("engine_time_s", 0.0);
-  Json summary{
-      {"run_id", r.run_id},
-      {"engine", model.name},
-      {"lcm_url", url},
-      {"inputs", inputs_csv},
-      {"pairs", r.pairs},
-      {"engine_time_s", r.engine_time_s},
-      {"wall_time_s", r.wall_time_s},
-      {"speedup", r.engine_time_s / std::max(r.wall_time_s, 1e-9)},
-      {"tape_blocks", n},
-      {"fit_time_s", r.fit_time_s},
-      {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
-  json_save_file(o.out + "/run.json", summary);
+
+  ResumePoint rp;
+  if (o.resume) {
+    const int64_t cut = cut_tape_to_whole_events(tape);
+    if (cut > 0)
+      std::cerr << "fralab: " << tape << ": cut " << cut
+                << " bytes of a partly written last event\n";
+    const auto camp = make_campaign(model, ao, r.run_id);
+    rp = plan_resume(tape, r.run_id, *camp, ao.block);
+    std::cerr << "fralab: resuming run " << r.run_id << ": " << rp.blocks_on_tape
+              << " tape blocks on the tape; "
+              << (rp.complete ? "every block is there"
+                              : "starting again at step " + std::to_string(rp.first_step) +
+                                    " (command block " + std::to_string(rp.first_block) + ")")
+              << "\n";
+    run["resumed"] = run.value("resumed", 0) + 1;
+  } else {
+    fs::remove(tape);
+    run = Json{{"format", "fralab-run/1"},
+               {"run_id", r.run_id},
+               {"engine", model.name},
+               {"inputs", inputs_csv},
+               {"pairs", r.pairs},
+               {"options",
+                {{"seed", o.seed},
+                 {"no_noise", o.no_noise},
+                 {"fit_delay", o.fit_delay},
+                 {"timeout_s", o.timeout_s},
+                 {"stall_timeout_s", o.stall_timeout_s},
+                 {"acquire_flags", acquire_flags(ao)}}},
+               {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
+  }
+  run["lcm_url"] = url;
+  run["state"] = "running";
+  save_run(o.out, run);
+  auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
+
+  Supervisor::catch_stop_signals();
+  Supervisor sup;
+  sup.set_stop_first({"acquire"});  // the excitation stops first, actuators to their operating point
+  try {
+    if (!rp.complete) {
+      // The recorder: inside the flow control (a consumer the acquisition waits for), so a busy
+      // machine slows the run instead of losing tape blocks.
+      std::vector<std::string> rec = {module_path("fralab-record"), "--lcm-url", url, "--run-id",
+                                      r.run_id, "--out", tape};
+      if (o.resume)
+        for (const std::string& a :
+             {std::string("--append"), std::string("--first-block"),
+              std::to_string(rp.first_block), std::string("--first-status"),
+              std::to_string(rp.first_status)})
+          rec.push_back(a);
+      sup.start({"recorder", rec, log("recorder")});
+
+      std::vector<std::string> plant_args = {module_path("fralab-plant"),
+                                             "--model",
+                                             engine_file,
+                                             "--lcm-url",
+                                             url,
+                                             "--seed",
+                                             std::to_string(o.seed),
+                                             "--run-id",
+                                             r.run_id,
+                                             "--sample-rate",
+                                             lossless(o.acquire.sample_rate_hz)};
+      if (o.no_noise) plant_args.push_back("--no-noise");
+      if (o.resume) {
+        plant_args.insert(plant_args.end(), {"--replay", tape, "--replay-blocks",
+                                             std::to_string(rp.first_block)});
+      }
+      sup.start({"plant", plant_args, log("plant")});
+
+      std::vector<std::string> consumers = {"plant", "recorder"}, waits = {"plant"};
+      // A fresh run: the live analysers (one process per position-relative pair, one for the
+      // command-relative ones) and the identifier. A resumed run analyses the whole tape at the
+      // end instead.
+      if (!o.resume) {
+        for (int i : excite) {
+          auto pairs = pairs_for_input(model.inputs[i].name, outs);
+          std::vector<std::vector<std::string>> groups;
+          for (size_t k = 0; k <= outs.size(); ++k) groups.push_back({pairs[k]});
+          groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
+          for (const auto& g : groups) {
+            std::string name =
+                "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
+            // Analysers run at lower priority: they are flow-controlled like the plant and
+            // recorder.
+            std::vector<std::string> args = {"nice",     "-n",     "5",
+                                             module_path("fralab-analyze"),
+                                             "--lcm-url", url,     "--run-id",
+                                             r.run_id,   "--name", name,
+                                             "--out",    o.out,    "--linger",
+                                             "30"};
+            for (const auto& p : g) {
+              args.push_back("--pair");
+              args.push_back(p);
+            }
+            sup.start({name, args, log(name)});
+            consumers.push_back(name);
+            waits.push_back(name);
+          }
+        }
+        sup.start({"identify",
+                   {module_path("fralab-identify"), "--lcm-url", url, "--run-id", r.run_id,
+                    "--expect", std::to_string(r.pairs.size()), "--out", o.out, "--delay",
+                    o.fit_delay, "--title", model.name + ": measured transfer matrix"},
+                   log("identify")});
+      }
+      std::string consumers_csv;
+      for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
+      std::vector<std::string> acq = {module_path("fralab-acquire"),
+                                      "--engine",
+                                      engine_file,
+                                      "--lcm-url",
+                                      url,
+                                      "--run-id",
+                                      r.run_id,
+                                      "--consumers",
+                                      consumers_csv,
+                                      "--stall-timeout",
+                                      lossless(o.stall_timeout_s),
+                                      "--first-block",
+                                      std::to_string(rp.first_block),
+                                      "--first-status",
+                                      std::to_string(rp.first_status),
+                                      "--summary",
+                                      o.out + "/acquire.json"};
+      for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
+      const auto t0 = std::chrono::steady_clock::now();
+      sup.start({"acquire", acq, log("acquire")});
+      waits.push_back("acquire");
+      sup.wait_for(waits, o.timeout_s);
+      r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    const auto t_fit = std::chrono::steady_clock::now();
+    if (!o.resume) sup.wait_for({"identify"}, o.timeout_s);
+
+    // The recorder acknowledged every tape block once on disk; the tape is read back and checked
+    // (every tape block and status event, the done status) before the recorder is stopped.
+    std::string problem;
+    int64_t n = -1;
+    TapeCheck check(tape, r.run_id);
+    for (int i = 0; i < 200 && n < 0; ++i) {
+      n = check.update(&problem);
+      if (n == -1) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (n == -2) break;
+    }
+    sup.stop("recorder", SIGINT, 5.0);
+    if (n < 0) throw InputError(tape + ": " + problem);
+    r.tape_blocks = n;
+    if (o.resume) {
+      // The whole tape, analysed as the live analysers would (tape = live), then fitted as the
+      // live identifier would (the curves in pair order).
+      std::vector<Frd> curves = analyze_tape_file(tape, r.pairs, {});
+      std::sort(curves.begin(), curves.end(),
+                [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
+      for (const Frd& f : curves)
+        save_frd(o.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+      FitOptions fo;
+      parse_delay_option(o.fit_delay, &fo);
+      fit_and_write(curves, fo, o.out, model.name + ": measured transfer matrix");
+    }
+    r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
+  } catch (const Interrupted& e) {
+    sup.stop_all();
+    run["state"] = "interrupted";
+    run["reason"] = e.what();
+    save_run(o.out, run);
+    throw InputError(std::string(e.what()) + ": the excitation was stopped first, then every "
+                     "process; resume with `fralab measure --resume " + o.out + "`");
+  } catch (const std::exception& e) {
+    sup.stop_all();
+    run["state"] = "failed";
+    run["reason"] = e.what();
+    save_run(o.out, run);
+    throw InputError(std::string(e.what()) + " (everything measured is kept in " + o.out +
+                     "; resume with `fralab measure --resume " + o.out + "`)");
+  }
+  const double engine_total =
+      double(make_campaign(model, ao, r.run_id)->total_samples()) / o.acquire.sample_rate_hz;
+  r.engine_time_s = engine_total;
+  if (fs::exists(o.out + "/acquire.json")) {
+    Json acq_summary = json_load_file(o.out + "/acquire.json");
+    run["retransmissions"] = acq_summary.value("retransmissions", 0);
+    run["items_retransmitted"] = acq_summary.value("items_retransmitted", 0);
+  }
+  run["state"] = "complete";
+  run.erase("reason");
+  run["engine_time_s"] = r.engine_time_s;
+  run["wall_time_s"] = r.wall_time_s;
+  run["speedup"] = r.engine_time_s / std::max(r.wall_time_s, 1e-9);
+  run["tape_blocks"] = r.tape_blocks;
+  run["fit_time_s"] = r.fit_time_s;
+  save_run(o.out, run);
   return r;
 }
 

@@ -18,13 +18,27 @@ extern char** environ;
 
 namespace fralab {
 
-Supervisor::~Supervisor() {
-  for (auto& [n, p] : procs_) {
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;
+void on_stop_signal(int sig) { g_stop_signal = sig; }
+}  // namespace
+
+void Supervisor::catch_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &sa, nullptr);
+}
+
+int Supervisor::stop_signal() { return g_stop_signal; }
+
+Supervisor::~Supervisor() { stop_all(); }
+
+void Supervisor::stop_all(double timeout_s) {
+  for (const auto& n : first_) stop(n, SIGTERM, timeout_s);
+  for (auto& [n, p] : procs_)
     if (!p.exited && p.pid > 0) kill(p.pid, SIGTERM);
-  }
-  for (auto& [n, p] : procs_) {
-    if (!p.exited && p.pid > 0) waitpid(p.pid, nullptr, 0);
-  }
+  for (auto& [n, p] : procs_) stop(n, SIGTERM, timeout_s);
 }
 
 void Supervisor::start(const ProcessSpec& spec) {
@@ -77,6 +91,8 @@ std::string Supervisor::reason(const Proc& p) const {
 void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_s) {
   const auto t0 = std::chrono::steady_clock::now();
   for (;;) {
+    if (const int sig = stop_signal())
+      throw Interrupted("stopped by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")");
     reap(false);
     for (auto& [n, p] : procs_) {
       if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0))

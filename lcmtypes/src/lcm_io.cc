@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
 namespace fralab {
 
@@ -343,6 +344,30 @@ Json tape_summary(const std::string& path) {
   j["sample_rate_hz"] = fs;
   j["engine_time_s"] = fs > 0 ? samples / fs : 0.0;
   return j;
+}
+
+std::vector<Block> read_tape_blocks(const std::string& path, const std::string& run_id,
+                                    int64_t below) {
+  std::map<int64_t, Block> got;
+  read_tape_file(path, [&](const TapeEvent& ev) {
+    if (ev.channel != kTapeChannel) return;
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    try {
+      tape_block_t m = decode_checked<tape_block_t>(&rb, ev.channel);
+      if (m.run_id == run_id && m.seq >= 0 && m.seq < below && !got.count(m.seq))
+        got.emplace(m.seq, from_msg(m));
+    } catch (const InputError& e) {
+      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
+    }
+  });
+  std::vector<Block> out;
+  for (int64_t s = 0; s < below; ++s) {
+    auto it = got.find(s);
+    if (it == got.end())
+      throw InputError(path + ": run " + run_id + " lacks tape block seq " + std::to_string(s));
+    out.push_back(std::move(it->second));
+  }
+  return out;
 }
 
 }  // namespace fralab

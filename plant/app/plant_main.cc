@@ -32,6 +32,12 @@ int main(int argc, char** argv) {
   app.add_option("--control-url", ctl_url,
                  "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--run-id", run_id, "only this run (default: the first command's)");
+  std::string replay;
+  int64_t replay_blocks = 0;
+  app.add_option("--replay", replay,
+                 "resume: first replay this run's tape blocks 0..N-1 from this tape (bit-exact "
+                 "check), then take command blocks from N on");
+  app.add_option("--replay-blocks", replay_blocks, "N for --replay")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   opt.noise = !no_noise;
   try {
@@ -42,7 +48,14 @@ int main(int argc, char** argv) {
     lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
                                  : resolve_lcm_url(ctl_url));
     if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    PlantNode plant(lcm, ctl, LockstepPlant(model, opt, run_id));
+    LockstepPlant lockstep(model, opt, run_id);
+    if (!replay.empty()) {  // resume: back to the exact state where the recorded run stands
+      if (run_id.empty()) throw InputError("--replay needs --run-id");
+      for (const Block& b : read_tape_blocks(replay, run_id, replay_blocks)) lockstep.replay(b);
+      std::cerr << "fralab-plant: replayed " << replay_blocks << " tape blocks of " << replay
+                << ": the plant makes them again bit for bit\n";
+    }
+    PlantNode plant(lcm, ctl, std::move(lockstep));
     using Clock = std::chrono::steady_clock;
     auto last_ready = Clock::now() - std::chrono::seconds(1);
     // After the final block the plant stays to republish tape blocks a consumer lost, until the

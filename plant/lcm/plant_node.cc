@@ -3,7 +3,11 @@
 namespace fralab {
 
 PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks)
-    : plant_(std::move(plant)), data_(data), control_(control), keep_(keep_blocks) {
+    : plant_(std::move(plant)),
+      data_(data),
+      control_(control),
+      keep_(keep_blocks),
+      commands_(plant_.next_seq()) {
   data_.subscribe(kCmdChannel, &PlantNode::on_command, this)->setQueueCapacity(100000);
   control_.subscribe(kFlowChannel, &PlantNode::on_flow, this)->setQueueCapacity(100000);
 }
@@ -20,8 +24,16 @@ void PlantNode::on_command(const lcm::ReceiveBuffer* rbuf, const std::string& ch
     Block cmd = from_msg(decode_checked<command_block_t>(rbuf, channel));
     if (!plant_.accepts(cmd.run_id)) return;  // another run on the same URL: not ours
     started_ = true;
+    if (cmd.seq < 0) {  // the acquisition was stopped: actuators to their operating point
+      if (!plant_.done()) {
+        tape_block_t msg = to_tape_msg(plant_.hold(cmd));
+        data_.publish(kTapeChannel, &msg);
+      }
+      return;
+    }
     const int64_t seq = cmd.seq;
-    if (commands_.offer(seq, std::move(cmd)) == InOrder<Block>::Offer::kDuplicate) {
+    if (plant_.done() ||
+        commands_.offer(seq, std::move(cmd)) == InOrder<Block>::Offer::kDuplicate) {
       ack("command", commands_.delivered());  // its acknowledgement was lost: say it again
       return;
     }

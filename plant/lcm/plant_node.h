@@ -19,7 +19,8 @@ namespace fralab {
 
 class PlantNode {
  public:
-  /// Subscribes to FRALAB_CMD on `data` and FRALAB_FLOW on `control` (may be `data`).
+  /// Subscribes to FRALAB_CMD on `data` and FRALAB_FLOW on `control` (may be `data`). The first
+  /// command expected is the plant's next_seq() (0, or where a replayed plant stands: resume).
   PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks = 1024);
   /// "Ready" (stream "ready", seq -1): the acquisition waits for it before the first command.
   void announce_ready();
@@ -43,7 +44,7 @@ class PlantNode {
   lcm::LCM& data_;
   lcm::LCM& control_;
   size_t keep_;
-  InOrder<Block> commands_{0};
+  InOrder<Block> commands_;
   std::map<int64_t, tape_block_t> kept_;
   bool started_ = false, closed_ = false;
   int64_t resent_ = 0;

@@ -60,4 +60,47 @@ Block LockstepPlant::advance(const Block& cmd) {
   return tape;
 }
 
+Block LockstepPlant::hold(const Block& abort) {
+  Block cmd = abort;
+  cmd.seq = next_seq_;
+  cmd.start_sample = sim_.samples_done();
+  Block tape = advance(cmd);
+  tape.seq = -1;
+  done_ = true;
+  return tape;
+}
+
+void LockstepPlant::replay(const Block& rec) {
+  Block cmd;
+  cmd.run_id = rec.run_id;
+  cmd.seq = rec.seq;
+  cmd.start_sample = rec.start_sample;
+  cmd.sample_rate_hz = rec.sample_rate_hz;
+  cmd.n_samples = rec.n_samples;
+  cmd.final_block = rec.final_block;
+  const size_t ni = input_names_.size(), first_echo = ni + size_t(sim_.n_channels());
+  if (rec.channels.size() < first_echo)
+    throw InputError("tape block seq " + std::to_string(rec.seq) +
+                     " has fewer channels than this plant makes: not this model's tape");
+  for (size_t c = 0; c < rec.channels.size(); ++c) {
+    if (c >= ni && c < first_echo) continue;
+    cmd.channels.push_back(rec.channels[c]);
+    cmd.samples.insert(cmd.samples.end(), rec.samples.begin() + c * size_t(rec.n_samples),
+                       rec.samples.begin() + (c + 1) * size_t(rec.n_samples));
+  }
+  const Block again = advance(cmd);
+  if (again.channels != rec.channels)
+    throw InputError("tape block seq " + std::to_string(rec.seq) +
+                     ": its channels are not the ones this plant makes: not this model's tape");
+  for (size_t c = 0; c < again.channels.size(); ++c)
+    for (int k = 0; k < again.n_samples; ++k)
+      if (again.at(int(c), k) != rec.at(int(c), k))
+        throw InputError("tape block seq " + std::to_string(rec.seq) + ", channel " +
+                         again.channels[c] + ", sample " + std::to_string(rec.start_sample + k) +
+                         ": the plant does not make the recorded value again (" +
+                         std::to_string(again.at(int(c), k)) + " vs " +
+                         std::to_string(rec.at(int(c), k)) +
+                         "): another model, seed or sample rate than the recorded run");
+}
+
 }  // namespace fralab

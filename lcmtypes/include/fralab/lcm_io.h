@@ -109,6 +109,12 @@ int64_t read_tape_file(const std::string& path, const std::function<void(const T
 int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn);
 
+/// The tape blocks of run `run_id` with seq < `below` from a tape file, in seq order, each once
+/// (retransmitted copies dropped); InputError naming the file and the first missing seq when they
+/// are not all there, or for an event that does not decode.
+std::vector<Block> read_tape_blocks(const std::string& path, const std::string& run_id,
+                                    int64_t below);
+
 /// `fralab tape`: per LCM channel the event count, the tape's channels, block sequence with the
 /// missing seqs named, excitation states, samples and engine time. Errors name the file and event.
 Json tape_summary(const std::string& path);

@@ -50,6 +50,11 @@ std::unique_ptr<Campaign> make_campaign(const Model& m, const AcquireOptions& o,
 /// Number of command blocks of `block` samples that carry the whole campaign.
 int64_t command_block_count(const Campaign& c, int block);
 
+/// The block that ends an aborted run: `n` samples from `start_sample` of every input's command
+/// held at its operating point (its dc), the reference zero, final_block set.
+Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
+                  double sample_rate_hz, const std::string& run_id);
+
 /// Command block `seq`: samples [seq * block, ...) of every input's command (channels u_<input>)
 /// and the reference (ref_phase, rad; ref_freq_hz), final_block on the last one.
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,

@@ -42,6 +42,10 @@ class FlowControl {
   /// streams. "plant" is added when missing.
   FlowControl(std::vector<std::string> consumers, FlowOptions o = {});
 
+  /// Resume: the streams start at command/tape block `first_block` and status event
+  /// `first_status` (everything before is held already): a consumer that said ready holds
+  /// first - 1.
+  void begin_at(int64_t first_block, int64_t first_status);
   /// An acknowledgement: stream "ready" (subscribed), "command", "tape" or "status"; other streams
   /// and unknown consumers are ignored. Later acknowledgements never move a consumer back.
   void on_ack(const std::string& consumer, const std::string& stream, int64_t seq, double now);
@@ -87,6 +91,7 @@ class FlowControl {
   std::map<std::string, std::map<std::string, int64_t>> acked_;  // consumer -> stream -> seq
   std::map<std::string, double> heard_;                          // consumer -> last time heard
   State state_[3];
+  int64_t floor_[3] = {-1, -1, -1};  // what a ready consumer holds (begin_at)
   int64_t resends_ = 0, items_resent_ = 0;
 };
 

@@ -1,6 +1,10 @@
 // The lab launcher behind `fralab run` and `fralab measure`: starts the recorder, the plant, one
 // analyser per channel pair and the acquisition as separate processes on a private LCM URL,
-// supervises them, verifies the tape holds every block, and stops them cleanly.
+// supervises them, verifies the tape holds every block, and stops them cleanly. DIR/run.json
+// records the run from its start ("state": running, complete, failed with "reason", interrupted);
+// a signal (SIGINT, SIGTERM, SIGHUP) stops the acquisition first (the actuators commanded back to
+// their operating point), then every other process; a failed or interrupted run keeps its tape
+// and continues with `--resume DIR` (lab/resume.h).
 #pragma once
 
 #include <cstdint>
@@ -22,6 +26,10 @@ struct MeasureOptions {
   std::string lcm_url;  // "" = a fresh private URL
   double timeout_s = 3600;
   std::string fit_delay = "auto";  // the identifier's --delay
+  double stall_timeout_s = 60;     // a stream standing still this long fails the run (acquire)
+  /// Continue the run in `out` (its run.json holds every other option) from its first incomplete
+  /// step (lab/resume.h).
+  bool resume = false;
 };
 
 struct MeasureResult {

@@ -13,6 +13,11 @@
 
 namespace fralab {
 
+/// Thrown by Supervisor::wait_for when the launcher was asked to stop by a signal.
+struct Interrupted : InputError {
+  using InputError::InputError;
+};
+
 struct ProcessSpec {
   std::string name;
   std::vector<std::string> argv;  // argv[0] is the program (path or PATH name)
@@ -23,12 +28,26 @@ class Supervisor {
  public:
   Supervisor() = default;
   Supervisor(const Supervisor&) = delete;
-  ~Supervisor();  // SIGTERM to whatever still runs
+  /// stop_all(): whatever still runs is stopped, the processes named first (set_stop_first) first.
+  ~Supervisor();
+
+  /// From now on SIGINT, SIGTERM and SIGHUP to this process do not kill it: they are recorded, and
+  /// wait_for throws Interrupted naming the signal, so the caller stops its children in order.
+  static void catch_stop_signals();
+  /// The signal caught (0: none).
+  static int stop_signal();
+  /// Processes stopped before all others by stop_all() (the acquisition: the excitation stops
+  /// first and commands the actuators back to their operating point).
+  void set_stop_first(std::vector<std::string> names) { first_ = std::move(names); }
+  /// SIGTERM to the processes named first, waiting up to timeout_s for each, then to every other
+  /// one; SIGKILL to any still running after timeout_s.
+  void stop_all(double timeout_s = 5.0);
 
   /// Starts a process; InputError when it cannot be started.
   void start(const ProcessSpec& spec);
   /// Waits until every process named has exited with status 0. If any supervised process exits
-  /// non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout throws too.
+  /// non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout throws too, and
+  /// a stop signal caught (catch_stop_signals) throws Interrupted.
   void wait_for(const std::vector<std::string>& names, double timeout_s);
   /// Sends `sig` and waits up to timeout_s for the exit (then SIGKILL).
   void stop(const std::string& name, int sig, double timeout_s);
@@ -45,6 +64,7 @@ class Supervisor {
   void reap(bool block);
   std::string reason(const Proc& p) const;
   std::map<std::string, Proc> procs_;
+  std::vector<std::string> first_;
 };
 
 /// The path of a fralab module executable: beside the running binary if there, else `name` (PATH).

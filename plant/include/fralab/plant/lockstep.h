@@ -26,6 +26,17 @@ class LockstepPlant {
   /// the plant's sample, or lacks a u_<input> channel.
   Block advance(const Block& cmd);
 
+  /// An aborted run's last block (seq -1, final): the actuators are commanded to the block's values
+  /// (their operating point) for its length, from wherever the plant stands, outside the sequence.
+  /// Returns the tape block (seq -1). The plant is done afterwards.
+  Block hold(const Block& abort);
+
+  /// Resume: advances the model through a tape block recorded earlier (its u_<input> commands and
+  /// reference channels are the command) and checks that the plant made exactly that block again,
+  /// bit for bit (same model, seed and history). InputError naming the block and the first
+  /// differing channel and sample otherwise.
+  void replay(const Block& recorded);
+
   int64_t next_seq() const { return next_seq_; }
   bool done() const { return done_; }
   const std::string& run_id() const { return run_id_; }
