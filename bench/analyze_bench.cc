@@ -58,7 +58,7 @@ static void BM_OfflineTape(benchmark::State& state) {
   read_tape_file(tape, [&](const TapeEvent& ev) {
     if (ev.channel != kTapeChannel) return;
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
-    auto b = decode_checked<tape_block_t>(&rb, ev.channel);
+    Block b = decode_tape_block(&rb, ev.channel);
     samples += b.n_samples;
     fs = b.sample_rate_hz;
   });

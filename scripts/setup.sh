@@ -6,7 +6,7 @@ set -euo pipefail
 PKGS=(build-essential cmake pkg-config git
       liblcm-dev liblcm-bin liblcm-java default-jdk-headless libjchart2d-java
       libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
-      nlohmann-json3-dev libcli11-dev gnuplot-nox iproute2 util-linux)
+      nlohmann-json3-dev libcli11-dev zlib1g-dev gnuplot-nox iproute2 util-linux nftables)
 # --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
 if [ "${1:-}" = "--test" ]; then PKGS+=(octave octave-signal); fi
 missing=()

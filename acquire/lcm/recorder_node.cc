@@ -7,8 +7,8 @@
 namespace fralab {
 
 RecorderNode::RecorderNode(lcm::LCM& data, lcm::LCM& control, const std::string& path,
-                           std::string run_id, std::string name, bool append,
-                           int64_t first_block, int64_t first_status)
+                           std::string run_id, std::string name, bool append, int64_t first_block,
+                           int64_t first_status)
     : data_(data),
       control_(control),
       path_(path),
@@ -57,7 +57,12 @@ void RecorderNode::on_any(const lcm::ReceiveBuffer* rbuf, const std::string& cha
       ack(stream, q.delivered());
     };
     if (channel == kTapeChannel) {
-      const tape_block_t m = decode_checked<tape_block_t>(rbuf, channel);
+      Block m;
+      try {
+        m = decode_tape_block(rbuf, channel);
+      } catch (const CorruptBlock&) {
+        return;  // on the tape as it came, not acknowledged: it is sent again
+      }
       if (run_id_.empty()) run_id_ = m.run_id;
       if (m.run_id != run_id_) return;
       ++blocks_;

@@ -15,7 +15,15 @@ TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, i
   lcm::ReceiveBuffer rb{const_cast<void*>(data), static_cast<uint32_t>(size), 0};
   Fed fed;
   if (channel == kTapeChannel) {
-    Block b = from_msg(decode_checked<tape_block_t>(&rb, channel));
+    Block b;
+    try {
+      b = decode_tape_block(&rb, channel);
+    } catch (const CorruptBlock& c) {  // refused: as if lost (a live run gets it again)
+      corrupt_.insert(c.seq);
+      for (auto& a : an_) a->note_corrupt(c.seq);
+      fed.kind = Kind::kTape;
+      return fed;
+    }
     if (run_id_.empty()) run_id_ = b.run_id;
     if (b.run_id != run_id_) return fed;
     fed.kind = Kind::kTape;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,8 @@ class TapeFeeder {
   /// number of tape blocks and status events given up.
   int64_t flush();
   const std::string& run_id() const { return run_id_; }
+  /// Tape blocks refused because their checksum failed (lcm_io CorruptBlock), by seq.
+  const std::set<int64_t>& corrupt() const { return corrupt_; }
 
  private:
   void deliver();
@@ -48,6 +51,7 @@ class TapeFeeder {
   std::string run_id_;
   InOrder<Block> tape_{0};
   InOrder<StatusEvent> status_{0};
+  std::set<int64_t> corrupt_;
   bool final_seen_ = false;
 };
 

@@ -131,6 +131,10 @@ std::string PairAnalyzer::describe_gaps(int64_t a, int64_t b) const {
       prev = it->first;
     }
     if (!missing.empty()) out += " (tape block seq " + missing + " missing)";
+    std::string bad;
+    for (int64_t q : corrupt_)
+      if (!seqs_.count(q)) bad += (bad.empty() ? "" : ",") + std::to_string(q);
+    if (!bad.empty()) out += " (tape block seq " + bad + " failed its checksum)";
   }
   return out;
 }

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
@@ -13,13 +14,12 @@
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
 #include "fralab/core/text.h"
+#include "fralab/identify/fit_io.h"
 #include "fralab/lab/resume.h"
 #include "fralab/lab/supervisor.h"
-#include "fralab/identify/fit_io.h"
-#include "tape_analysis.h"
-#include <CLI/CLI.hpp>
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
+#include "tape_analysis.h"
 
 namespace fralab {
 
@@ -89,7 +89,12 @@ class TapeCheck {
   void decode(const TapeEvent& ev) {
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     if (ev.channel == kTapeChannel) {
-      auto m = decode_checked<tape_block_t>(&rb, ev.channel);
+      Block m;
+      try {
+        m = decode_tape_block(&rb, ev.channel);
+      } catch (const CorruptBlock&) {  // a later copy (retransmitted) may be whole
+        return;
+      }
       if (m.run_id == run_id_ && m.seq >= 0) {  // seq -1: an aborted run's last block
         seqs_["tape"].push_back(m.seq);
         final_tape_ |= m.final_block;
@@ -160,8 +165,9 @@ MeasureResult run_measure(const MeasureOptions& given) {
   if (given.resume) {
     const std::string rj = given.out + "/run.json";
     if (!fs::exists(rj))
-      throw InputError(rj + ": no such file: --resume needs the folder of a run started by "
-                            "`fralab measure`");
+      throw InputError(rj +
+                       ": no such file: --resume needs the folder of a run started by "
+                       "`fralab measure`");
     run = json_load_file(rj);
     if (run.value("state", "") == "complete")
       throw InputError(given.out + ": the run is complete; there is nothing to resume");
@@ -179,8 +185,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
   const uint64_t salt = uint64_t(getpid()) * 1000003u ^
                         uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
   const std::string url = o.lcm_url.empty() ? private_lcm_url(salt) : resolve_lcm_url(o.lcm_url);
-  r.run_id = o.resume ? run.at("run_id").get<std::string>()
-                      : "run-" + std::to_string(salt % 1000000007u);
+  r.run_id =
+      o.resume ? run.at("run_id").get<std::string>() : "run-" + std::to_string(salt % 1000000007u);
   const std::string tape = o.out + "/tape.lcmlog";
   std::string inputs_csv;
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
@@ -210,19 +216,20 @@ MeasureResult run_measure(const MeasureOptions& given) {
     run["resumed"] = run.value("resumed", 0) + 1;
   } else {
     fs::remove(tape);
-    run = Json{{"format", "fralab-run/1"},
-               {"run_id", r.run_id},
-               {"engine", model.name},
-               {"inputs", inputs_csv},
-               {"pairs", r.pairs},
-               {"options",
-                {{"seed", o.seed},
-                 {"no_noise", o.no_noise},
-                 {"fit_delay", o.fit_delay},
-                 {"timeout_s", o.timeout_s},
-                 {"stall_timeout_s", o.stall_timeout_s},
-                 {"acquire_flags", acquire_flags(ao)}}},
-               {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
+    run =
+        Json{{"format", "fralab-run/1"},
+             {"run_id", r.run_id},
+             {"engine", model.name},
+             {"inputs", inputs_csv},
+             {"pairs", r.pairs},
+             {"options",
+              {{"seed", o.seed},
+               {"no_noise", o.no_noise},
+               {"fit_delay", o.fit_delay},
+               {"timeout_s", o.timeout_s},
+               {"stall_timeout_s", o.stall_timeout_s},
+               {"acquire_flags", acquire_flags(ao)}}},
+             {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
   }
   run["lcm_url"] = url;
   run["state"] = "running";
@@ -231,18 +238,18 @@ MeasureResult run_measure(const MeasureOptions& given) {
 
   Supervisor::catch_stop_signals();
   Supervisor sup;
-  sup.set_stop_first({"acquire"});  // the excitation stops first, actuators to their operating point
+  sup.set_stop_first(
+      {"acquire"});  // the excitation stops first, actuators to their operating point
   try {
     if (!rp.complete) {
       // The recorder: inside the flow control (a consumer the acquisition waits for), so a busy
       // machine slows the run instead of losing tape blocks.
-      std::vector<std::string> rec = {module_path("fralab-record"), "--lcm-url", url, "--run-id",
-                                      r.run_id, "--out", tape};
+      std::vector<std::string> rec = {
+          module_path("fralab-record"), "--lcm-url", url, "--run-id", r.run_id, "--out", tape};
       if (o.resume)
         for (const std::string& a :
-             {std::string("--append"), std::string("--first-block"),
-              std::to_string(rp.first_block), std::string("--first-status"),
-              std::to_string(rp.first_status)})
+             {std::string("--append"), std::string("--first-block"), std::to_string(rp.first_block),
+              std::string("--first-status"), std::to_string(rp.first_status)})
           rec.push_back(a);
       sup.start({"recorder", rec, log("recorder")});
 
@@ -259,8 +266,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
                                              lossless(o.acquire.sample_rate_hz)};
       if (o.no_noise) plant_args.push_back("--no-noise");
       if (o.resume) {
-        plant_args.insert(plant_args.end(), {"--replay", tape, "--replay-blocks",
-                                             std::to_string(rp.first_block)});
+        plant_args.insert(plant_args.end(),
+                          {"--replay", tape, "--replay-blocks", std::to_string(rp.first_block)});
       }
       sup.start({"plant", plant_args, log("plant")});
 
@@ -279,12 +286,11 @@ MeasureResult run_measure(const MeasureOptions& given) {
                 "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
             // Analysers run at lower priority: they are flow-controlled like the plant and
             // recorder.
-            std::vector<std::string> args = {"nice",     "-n",     "5",
-                                             module_path("fralab-analyze"),
-                                             "--lcm-url", url,     "--run-id",
-                                             r.run_id,   "--name", name,
-                                             "--out",    o.out,    "--linger",
-                                             "30"};
+            std::vector<std::string> args = {
+                "nice",      "-n", "5",        module_path("fralab-analyze"),
+                "--lcm-url", url,  "--run-id", r.run_id,
+                "--name",    name, "--out",    o.out,
+                "--linger",  "30"};
             for (const auto& p : g) {
               args.push_back("--pair");
               args.push_back(p);
@@ -348,8 +354,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
       std::vector<Frd> curves = analyze_tape_file(tape, r.pairs, {});
       std::sort(curves.begin(), curves.end(),
                 [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
-      for (const Frd& f : curves)
-        save_frd(o.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+      for (const Frd& f : curves) save_frd(o.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
       FitOptions fo;
       parse_delay_option(o.fit_delay, &fo);
       fit_and_write(curves, fo, o.out, model.name + ": measured transfer matrix");
@@ -360,8 +365,10 @@ MeasureResult run_measure(const MeasureOptions& given) {
     run["state"] = "interrupted";
     run["reason"] = e.what();
     save_run(o.out, run);
-    throw InputError(std::string(e.what()) + ": the excitation was stopped first, then every "
-                     "process; resume with `fralab measure --resume " + o.out + "`");
+    throw InputError(std::string(e.what()) +
+                     ": the excitation was stopped first, then every "
+                     "process; resume with `fralab measure --resume " +
+                     o.out + "`");
   } catch (const std::exception& e) {
     sup.stop_all();
     run["state"] = "failed";

@@ -24,8 +24,11 @@ ResumePoint plan_resume(const std::string& tape, const std::string& run_id, cons
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
       if (ev.channel == kTapeChannel) {
-        const tape_block_t m = decode_checked<tape_block_t>(&rb, ev.channel);
-        if (m.run_id == run_id) seqs.insert(m.seq);
+        try {
+          const Block b = decode_tape_block(&rb, ev.channel);
+          if (b.run_id == run_id) seqs.insert(b.seq);
+        } catch (const CorruptBlock&) {  // not on the tape: measured again
+        }
       } else if (ev.channel == kStatusChannel) {
         const excitation_status_t m = decode_checked<excitation_status_t>(&rb, ev.channel);
         done |= m.run_id == run_id && from_msg(m).state == RunState::kDone;

@@ -1,12 +1,14 @@
 #include "fralab/lcm_io.h"
 
 #include <sys/select.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <set>
 
 namespace fralab {
 
@@ -50,9 +52,47 @@ static Block from(const Msg& m, const char* type) {
   return b;
 }
 
-tape_block_t to_tape_msg(const Block& b) { return to_msg<tape_block_t>(b); }
+namespace {
+
+int64_t crc_of(tape_block_t m) {
+  m.crc32 = 0;
+  std::vector<uint8_t> buf(size_t(m.getEncodedSize()));
+  m.encode(buf.data(), 0, int(buf.size()));
+  return int64_t(::crc32(::crc32(0L, Z_NULL, 0), buf.data(), uInt(buf.size())));
+}
+
+}  // namespace
+
+tape_block_t to_tape_msg(const Block& b) {
+  tape_block_t m = to_msg<tape_block_t>(b);
+  m.crc32 = crc_of(m);
+  return m;
+}
 command_block_t to_command_msg(const Block& b) { return to_msg<command_block_t>(b); }
-Block from_msg(const tape_block_t& m) { return from(m, "tape_block_t"); }
+Block from_msg(const tape_block_t& m) {
+  Block b = from(m, "tape_block_t");
+  if (m.crc32 >= 0) {
+    const int64_t crc = crc_of(m);
+    if (crc != m.crc32)
+      throw CorruptBlock("tape block seq " + std::to_string(m.seq) + " of run " + m.run_id +
+                             " failed its checksum (stored " + std::to_string(m.crc32) +
+                             ", computed " + std::to_string(crc) + "): the block is corrupt",
+                         m.seq);
+  }
+  return b;
+}
+
+Block decode_tape_block(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  tape_block_t m;
+  const int n = m.decode(rbuf->data, 0, int(rbuf->data_size));
+  if (n >= 0 && uint32_t(n) == rbuf->data_size) return from_msg(m);
+  // A tape recorded before checksums.
+  tape_block_v1_t v1;
+  const int n1 = v1.decode(rbuf->data, 0, int(rbuf->data_size));
+  if (n1 >= 0 && uint32_t(n1) == rbuf->data_size) return from(v1, "tape_block_v1_t");
+  decode_checked<tape_block_t>(rbuf, channel);  // throws, naming the channel
+  throw InputError("channel " + channel + ": not a tape block");
+}
 Block from_msg(const command_block_t& m) { return from(m, "command_block_t"); }
 
 excitation_status_t to_status_msg(const StatusEvent& e) {
@@ -305,7 +345,9 @@ Tf from_tf_msg(const tf_t& m) {
 
 Json tape_summary(const std::string& path) {
   Json j{{"file", path}, {"events", Json::object()}, {"states", Json::object()}};
-  std::vector<int64_t> seqs;
+  std::vector<int64_t> seqs, corrupt;
+  std::set<int64_t> seen;
+  int64_t copies = 0, aborts = 0;
   std::vector<std::string> channels;
   bool final_block = false;
   int64_t samples = 0;
@@ -315,7 +357,21 @@ Json tape_summary(const std::string& path) {
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
       if (ev.channel == kTapeChannel) {
-        Block b = from_msg(decode_checked<tape_block_t>(&rb, ev.channel));
+        Block b;
+        try {
+          b = decode_tape_block(&rb, ev.channel);
+        } catch (const CorruptBlock& c) {
+          corrupt.push_back(c.seq);
+          return;
+        }
+        if (b.seq < 0) {  // an aborted run's last block: actuators to their operating point
+          ++aborts;
+          return;
+        }
+        if (!seen.insert(b.seq).second) {  // a retransmitted copy
+          ++copies;
+          return;
+        }
         seqs.push_back(b.seq);
         if (channels.empty()) channels = b.channels;
         final_block |= b.final_block;
@@ -339,6 +395,9 @@ Json tape_summary(const std::string& path) {
   j["first_seq"] = seqs.empty() ? -1 : seqs.front();
   j["last_seq"] = seqs.empty() ? -1 : seqs.back();
   j["missing_seqs"] = gaps;
+  j["corrupt_seqs"] = corrupt;  // blocks whose checksum failed (refused)
+  j["retransmitted_copies"] = copies;
+  j["abort_blocks"] = aborts;
   j["final_block"] = final_block;
   j["samples"] = samples;
   j["sample_rate_hz"] = fs;
@@ -353,9 +412,9 @@ std::vector<Block> read_tape_blocks(const std::string& path, const std::string& 
     if (ev.channel != kTapeChannel) return;
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
-      tape_block_t m = decode_checked<tape_block_t>(&rb, ev.channel);
-      if (m.run_id == run_id && m.seq >= 0 && m.seq < below && !got.count(m.seq))
-        got.emplace(m.seq, from_msg(m));
+      Block b = decode_tape_block(&rb, ev.channel);
+      if (b.run_id == run_id && b.seq >= 0 && b.seq < below && !got.count(b.seq))
+        got.emplace(b.seq, std::move(b));
     } catch (const InputError& e) {
       throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
     }

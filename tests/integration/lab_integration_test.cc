@@ -17,6 +17,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/model.h"
+#include "shell.h"
 #include "test_util.h"
 
 using namespace fralab;
@@ -26,27 +27,9 @@ namespace {
 
 const std::string kBin = FRALAB_BIN_DIR;
 
-struct Cmd {
-  int status;
-  std::string output;
-};
-
-Cmd sh(const std::string& cmd) {
-  std::string full = cmd + " 2>&1";
-  FILE* p = popen(full.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
-
-std::string tmpdir(const std::string& name) {
-  auto d = fs::temp_directory_path() / ("fralab_it_" + name + "_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
-}
+using fralab::testing::Cmd;
+using fralab::testing::sh;
+using fralab::testing::tmpdir;
 
 const std::string kSmall = " --input Wf --band 1:10 --points-per-decade 3 --min-integrate-s 2 ";
 

@@ -146,3 +146,82 @@ TEST(LcmIo, TfMessagesRoundTrip) {
   bad.poles[0].kind = "complex";
   EXPECT_THROW(from_tf_msg(bad), InputError);
 }
+
+// Tape blocks carry a CRC-32 (zlib) of their encoding: one flipped byte anywhere is refused with
+// the block named; a tape recorded before checksums (tape_block_v1_t, the old fingerprint) is
+// still read.
+namespace {
+
+Block sample_block() {
+  Block b;
+  b.run_id = "r";
+  b.seq = 7;
+  b.start_sample = 700;
+  b.sample_rate_hz = 1000;
+  b.channels = {"u_Wf", "P3"};
+  b.n_samples = 3;
+  b.samples = {1, 2, 3, 0.00859, 0.00860, 0.00861};
+  return b;
+}
+
+template <class Msg>
+std::vector<uint8_t> bytes_of(const Msg& m) {
+  std::vector<uint8_t> buf(size_t(m.getEncodedSize()));
+  m.encode(buf.data(), 0, int(buf.size()));
+  return buf;
+}
+
+}  // namespace
+
+TEST(TapeChecksum, AFlippedByteIsRefusedNamingTheBlock) {
+  const Block b = sample_block();
+  std::vector<uint8_t> buf = bytes_of(to_tape_msg(b));
+  lcm::ReceiveBuffer rb{buf.data(), uint32_t(buf.size()), 0};
+  const Block ok = decode_tape_block(&rb, kTapeChannel);
+  EXPECT_EQ(ok.samples, b.samples);
+  EXPECT_EQ(ok.seq, 7);
+  // Flipped: a byte of the P3 samples (before final_block, crc32 and two more samples), a byte
+  // of the run id, the last byte (the checksum itself).
+  for (size_t at : {buf.size() - 8 - 1 - 8 * 3 - 4, size_t(12), buf.size() - 1}) {
+    std::vector<uint8_t> bad = buf;
+    bad[at] ^= 0x10;
+    lcm::ReceiveBuffer rb2{bad.data(), uint32_t(bad.size()), 0};
+    try {
+      decode_tape_block(&rb2, kTapeChannel);
+      ADD_FAILURE() << "byte " << at << " flipped and accepted";
+    } catch (const CorruptBlock& e) {
+      EXPECT_EQ(e.seq, 7);
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("tape block seq 7 of run "));
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("failed its checksum"));
+    } catch (const InputError& e) {
+      // A flip in the fingerprint or a length: not a tape block at all, also refused.
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("FRALAB_TAPE")) << at;
+    }
+  }
+}
+
+TEST(TapeChecksum, TapesRecordedBeforeChecksumsAreStillRead) {
+  // The fingerprint of tape_block_t until issue 12 (lcm-gen of its old .lcm: base hash
+  // 0x371122aab21e9704): old tapes decode as tape_block_v1_t.
+  EXPECT_EQ(tape_block_v1_t::getHash(), int64_t(7935981726436503048LL));
+  const Block b = sample_block();
+  tape_block_v1_t old;
+  old.run_id = b.run_id;
+  old.seq = b.seq;
+  old.start_sample = b.start_sample;
+  old.sample_rate_hz = b.sample_rate_hz;
+  old.n_channels = 2;
+  old.channel_names = b.channels;
+  old.n_samples = b.n_samples;
+  old.n_values = 6;
+  old.samples = b.samples;
+  old.final_block = false;
+  std::vector<uint8_t> buf = bytes_of(old);
+  lcm::ReceiveBuffer rb{buf.data(), uint32_t(buf.size()), 0};
+  const Block got = decode_tape_block(&rb, kTapeChannel);
+  EXPECT_EQ(got.samples, b.samples);
+  EXPECT_EQ(got.channels, b.channels);
+  std::vector<uint8_t> junk(40, 0xab);
+  lcm::ReceiveBuffer rj{junk.data(), uint32_t(junk.size()), 0};
+  EXPECT_THROW(decode_tape_block(&rj, kTapeChannel), InputError);
+}

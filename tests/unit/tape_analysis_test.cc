@@ -104,7 +104,8 @@ TEST(TapeAnalysis, ReorderedAndDuplicatedRecordsGiveTheInOrderNumbers) {
                                 tape_block_t m;
                                 m.decode(b.data(), 0, int(b.size()));
                                 return m;
-                              }()).seq == 40)
+                              }())
+                                      .seq == 40)
       continue;
     lossy.feed(ch, b.data(), int(b.size()));
   }
@@ -116,6 +117,27 @@ TEST(TapeAnalysis, ReorderedAndDuplicatedRecordsGiveTheInOrderNumbers) {
       ++invalid;
       EXPECT_THAT(p.note, HasSubstr("incomplete window"));
     }
+  }
+  EXPECT_EQ(invalid, 1);
+
+  // Tape block 40 arrives with one byte flipped (silent corruption): refused, the window it cuts
+  // is invalid and names it.
+  TapeFeeder corrupt({"u:y"}, {});
+  for (auto [ch, b] : recs) {
+    if (ch == kTapeChannel) {
+      tape_block_t m;
+      m.decode(b.data(), 0, int(b.size()));
+      if (m.seq == 40) b[b.size() / 2] ^= 0x01;
+    }
+    corrupt.feed(ch, b.data(), int(b.size()));
+  }
+  corrupt.flush();
+  EXPECT_THAT(corrupt.corrupt(), ::testing::ElementsAre(40));
+  invalid = 0;
+  for (const auto& p : corrupt.analyzers()[0]->frd().points) {
+    if (p.valid) continue;
+    ++invalid;
+    EXPECT_THAT(p.note, HasSubstr("tape block seq 40 failed its checksum"));
   }
   EXPECT_EQ(invalid, 1);
 }

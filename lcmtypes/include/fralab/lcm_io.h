@@ -21,6 +21,7 @@
 #include "fralab/flow_t.hpp"
 #include "fralab/frd_t.hpp"
 #include "fralab/tape_block_t.hpp"
+#include "fralab/tape_block_v1_t.hpp"
 #include "fralab/tf_t.hpp"
 
 namespace fralab {
@@ -40,10 +41,21 @@ void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string
 void publish_flow(lcm::LCM& control, const std::string& run_id, const std::string& kind,
                   const std::string& stream, int64_t from_seq, int64_t to_seq);
 
+/// A tape block carrying its checksum (tape_block_t.lcm: crc32).
 tape_block_t to_tape_msg(const Block& b);
 command_block_t to_command_msg(const Block& b);
-/// Throws InputError when sizes disagree (n_values != n_channels * n_samples, ...).
+/// A tape block that failed its checksum (the block is named: seq, run, stored and computed CRC).
+struct CorruptBlock : InputError {
+  CorruptBlock(const std::string& what, int64_t seq) : InputError(what), seq(seq) {}
+  int64_t seq;
+};
+/// Throws InputError when sizes disagree (n_values != n_channels * n_samples, ...), CorruptBlock
+/// when the checksum does not match.
 Block from_msg(const tape_block_t& m);
+/// A tape record (FRALAB_TAPE) as a Block: tape_block_t with its checksum checked, or a tape
+/// recorded before checksums (tape_block_v1_t). InputError naming the channel for any other bytes,
+/// CorruptBlock for a failed checksum.
+Block decode_tape_block(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
 Block from_msg(const command_block_t& m);
 excitation_status_t to_status_msg(const StatusEvent& e);
 StatusEvent from_msg(const excitation_status_t& m);

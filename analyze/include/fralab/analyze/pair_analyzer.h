@@ -22,6 +22,7 @@
 
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,9 @@ class PairAnalyzer {
 
   void on_status(const StatusEvent& status);
   void on_block(const Block& block);
+  /// Tape block `seq` arrived corrupt (failed its checksum) and was refused: a window it cuts
+  /// says so in its note.
+  void note_corrupt(int64_t seq) { corrupt_.insert(seq); }
   /// Points completed since the last call, in completion order.
   std::vector<FrdPoint> take_new_points();
   /// Every point so far (ascending w), as a fralab-frd/1 document.
@@ -85,6 +89,7 @@ class PairAnalyzer {
   int64_t max_seen_ = -1;
   int64_t blocks_seen_ = 0;
   std::map<int64_t, std::pair<int64_t, int64_t>> seqs_;  // seq -> [start, end)
+  std::set<int64_t> corrupt_;
   bool done_seen_ = false;
   int64_t done_sample_ = 0;
 };

@@ -1,0 +1,174 @@
+// Fault injection (issue 12): the lab's real processes under the conditions a test cell meets.
+// Every run is `fralab measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3`
+// (177 s of engine time), and every completed run must give frd files, fits and transfer matrix
+// byte-identical to an undisturbed run of the same seed:
+//   - random UDP loss on every channel (scripts/lossy.sh: nftables in a private namespace),
+//     1, 10 and 50 per mille;
+//   - four CPU hogs while runs go as fast as the consumers keep up (--speed 0), N runs;
+//   - SIGKILL of each process type mid-run, then `fralab measure --resume DIR`;
+//   - SIGTERM / SIGINT to the launcher: no process left, the abort on the tape, resume;
+//   - a stopped (SIGSTOP) analyser: the run fails naming it as silent.
+// FRALAB_FAULT_HOG_RUNS sets the number of runs under CPU hogs (default 20).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "fralab/core/json_util.h"
+#include "shell.h"
+
+using fralab::Json;
+using fralab::json_load_file;
+using fralab::testing::sh;
+using fralab::testing::tmpdir;
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kBin = FRALAB_BIN_DIR;
+const std::string kScripts = FRALAB_SCRIPTS_DIR;
+const std::string kRun =
+    " measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3 --seed 3 ";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The undisturbed run every other run is compared with.
+const std::string& reference() {
+  static const std::string dir = [] {
+    const std::string d = tmpdir("fault_ref");
+    const auto c = sh(kBin + "/fralab" + kRun + "--out " + d);
+    EXPECT_EQ(c.status, 0) << c.output;
+    return d;
+  }();
+  return dir;
+}
+
+// Every frd and tf file and the transfer matrix of `dir` equal the reference's, byte for byte.
+void expect_identical(const std::string& dir) {
+  const std::string& ref = reference();
+  int files = 0;
+  for (const char* sub : {"frd", "tf"}) {
+    for (const auto& f : fs::directory_iterator(ref + "/" + sub)) {
+      const std::string name = std::string(sub) + "/" + f.path().filename().string();
+      ASSERT_TRUE(fs::exists(dir + "/" + name)) << dir << ": no " << name;
+      EXPECT_EQ(slurp(f.path().string()), slurp(dir + "/" + name)) << dir << ": " << name;
+      ++files;
+    }
+  }
+  EXPECT_EQ(files, 22);  // 11 pairs
+  EXPECT_EQ(slurp(ref + "/transfer_matrix.json"), slurp(dir + "/transfer_matrix.json")) << dir;
+}
+
+int processes_of(const std::string& dir) {
+  // "[f]ralab": the pattern does not match the shell that runs pgrep.
+  const auto c = sh("pgrep -fc '[f]ralab-[a-z]*.*" + dir + "'");
+  return std::atoi(c.output.c_str());
+}
+
+class Loss : public ::testing::TestWithParam<int> {};
+
+TEST_P(Loss, EveryDatagramLostIsRetransmittedAndTheRunIsIdentical) {
+  const int per_mille = GetParam();
+  reference();
+  const std::string d = tmpdir("loss" + std::to_string(per_mille));
+  const auto c = sh(kScripts + "/lossy.sh " + std::to_string(per_mille) + " " + kBin + "/fralab" +
+                    kRun + "--out " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  expect_identical(d);
+  const Json run = json_load_file(d + "/run.json");
+  EXPECT_EQ(run["state"], "complete");
+  std::cout << "[ figures  ] loss " << per_mille / 10.0 << " %: " << c.output.substr(0, 0)
+            << run["retransmissions"] << " retransmissions of " << run["items_retransmitted"]
+            << " blocks/events, wall " << run["wall_time_s"] << " s, engine time added 0 s\n"
+            << c.output;
+  if (per_mille >= 10) EXPECT_GT(run["retransmissions"].get<int>(), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Faults, Loss, ::testing::Values(1, 10, 50));
+
+TEST(Faults, FourCpuHogsAtFullSpeedEveryRunCompletesIdentical) {
+  reference();
+  const char* env = std::getenv("FRALAB_FAULT_HOG_RUNS");
+  const int runs = env ? std::atoi(env) : 20;
+  const std::string d = tmpdir("hogs");
+  // (Output to /dev/null: a hog holding the pipe would keep sh() waiting.)
+  sh("for i in 1 2 3 4; do (timeout 3600 sh -c 'while :; do :; done' >/dev/null 2>&1 &) ; done");
+  int ok = 0;
+  for (int i = 0; i < runs; ++i) {
+    const std::string out = d + "/run" + std::to_string(i);
+    const auto c = sh(kBin + "/fralab" + kRun + "--speed 0 --out " + out);
+    EXPECT_EQ(c.status, 0) << c.output;
+    if (c.status == 0) {
+      expect_identical(out);
+      ++ok;
+    }
+    fs::remove_all(out);
+  }
+  sh("pkill -f '[w]hile :; do :; done'");
+  std::cout << "[ figures  ] four CPU hogs: " << ok << " of " << runs << " runs complete\n";
+  EXPECT_EQ(ok, runs);
+}
+
+class Kill : public ::testing::TestWithParam<std::string> {};
+
+// Paced at 50x so the kill lands mid-run (the run takes 3.5 s).
+TEST_P(Kill, AKilledProcessFailsTheRunAndResumeGivesTheUninterruptedNumbers) {
+  reference();
+  const std::string who = GetParam();
+  const std::string d = tmpdir("kill_" + who);
+  const std::string first = d + "/first.out";
+  auto c = sh("(" + kBin + "/fralab" + kRun + "--speed 50 --out " + d + " > " + first +
+              " 2>&1 & lp=$!; sleep 1.5; " +
+              (who == "launcher" ? std::string("kill -TERM $lp")
+                                 : "pkill -KILL -f '[f]ralab-" + who + ".*" + d + "'") +
+              "; wait $lp; echo exit=$?)");
+  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(first);
+  sh("sleep 0.5");
+  EXPECT_EQ(processes_of(d), 0) << "processes left after the run failed";
+  Json run = json_load_file(d + "/run.json");
+  EXPECT_EQ(run["state"], who == "launcher" ? "interrupted" : "failed") << run.dump();
+  if (who == "launcher") {
+    EXPECT_THAT(slurp(first), HasSubstr("the excitation was stopped first"));
+    const auto tape = sh(kBin + "/fralab tape --log " + d + "/tape.lcmlog");
+    EXPECT_THAT(tape.output, HasSubstr("\"abort\"")) << "no abort status on the tape";
+  } else {
+    EXPECT_THAT(slurp(first), HasSubstr("killed by signal 9"));
+  }
+  c = sh(kBin + "/fralab measure --resume " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("resuming run"));
+  expect_identical(d);
+  run = json_load_file(d + "/run.json");
+  EXPECT_EQ(run["state"], "complete");
+  EXPECT_EQ(run["resumed"], 1);
+  c = sh(kBin + "/fralab measure --resume " + d);
+  EXPECT_NE(c.status, 0);
+  EXPECT_THAT(c.output, HasSubstr("the run is complete; there is nothing to resume"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Faults, Kill,
+                         ::testing::Values("plant", "acquire", "analyze", "record", "identify",
+                                           "launcher"));
+
+TEST(Faults, AStoppedAnalyserIsNamedAsSilent) {
+  const std::string d = tmpdir("sigstop");
+  const auto c = sh("(" + kBin + "/fralab" + kRun + "--speed 50 --stall-timeout 4 --out " + d +
+                    " & lp=$!; sleep 1; pkill -STOP -f '[f]ralab-analyze.*Wf_P3.*" + d +
+                    "'; wait $lp; echo exit=$?; pkill -CONT -f '[f]ralab-analyze.*" + d + "')");
+  EXPECT_THAT(c.output, HasSubstr("exit=1"));
+  EXPECT_THAT(c.output, HasSubstr("consumer \"analyze-Wf_P3\""));
+  EXPECT_THAT(c.output, HasSubstr("hung, stopped or dead?"));
+  sh("sleep 0.5");
+  EXPECT_EQ(processes_of(d), 0);
+}
+
+}  // namespace
