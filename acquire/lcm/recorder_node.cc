@@ -36,6 +36,11 @@ void RecorderNode::ack(const std::string& stream, int64_t seq) {
 void RecorderNode::on_any(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
   if (!error_.empty()) return;
   try {
+    // Another run sharing the port (its datagrams reach every socket bound to it): not ours.
+    if (!run_id_.empty() && channel.rfind("FRALAB_", 0) == 0) {
+      const auto id = peek_run_id(rbuf->data, rbuf->data_size);
+      if (id && *id != run_id_) return;
+    }
     lcm::LogEvent ev;
     ev.eventnum = events_;
     ev.timestamp = rbuf->recv_utime;

@@ -10,6 +10,8 @@
 #include <map>
 #include <set>
 
+#include "fralab/core/text.h"
+
 namespace fralab {
 
 template <class Msg>
@@ -151,17 +153,40 @@ std::string resolve_lcm_url(const std::string& flag) {
     const char* env = std::getenv("LCM_DEFAULT_URL");
     url = env && *env ? env : "udpm://239.255.76.67:7667?ttl=0";
   }
-  if (url.rfind("udpm://", 0) == 0 && url.find("ttl=0") == std::string::npos) {
-    throw InputError("LCM URL \"" + url +
-                     "\" has no ttl=0: fralab traffic must stay on this host; append ?ttl=0");
+  if (url.rfind("udpm://", 0) != 0) return url;
+  // The ttl option, parsed: "?a=1&ttl=0&b=2"; it must be stated.
+  long ttl = -2;  // unstated
+  const auto q = url.find('?');
+  if (q != std::string::npos) {
+    for (const std::string& kv : split_list(url.substr(q + 1), '&')) {
+      const auto eq = kv.find('=');
+      if (kv.substr(0, eq) != "ttl") continue;
+      const std::string v = eq == std::string::npos ? "" : kv.substr(eq + 1);
+      char* end = nullptr;
+      ttl = v.empty() || v.size() > 3 ? -1 : std::strtol(v.c_str(), &end, 10);
+      if (ttl < 0 || ttl > 255 || end != v.c_str() + v.size() || (v.size() > 1 && v[0] == '0'))
+        throw InputError("LCM URL \"" + url + "\": ttl \"" + v + "\" is not a number 0-255");
+    }
   }
+  const char* net = std::getenv("FRALAB_NETWORK");
+  const bool network = net && std::string(net) == "1";
+  if (ttl == -2)
+    throw InputError("LCM URL \"" + url +
+                     "\" states no ttl: fralab traffic stays on this host unless asked; append "
+                     "?ttl=0");
+  if (ttl > 0 && !network)
+    throw InputError("LCM URL \"" + url + "\" has ttl=" + std::to_string(ttl) +
+                     ": fralab traffic stays on this host; reaching other hosts is an explicit "
+                     "opt-in: set FRALAB_NETWORK=1");
   return url;
 }
 
 std::string private_lcm_url(uint64_t salt) {
-  // Group 239.255.x.y (administratively scoped), port 7700-8699, ttl=0.
+  // Group 239.255.x.y (administratively scoped), an even port 20000-59998 (the control URL takes
+  // the odd one above it), ttl=0. Linux hands a multicast datagram to every socket bound to its
+  // port whatever the group, so the port is what separates two runs: 20000 of them.
   unsigned x = 1 + (salt % 250), y = 1 + ((salt / 250) % 250);
-  unsigned port = 7700 + ((salt / 62500) % 1000);
+  unsigned port = 20000 + 2 * unsigned((salt / 62500) % 20000);
   return "udpm://239.255." + std::to_string(x) + "." + std::to_string(y) + ":" +
          std::to_string(port) + "?ttl=0&recv_buf_size=2097152";
 }
@@ -178,6 +203,14 @@ std::string control_url_for(const std::string& url) {
   } catch (const std::exception&) {
     return url;
   }
+}
+
+std::optional<std::string> peek_run_id(const void* data, size_t size) {
+  const auto* p = static_cast<const uint8_t*>(data);
+  if (size < 12) return std::nullopt;
+  const uint32_t n = uint32_t(p[8]) << 24 | uint32_t(p[9]) << 16 | uint32_t(p[10]) << 8 | p[11];
+  if (n < 1 || n > size - 12) return std::nullopt;  // n counts the terminating NUL
+  return std::string(reinterpret_cast<const char*>(p + 12), n - 1);
 }
 
 void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string& consumer,

@@ -124,3 +124,40 @@ TEST(LabLoop, AConsumerThatNeverSaysReadyIsNamed) {
 
 }  // namespace
 }  // namespace fralab
+
+namespace fralab {
+namespace {
+
+// Two runs sharing a port (Linux hands their datagrams to both): the recorder writes only its own.
+TEST(LabLoop, TheRecorderKeepsOnlyItsRunOnASharedPort) {
+  lcm::LCM bus("memq://");
+  ASSERT_TRUE(bus.good());
+  const std::string tape =
+      (std::filesystem::temp_directory_path() / "lab_loop_shared_port.lcmlog").string();
+  {
+    RecorderNode recorder(bus, bus, tape, "ours");
+    Block b;
+    b.run_id = "theirs";
+    b.seq = 0;
+    b.sample_rate_hz = 1000;
+    b.channels = {"y"};
+    b.n_samples = 1;
+    b.samples = {1.0};
+    tape_block_t m = to_tape_msg(b);
+    bus.publish(kTapeChannel, &m);
+    b.run_id = "ours";
+    m = to_tape_msg(b);
+    bus.publish(kTapeChannel, &m);
+    while (bus.handleTimeout(10) > 0) {
+    }
+    EXPECT_EQ(recorder.error(), "");
+  }
+  std::vector<std::string> runs;
+  read_tape_file(tape, [&](const TapeEvent& ev) {
+    if (ev.channel == kTapeChannel) runs.push_back(*peek_run_id(ev.data, size_t(ev.datalen)));
+  });
+  EXPECT_THAT(runs, ::testing::ElementsAre("ours"));
+}
+
+}  // namespace
+}  // namespace fralab

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <set>
 
 using namespace fralab;
 namespace fs = std::filesystem;
@@ -224,4 +225,58 @@ TEST(TapeChecksum, TapesRecordedBeforeChecksumsAreStillRead) {
   std::vector<uint8_t> junk(40, 0xab);
   lcm::ReceiveBuffer rj{junk.data(), uint32_t(junk.size()), 0};
   EXPECT_THROW(decode_tape_block(&rj, kTapeChannel), InputError);
+}
+
+// The URL policy: the ttl option parsed (not a substring), ttl >= 1 only on the explicit opt-in.
+TEST(LcmUrl, TtlIsParsedAndLeavingTheHostIsAnOptIn) {
+  unsetenv("FRALAB_NETWORK");
+  EXPECT_EQ(resolve_lcm_url("udpm://239.255.1.2:7667?ttl=0"), "udpm://239.255.1.2:7667?ttl=0");
+  EXPECT_NO_THROW(resolve_lcm_url("udpm://239.255.1.2:7667?recv_buf_size=2097152&ttl=0"));
+  EXPECT_NO_THROW(resolve_lcm_url("memq://"));
+  for (const char* bad : {"udpm://239.255.1.2:7667?ttl=05", "udpm://239.255.1.2:7667?ttl=0x1",
+                          "udpm://239.255.1.2:7667?ttl=", "udpm://239.255.1.2:7667?ttl=256"}) {
+    try {
+      resolve_lcm_url(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("is not a number 0-255")) << bad;
+    }
+  }
+  EXPECT_THROW(resolve_lcm_url("udpm://239.255.1.2:7667"), InputError);         // ttl unstated
+  EXPECT_THROW(resolve_lcm_url("udpm://239.255.1.2:7667?xttl=0"), InputError);  // not ttl
+  try {
+    resolve_lcm_url("udpm://239.255.1.2:7667?ttl=1");
+    ADD_FAILURE() << "ttl=1 without the opt-in";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("set FRALAB_NETWORK=1"));
+  }
+  setenv("FRALAB_NETWORK", "1", 1);
+  EXPECT_NO_THROW(resolve_lcm_url("udpm://239.255.1.2:7667?ttl=1"));
+  unsetenv("FRALAB_NETWORK");
+}
+
+TEST(LcmUrl, PrivateUrlsUseAnEvenPortAndThePeekFindsTheRunId) {
+  std::set<std::string> ports;
+  for (uint64_t s = 0; s < 20000; ++s) {
+    const std::string u = private_lcm_url(s * 62500);
+    const auto colon = u.rfind(':'), q = u.find('?');
+    const int port = std::stoi(u.substr(colon + 1, q - colon - 1));
+    EXPECT_EQ(port % 2, 0);
+    EXPECT_GE(port, 20000);
+    EXPECT_LE(port, 59998);
+    ports.insert(u.substr(colon + 1, q - colon - 1));
+    EXPECT_NO_THROW(resolve_lcm_url(u));
+  }
+  EXPECT_EQ(ports.size(), 20000u);  // every port used once
+  ack_t a;
+  a.run_id = "run-42";
+  a.consumer = "c";
+  a.seq = 1;
+  a.stream = "tape";
+  std::vector<uint8_t> buf(size_t(a.getEncodedSize()));
+  a.encode(buf.data(), 0, int(buf.size()));
+  EXPECT_EQ(peek_run_id(buf.data(), buf.size()), "run-42");
+  EXPECT_EQ(peek_run_id(buf.data(), 10), std::nullopt);
+  buf[8] = 0x7f;  // absurd length
+  EXPECT_EQ(peek_run_id(buf.data(), buf.size()), std::nullopt);
 }

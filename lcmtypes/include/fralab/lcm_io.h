@@ -69,6 +69,10 @@ tf_t to_tf_msg(const Tf& tf, const std::string& pair, const std::string& run_id,
 /// InputError naming the pair for a root kind other than "real" or "pair".
 Tf from_tf_msg(const tf_t& m);
 
+/// The run id every fralab message begins with (after its 8-byte fingerprint); nullopt when the
+/// bytes are too short or the length is absurd.
+std::optional<std::string> peek_run_id(const void* data, size_t size);
+
 /// Decodes a message of type Msg from a raw buffer; InputError naming the channel and the expected
 /// type when the bytes are not that type (fingerprint mismatch, truncated).
 template <class Msg>
@@ -84,11 +88,14 @@ Msg decode_checked(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
 }
 
 /// The LCM URL: `flag` when given, else $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0.
-/// A udpm URL without ttl=0 is refused (fralab traffic never leaves the host).
+/// A udpm URL must state its ttl option (parsed from the query: "?a=1&ttl=0", a number 0-255
+/// without leading zeros): ttl=0 keeps fralab traffic on this host; ttl >= 1 (reaching other
+/// hosts) is refused unless the environment says FRALAB_NETWORK=1 (the explicit opt-in).
 std::string resolve_lcm_url(const std::string& flag);
 
-/// A fresh private URL for one lab run: a multicast group/port derived from `salt`, ttl=0, and a
-/// 2 MB receive buffer request (granted up to net.core.rmem_max).
+/// A fresh private URL for one lab run: a multicast group and an even port 20000-59998 derived
+/// from `salt` (20000 ports: Linux separates runs by port, not group), ttl=0, and a 2 MB receive
+/// buffer request (granted up to net.core.rmem_max).
 std::string private_lcm_url(uint64_t salt);
 
 /// The control URL of a lab run: flow-control acknowledgements travel there, away from the tape
