@@ -12,6 +12,20 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
   c->add_option("--lcm-url", m.lcm_url, "LCM URL (default: a private one per run)");
   c->add_flag("--no-noise", m.no_noise, "plant noise off");
+  c->add_option_function<std::vector<std::string>>(
+       "--on",
+       [&m](const std::vector<std::string>& v) {
+         for (const std::string& kv : v) {
+           const auto eq = kv.find('=');
+           if (eq == std::string::npos || eq == 0 || eq + 1 == kv.size())
+             throw CLI::ValidationError("--on", "\"" + kv + "\" is not PROCESS=HOST");
+           m.hosts[kv.substr(0, eq)] = kv.substr(eq + 1);
+         }
+       },
+       "multi-host (needs FRALAB_NETWORK=1): PROCESS=HOST runs plant, recorder, acquire, "
+       "analyze or identify through the deputy HOST (fralab-deputy --name HOST); repeatable")
+      ->delimiter(',');
+  c->add_option("--deputy-url", m.deputy_url, "the deputies' LCM URL (multi-host)");
   c->add_option("--stall-timeout", m.stall_timeout_s,
                 "seconds a stream may stand still (retransmitted) before the run fails")
       ->capture_default_str();

@@ -15,6 +15,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/text.h"
 #include "fralab/identify/fit_io.h"
+#include "fralab/lab/deputy.h"
 #include "fralab/lab/resume.h"
 #include "fralab/lab/supervisor.h"
 #include "fralab/lcm_io.h"
@@ -145,6 +146,8 @@ MeasureOptions options_from_run(const std::string& dir, const Json& run) {
     o.fit_delay = opt.at("fit_delay").get<std::string>();
     o.timeout_s = opt.value("timeout_s", o.timeout_s);
     o.stall_timeout_s = opt.value("stall_timeout_s", o.stall_timeout_s);
+    o.hosts = opt.value("hosts", o.hosts);
+    o.deputy_url = opt.value("deputy_url", o.deputy_url);
     std::vector<std::string> flags = opt.at("acquire_flags").get<std::vector<std::string>>();
     CLI::App app;
     add_acquire_flags(&app, o.acquire);
@@ -184,7 +187,14 @@ MeasureResult run_measure(const MeasureOptions& given) {
   MeasureResult r;
   const uint64_t salt = uint64_t(getpid()) * 1000003u ^
                         uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
-  const std::string url = o.lcm_url.empty() ? private_lcm_url(salt) : resolve_lcm_url(o.lcm_url);
+  for (const auto& [kind, host] : o.hosts)
+    if (kind != "plant" && kind != "recorder" && kind != "acquire" && kind != "analyze" &&
+        kind != "identify")
+      throw InputError("--on " + kind + "=" + host +
+                       ": no such process (plant, recorder, acquire, analyze, identify)");
+  std::string url = o.lcm_url.empty() ? private_lcm_url(salt) : o.lcm_url;
+  if (!o.hosts.empty() && o.lcm_url.empty()) url.replace(url.find("ttl=0"), 5, "ttl=1");
+  url = resolve_lcm_url(url);  // ttl=1 needs FRALAB_NETWORK=1
   r.run_id =
       o.resume ? run.at("run_id").get<std::string>() : "run-" + std::to_string(salt % 1000000007u);
   const std::string tape = o.out + "/tape.lcmlog";
@@ -228,6 +238,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
                {"fit_delay", o.fit_delay},
                {"timeout_s", o.timeout_s},
                {"stall_timeout_s", o.stall_timeout_s},
+               {"hosts", o.hosts},
+               {"deputy_url", o.deputy_url},
                {"acquire_flags", acquire_flags(ao)}}},
              {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
   }
@@ -237,7 +249,24 @@ MeasureResult run_measure(const MeasureOptions& given) {
   auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
 
   Supervisor::catch_stop_signals();
+  // Deputies for the processes on other hosts (declared before the supervisor: it uses them until
+  // its end).
+  std::unique_ptr<lcm::LCM> deputy_lcm;
+  std::unique_ptr<DeputyClient> deputies;
+  if (!o.hosts.empty()) {
+    const std::string durl =
+        resolve_lcm_url(o.deputy_url.empty() ? kDefaultDeputyUrl : o.deputy_url);
+    deputy_lcm = std::make_unique<lcm::LCM>(durl);
+    if (!deputy_lcm->good()) throw InputError("cannot open the deputies' LCM URL " + durl);
+    deputies = std::make_unique<DeputyClient>(*deputy_lcm, r.run_id);
+    for (const auto& [kind, host] : o.hosts) deputies->wait_for_deputy(host, 10);
+  }
+  auto host_of = [&](const std::string& kind) {
+    auto it = o.hosts.find(kind);
+    return it == o.hosts.end() ? std::string() : it->second;
+  };
   Supervisor sup;
+  sup.set_remote(deputies.get());
   sup.set_stop_first(
       {"acquire"});  // the excitation stops first, actuators to their operating point
   try {
@@ -251,7 +280,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
              {std::string("--append"), std::string("--first-block"), std::to_string(rp.first_block),
               std::string("--first-status"), std::to_string(rp.first_status)})
           rec.push_back(a);
-      sup.start({"recorder", rec, log("recorder")});
+      sup.start({"recorder", rec, log("recorder"), host_of("recorder")});
 
       std::vector<std::string> plant_args = {module_path("fralab-plant"),
                                              "--model",
@@ -269,7 +298,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
         plant_args.insert(plant_args.end(),
                           {"--replay", tape, "--replay-blocks", std::to_string(rp.first_block)});
       }
-      sup.start({"plant", plant_args, log("plant")});
+      sup.start({"plant", plant_args, log("plant"), host_of("plant")});
 
       std::vector<std::string> consumers = {"plant", "recorder"}, waits = {"plant"};
       // A fresh run: the live analysers (one process per position-relative pair, one for the
@@ -295,7 +324,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
               args.push_back("--pair");
               args.push_back(p);
             }
-            sup.start({name, args, log(name)});
+            sup.start({name, args, log(name), host_of("analyze")});
             consumers.push_back(name);
             waits.push_back(name);
           }
@@ -304,7 +333,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
                    {module_path("fralab-identify"), "--lcm-url", url, "--run-id", r.run_id,
                     "--expect", std::to_string(r.pairs.size()), "--out", o.out, "--delay",
                     o.fit_delay, "--title", model.name + ": measured transfer matrix"},
-                   log("identify")});
+                   log("identify"),
+                   host_of("identify")});
       }
       std::string consumers_csv;
       for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
@@ -327,7 +357,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
                                       o.out + "/acquire.json"};
       for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
       const auto t0 = std::chrono::steady_clock::now();
-      sup.start({"acquire", acq, log("acquire")});
+      sup.start({"acquire", acq, log("acquire"), host_of("acquire")});
       waits.push_back("acquire");
       sup.wait_for(waits, o.timeout_s);
       r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -36,13 +36,24 @@ Supervisor::~Supervisor() { stop_all(); }
 
 void Supervisor::stop_all(double timeout_s) {
   for (const auto& n : first_) stop(n, SIGTERM, timeout_s);
-  for (auto& [n, p] : procs_)
+  for (auto& [n, p] : procs_) {
     if (!p.exited && p.pid > 0) kill(p.pid, SIGTERM);
+    if (!p.exited && p.remote) remote_->stop(n);
+  }
   for (auto& [n, p] : procs_) stop(n, SIGTERM, timeout_s);
 }
 
 void Supervisor::start(const ProcessSpec& spec) {
   if (procs_.count(spec.name)) throw InputError("process name \"" + spec.name + "\" used twice");
+  if (!spec.host.empty()) {
+    if (!remote_)
+      throw InputError(spec.name + ": host \"" + spec.host + "\" given but no deputies in use");
+    remote_->start(spec);
+    Proc p{spec, -1, false, 0};
+    p.remote = true;
+    procs_[spec.name] = p;
+    return;
+  }
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
   if (!spec.log_file.empty()) {
@@ -64,8 +75,19 @@ void Supervisor::start(const ProcessSpec& spec) {
 }
 
 void Supervisor::reap(bool block) {
+  bool any_remote = false;
+  for (auto& [n, p] : procs_) any_remote |= p.remote && !p.exited;
+  if (any_remote) remote_->poll(0);
   for (auto& [n, p] : procs_) {
     if (p.exited) continue;
+    if (p.remote) {
+      if (auto e = remote_->exited(n)) {
+        p.exited = true;
+        p.status = e->status < 0 ? SIGKILL : (e->status & 0xff) << 8;  // as waitpid encodes it
+        p.remote_reason = e->reason;
+      }
+      continue;
+    }
     int st = 0;
     pid_t r = waitpid(p.pid, &st, block ? 0 : WNOHANG);
     if (r == p.pid) {
@@ -75,7 +97,16 @@ void Supervisor::reap(bool block) {
   }
 }
 
+std::optional<RemoteProcesses::Exit> Supervisor::exit_of(const std::string& name) const {
+  auto it = procs_.find(name);
+  if (it == procs_.end() || !it->second.exited) return std::nullopt;
+  const int st = it->second.status;
+  return RemoteProcesses::Exit{WIFEXITED(st) ? WEXITSTATUS(st) : -1,
+                               (WIFEXITED(st) && WEXITSTATUS(st) == 0) ? "" : reason(it->second)};
+}
+
 std::string Supervisor::reason(const Proc& p) const {
+  if (p.remote && !p.remote_reason.empty()) return p.remote_reason;
   std::string why = WIFEXITED(p.status)
                         ? "exited with status " + std::to_string(WEXITSTATUS(p.status))
                         : "was killed by signal " + std::to_string(WTERMSIG(p.status));
@@ -96,7 +127,11 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
     reap(false);
     for (auto& [n, p] : procs_) {
       if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0))
-        throw InputError(reason(p));
+        throw InputError(reason(p) + (p.remote ? " (on " + p.spec.host + ")" : ""));
+    }
+    if (remote_) {
+      const std::string silent = remote_->silent_deputy();
+      if (!silent.empty()) throw InputError(silent);
     }
     bool all = true;
     for (const auto& n : names) {
@@ -119,6 +154,23 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
 void Supervisor::stop(const std::string& name, int sig, double timeout_s) {
   auto it = procs_.find(name);
   if (it == procs_.end() || it->second.exited) return;
+  if (it->second.remote) {  // its deputy sends SIGTERM (then SIGKILL) and reports the exit
+    remote_->stop(name);
+    const auto t0 = std::chrono::steady_clock::now();
+    while (!it->second.exited && remote_->silent_deputy().empty() &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() <
+               timeout_s + 2) {
+      remote_->poll(20);
+      reap(false);
+    }
+    if (!it->second.exited) {  // the deputy never confirmed: count it gone, say so
+      it->second.exited = true;
+      it->second.status = SIGKILL;
+      it->second.remote_reason =
+          name + " on " + it->second.spec.host + ": its deputy did not confirm the stop";
+    }
+    return;
+  }
   kill(it->second.pid, sig);
   const auto t0 = std::chrono::steady_clock::now();
   while (!it->second.exited) {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,12 @@ struct MeasureOptions {
   /// Continue the run in `out` (its run.json holds every other option) from its first incomplete
   /// step (lab/resume.h).
   bool resume = false;
+  /// Multi-host (explicit opt-in, needs FRALAB_NETWORK=1): process kind ("plant", "recorder",
+  /// "acquire", "analyze" for every analyser, "identify") -> the deputy that runs it on its host
+  /// (lab/deputy.h); the run's URL then has ttl=1. Paths (model, tape, DIR) must be the same on
+  /// every host (a shared folder).
+  std::map<std::string, std::string> hosts;
+  std::string deputy_url;  // "" = kDefaultDeputyUrl
 };
 
 struct MeasureResult {

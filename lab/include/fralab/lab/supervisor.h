@@ -6,6 +6,7 @@
 #include <sys/types.h>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,26 @@ struct ProcessSpec {
   std::string name;
   std::vector<std::string> argv;  // argv[0] is the program (path or PATH name)
   std::string log_file;
+  std::string host;  // "" = this host; else the deputy (fralab-deputy --name HOST) that runs it
+};
+
+/// Processes on other hosts, started and watched through their deputies (lab/deputy.h).
+class RemoteProcesses {
+ public:
+  virtual ~RemoteProcesses() = default;
+  virtual void start(const ProcessSpec& spec) = 0;
+  virtual void stop(const std::string& name) = 0;
+  /// Handles what arrived and repeats unanswered orders; waits up to `ms`.
+  virtual void poll(int ms) = 0;
+  /// The process's exit, once its deputy reported it: the status (-1: killed by a signal) and
+  /// the one-line reason.
+  struct Exit {
+    int status;
+    std::string reason;
+  };
+  virtual std::optional<Exit> exited(const std::string& name) const = 0;
+  /// "" while every deputy in use answers; else which one is silent, and since when.
+  virtual std::string silent_deputy() const = 0;
 };
 
 class Supervisor {
@@ -43,8 +64,16 @@ class Supervisor {
   /// one; SIGKILL to any still running after timeout_s.
   void stop_all(double timeout_s = 5.0);
 
-  /// Starts a process; InputError when it cannot be started.
+  /// Starts a process (through its deputy when spec.host is set: set_remote first); InputError
+  /// when it cannot be started.
   void start(const ProcessSpec& spec);
+  /// The deputies' side for processes with a host (not owned; must outlive the supervisor).
+  void set_remote(RemoteProcesses* remote) { remote_ = remote; }
+  /// Notes exits without blocking or throwing.
+  void poll() { reap(false); }
+  /// The exit of a process that has exited: status (-1 when killed) and reason; nullopt while it
+  /// runs.
+  std::optional<RemoteProcesses::Exit> exit_of(const std::string& name) const;
   /// Waits until every process named has exited with status 0. If any supervised process exits
   /// non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout throws too, and
   /// a stop signal caught (catch_stop_signals) throws Interrupted.
@@ -60,11 +89,14 @@ class Supervisor {
     pid_t pid = -1;
     bool exited = false;
     int status = 0;
+    bool remote = false;
+    std::string remote_reason;  // remote: as its deputy reported
   };
   void reap(bool block);
   std::string reason(const Proc& p) const;
   std::map<std::string, Proc> procs_;
   std::vector<std::string> first_;
+  RemoteProcesses* remote_ = nullptr;
 };
 
 /// The path of a fralab module executable: beside the running binary if there, else `name` (PATH).
