@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "fralab/core/text.h"
@@ -252,44 +254,98 @@ void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms) {
 
 namespace {
 
-// Reads events from byte `from` on; *end: the offset after the last whole event.
-int64_t read_events(const std::string& path, long from, long* end,
-                    const std::function<void(const TapeEvent&)>& fn) {
+// The LCM log framing (lcm/eventlog.c), read with explicit bounds so no header can make a reader
+// allocate or read what the file does not hold: big-endian int32 sync 0xEDA1DA01, int64 event
+// number, int64 timestamp (us), int32 channel length, int32 data length, the channel, the data.
+constexpr uint32_t kSync = 0xEDA1DA01u;
+constexpr int64_t kHeader = 28;
+constexpr int32_t kMaxChannel = 256;            // LCM allows 63
+constexpr int64_t kMaxData = int64_t(1) << 30;  // 1 GiB: no fralab message comes near it
+
+uint64_t be(const uint8_t* p, int n) {
+  uint64_t v = 0;
+  for (int k = 0; k < n; ++k) v = v << 8 | p[k];
+  return v;
+}
+
+enum class Stop { kEnd, kCut, kCorrupt };
+
+// Reads whole events from byte `from` on; *end: the offset after the last whole event. Returns how
+// the reading stopped: the end of the file, a last event cut short (the file ends inside it), or
+// bytes that are not an event (*why says which).
+Stop read_events(const std::string& path, int64_t from, int64_t* end, int64_t* n, std::string* why,
+                 const std::function<void(const TapeEvent&)>& fn) {
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such tape file");
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw InputError(path + ": cannot open as an LCM log");
-  if (from > 0 && std::fseek(log.getFilePtr(), from, SEEK_SET) != 0) {
-    throw InputError(path + ": cannot seek to offset " + std::to_string(from));
-  }
-  int64_t n = 0;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(path + ": cannot open the tape file");
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, &std::fclose);
+  std::error_code ec;
+  const int64_t size = int64_t(std::filesystem::file_size(path, ec));
+  if (ec) throw InputError(path + ": cannot read its size");
   *end = from;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    TapeEvent te{ev->eventnum, ev->timestamp, ev->channel, ev->data, ev->datalen};
+  *n = 0;
+  if (from > 0 && std::fseek(f, long(from), SEEK_SET) != 0)
+    throw InputError(path + ": cannot seek to offset " + std::to_string(from));
+  std::vector<uint8_t> buf;
+  uint8_t h[kHeader];
+  int64_t at = from;
+  for (;;) {
+    if (at == size) return Stop::kEnd;
+    if (size - at < kHeader || std::fread(h, 1, kHeader, f) != size_t(kHeader)) return Stop::kCut;
+    const uint32_t sync = uint32_t(be(h, 4));
+    const int64_t eventnum = int64_t(be(h + 4, 8)), ts = int64_t(be(h + 12, 8));
+    const int32_t clen = int32_t(be(h + 20, 4)), dlen = int32_t(be(h + 24, 4));
+    if (sync != kSync) {
+      *why = "no event at byte " + std::to_string(at) + " (sync word " + std::to_string(sync) +
+             ", not an LCM log event)";
+      return Stop::kCorrupt;
+    }
+    if (clen <= 0 || clen > kMaxChannel || dlen < 0 || dlen > kMaxData) {
+      *why = "event at byte " + std::to_string(at) + " claims a channel of " +
+             std::to_string(clen) + " bytes and data of " + std::to_string(dlen) +
+             " bytes (impossible)";
+      return Stop::kCorrupt;
+    }
+    const int64_t body = int64_t(clen) + dlen;
+    if (size - at - kHeader < body) return Stop::kCut;  // the file ends inside this event
+    buf.resize(size_t(body));
+    if (std::fread(buf.data(), 1, size_t(body), f) != size_t(body)) return Stop::kCut;
+    const std::string channel(reinterpret_cast<const char*>(buf.data()), size_t(clen));
+    TapeEvent te{eventnum, ts, channel, buf.data() + clen, dlen};
     fn(te);
-    ++n;
-    *end = std::ftell(log.getFilePtr());
+    ++*n;
+    at += kHeader + body;
+    *end = at;
   }
-  return n;
 }
 
 }  // namespace
 
-int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn) {
-  long last_good = 0;
-  const int64_t n = read_events(path, 0, &last_good, fn);
-  const auto size = static_cast<long>(std::filesystem::file_size(path));
-  if (last_good != size && !(n == 0 && size == 0)) {
-    throw InputError(path + ": truncated or corrupt tape: " + std::to_string(n) +
-                     " events read, then unreadable bytes from offset " +
-                     std::to_string(last_good) + " of " + std::to_string(size));
+int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn,
+                       std::string* warning) {
+  int64_t end = 0, n = 0;
+  std::string why;
+  const Stop stop = read_events(path, 0, &end, &n, &why, fn);
+  if (stop == Stop::kCorrupt)
+    throw InputError(path + ": corrupt tape: " + std::to_string(n) + " events read, then " + why);
+  if (stop == Stop::kCut) {
+    const std::string w = path + ": the tape ends inside an event (cut mid-write at byte " +
+                          std::to_string(std::filesystem::file_size(path)) + "): read its " +
+                          std::to_string(n) + " whole events, up to byte " + std::to_string(end);
+    if (warning)
+      *warning = w;
+    else
+      std::cerr << "fralab: warning: " << w << "\n";
   }
   return n;
 }
 
 int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn) {
-  long end = 0;
-  const int64_t n = read_events(path, static_cast<long>(*offset), &end, fn);
+  int64_t end = 0, n = 0;
+  std::string why;
+  if (read_events(path, *offset, &end, &n, &why, fn) == Stop::kCorrupt)
+    throw InputError(path + ": corrupt tape: " + why);
   *offset = end;
   return n;
 }
@@ -385,39 +441,44 @@ Json tape_summary(const std::string& path) {
   bool final_block = false;
   int64_t samples = 0;
   double fs = 0;
-  read_tape_file(path, [&](const TapeEvent& ev) {
-    j["events"][ev.channel] = j["events"].value(ev.channel, 0) + 1;
-    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
-    try {
-      if (ev.channel == kTapeChannel) {
-        Block b;
+  std::string warning;
+  read_tape_file(
+      path,
+      [&](const TapeEvent& ev) {
+        j["events"][ev.channel] = j["events"].value(ev.channel, 0) + 1;
+        lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
         try {
-          b = decode_tape_block(&rb, ev.channel);
-        } catch (const CorruptBlock& c) {
-          corrupt.push_back(c.seq);
-          return;
+          if (ev.channel == kTapeChannel) {
+            Block b;
+            try {
+              b = decode_tape_block(&rb, ev.channel);
+            } catch (const CorruptBlock& c) {
+              corrupt.push_back(c.seq);
+              return;
+            }
+            if (b.seq < 0) {  // an aborted run's last block: actuators to their operating point
+              ++aborts;
+              return;
+            }
+            if (!seen.insert(b.seq).second) {  // a retransmitted copy
+              ++copies;
+              return;
+            }
+            seqs.push_back(b.seq);
+            if (channels.empty()) channels = b.channels;
+            final_block |= b.final_block;
+            samples += b.n_samples;
+            fs = b.sample_rate_hz;
+          } else if (ev.channel == kStatusChannel) {
+            StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
+            j["states"][to_string(e.state)] = j["states"].value(to_string(e.state), 0) + 1;
+          }
+        } catch (const InputError& e) {
+          throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
         }
-        if (b.seq < 0) {  // an aborted run's last block: actuators to their operating point
-          ++aborts;
-          return;
-        }
-        if (!seen.insert(b.seq).second) {  // a retransmitted copy
-          ++copies;
-          return;
-        }
-        seqs.push_back(b.seq);
-        if (channels.empty()) channels = b.channels;
-        final_block |= b.final_block;
-        samples += b.n_samples;
-        fs = b.sample_rate_hz;
-      } else if (ev.channel == kStatusChannel) {
-        StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
-        j["states"][to_string(e.state)] = j["states"].value(to_string(e.state), 0) + 1;
-      }
-    } catch (const InputError& e) {
-      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
-    }
-  });
+      },
+      &warning);
+  if (!warning.empty()) j["warning"] = warning;
   std::sort(seqs.begin(), seqs.end());
   Json gaps = Json::array();
   for (size_t i = 1; i < seqs.size(); ++i) {

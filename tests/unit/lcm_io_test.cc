@@ -46,21 +46,59 @@ TEST(TapeFile, ReadsEveryEventInOrder) {
   fs::remove(p);
 }
 
-TEST(TapeFile, TruncationIsNamedWithItsOffset) {
+TEST(TapeFile, ACutTapeIsReadUpToTheCutWithAWarning) {
   const std::string p = tmp("cut.lcmlog");
   auto ends = write_log(p, 4);
-  fs::resize_file(p, ends[3] - 5);  // the last event loses its tail
+  fs::resize_file(p, ends[3] - 5);  // the last event loses its tail (a recorder killed mid-write)
+  std::string warning;
+  EXPECT_EQ(read_tape_file(
+                p, [](const TapeEvent&) {}, &warning),
+            3);
+  EXPECT_THAT(warning, ::testing::HasSubstr("cut.lcmlog: the tape ends inside an event"));
+  EXPECT_THAT(warning, ::testing::HasSubstr("read its 3 whole events, up to byte " +
+                                            std::to_string(ends[2])));
+  fs::resize_file(p, ends[2] + 10);  // cut inside the header of the fourth
+  warning.clear();
+  EXPECT_EQ(read_tape_file(
+                p, [](const TapeEvent&) {}, &warning),
+            3);
+  EXPECT_FALSE(warning.empty());
+  fs::remove(p);
+}
+
+// Headers are checked against the file before anything is read or allocated: an event claiming
+// 0x7fffffff bytes (a crash inside liblcm's reader before) and garbage in the middle are refused,
+// naming the file and byte.
+TEST(TapeFile, ImpossibleHeadersAndGarbageAreRefusedNamingTheByte) {
+  const std::string p = tmp("bad.lcmlog");
+  auto ends = write_log(p, 3);
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(ends[0] + 24);  // the second event's data length
+    const char huge[4] = {0x7f, char(0xff), char(0xff), char(0xff)};
+    f.write(huge, 4);
+  }
   try {
     read_tape_file(p, [](const TapeEvent&) {});
-    FAIL() << "a truncated tape was read without complaint";
+    ADD_FAILURE() << "an impossible length was read";
   } catch (const InputError& e) {
-    const std::string m = e.what();
-    EXPECT_THAT(m,
-                ::testing::HasSubstr(
-                    "cut.lcmlog: truncated or corrupt tape: 3 events read, then unreadable bytes "
-                    "from offset " +
-                    std::to_string(ends[2])))
-        << m;
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("bad.lcmlog: corrupt tape: 1 events read, then "
+                                               "event at byte " +
+                                               std::to_string(ends[0])));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("data of 2147483647 bytes (impossible)"));
+  }
+  write_log(p, 3);
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(ends[1]);  // the third event's sync word
+    f.write("JUNK", 4);
+  }
+  try {
+    read_tape_file(p, [](const TapeEvent&) {});
+    ADD_FAILURE() << "garbage was read";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("2 events read, then no event at byte " +
+                                               std::to_string(ends[1])));
   }
   fs::remove(p);
 }

@@ -116,15 +116,19 @@ struct TapeEvent {
   int32_t datalen;
 };
 
-/// Reads every event of an LCM log file in order, calling `fn`. Throws InputError when the file
-/// cannot be opened or ends inside an event (truncated tape), naming the file and byte offset.
-/// Returns the number of events read.
-int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn);
+/// Reads every event of an LCM log file in order, calling `fn`, with explicit bounds (a header
+/// is checked against the bytes the file holds before anything is read or allocated). A tape cut
+/// inside its last event (a recorder killed mid-write) is read up to the cut with a warning (in
+/// *warning, else on stderr) naming the file and byte; bytes that are not an event (a bad sync
+/// word, an impossible length) throw InputError naming the file and byte. Returns the number of
+/// events read.
+int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn,
+                       std::string* warning = nullptr);
 
 /// Follows a tape still being written: reads the whole events from byte *offset on, calling `fn`,
 /// and leaves *offset after the last of them (a partly written last event is read on a later
 /// call). Start with *offset = 0. Returns the number of events read by this call. Throws
-/// InputError when the file cannot be opened.
+/// InputError when the file cannot be opened or holds bytes that are not an event.
 int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn);
 
