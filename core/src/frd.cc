@@ -32,7 +32,7 @@ Json frd_to_json(const Frd& frd) {
             {"f_hz", p.w / (2 * std::numbers::pi)},
             {"mag", p.mag},
             {"phase_deg", p.phase_deg}};
-    if (p.sigma >= 0) jp["sigma"] = p.sigma;
+    if (p.sigma > 0) jp["sigma"] = p.sigma;
     if (p.coherence >= 0) jp["coherence"] = p.coherence;
     jp["h2_rel"] = p.h2_rel;
     jp["h3_rel"] = p.h3_rel;
@@ -83,11 +83,31 @@ Frd frd_from_json(const Json& j, const std::string& source) {
       p.valid = jp["valid"];
     }
     if (jp.contains("note") && jp["note"].is_string()) p.note = jp["note"];
+    if (jp.contains("sigma") && !(p.sigma > 0))
+      json_fail(w / "sigma", "sigma " + std::to_string(p.sigma) +
+                                 " must be > 0 (the standard deviation; omit it when unknown)");
+    if (jp.contains("coherence") && p.coherence < 0)
+      json_fail(w / "coherence", "coherence must lie in [0, 1]");
+    if (const std::string bad = frd_point_problem(p); !bad.empty()) json_fail(w, bad);
     f.points.push_back(p);
   }
   std::stable_sort(f.points.begin(), f.points.end(),
                    [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
   return f;
+}
+
+std::string frd_point_problem(const FrdPoint& p) {
+  auto num = [](double v) { return std::to_string(v); };
+  if (!std::isfinite(p.w) || !(p.w > 0)) return "w " + num(p.w) + " must be a finite > 0 rad/s";
+  if (!std::isfinite(p.mag) || p.mag < 0 || p.mag > kMaxFrdMagnitude)
+    return "mag " + num(p.mag) + " is not an amplitude ratio in [0, 1e12]";
+  if (!std::isfinite(p.phase_deg)) return "phase_deg is not finite";
+  if (p.sigma >= 0 && (!std::isfinite(p.sigma) || p.sigma == 0))
+    return "sigma " + num(p.sigma) + " must be a finite > 0 (omit it when unknown)";
+  if (!std::isfinite(p.sigma)) return "sigma is not finite";
+  if (!std::isfinite(p.coherence) || p.coherence > 1 + 1e-9)
+    return "coherence " + num(p.coherence) + " must lie in [0, 1]";
+  return "";
 }
 
 Frd load_frd(const std::string& file) { return frd_from_json(json_load_file(file), file); }

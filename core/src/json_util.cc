@@ -13,11 +13,25 @@ void json_fail(const JsonWhere& where, const std::string& message) {
 Json json_load_file(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError(file + ": cannot open for reading (check the path)");
+  // No fralab file nests deeper than a few levels: a depth limit keeps a hostile file (200,000
+  // nested arrays) from exhausting the stack of whatever walks it.
+  int64_t deepest_at = -1;
+  auto limit = [&](int depth, Json::parse_event_t, Json&) {
+    if (depth >= kMaxJsonDepth && deepest_at < 0) deepest_at = in.tellg();  // depth from 0
+    return depth < kMaxJsonDepth;  // false: the value is dropped
+  };
+  Json j;
   try {
-    return Json::parse(in, nullptr, true, false);
+    j = Json::parse(in, limit, true, false);
   } catch (const Json::parse_error& e) {
     throw InputError(file + ": malformed JSON: " + e.what());
+  } catch (const std::bad_alloc&) {
+    throw InputError(file + ": too large to read into memory");
   }
+  if (deepest_at >= 0)
+    throw InputError(file + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                     " levels (near byte " + std::to_string(deepest_at) + "): not a fralab file");
+  return j;
 }
 
 void json_save_file(const std::string& file, const Json& j) {

@@ -97,7 +97,12 @@ Frd read_frd_csv(const std::string& file) {
           im >= 0 ? to_number(v[im], where) : std::pow(10.0, to_number(v[idb], where) / 20);
       p = from_polar(w, mag, to_number(v[ip], where) * std::numbers::pi / 180);
     }
-    if (is >= 0) p.sigma = to_number(v[is], where);
+    if (is >= 0) {
+      p.sigma = to_number(v[is], where);
+      if (!(p.sigma > 0)) throw InputError(where + ": sigma must be > 0 (leave the cell out)");
+    }
+    if (const std::string bad = frd_point_problem(p); !bad.empty())
+      throw InputError(where + ": " + bad);
     f.points.push_back(p);
   }
   if (f.points.empty()) throw InputError(file + ": no data rows");
@@ -216,7 +221,11 @@ FitInput read_fit_input(const std::string& file) {
     r.frd = read_frd_csv(file);
     return r;
   }
-  return read_tfns_deck(file);
+  FitInput r = read_tfns_deck(file);
+  for (size_t i = 0; i < r.frd.points.size(); ++i)
+    if (const std::string bad = frd_point_problem(r.frd.points[i]); !bad.empty())
+      throw InputError(file + ": point " + std::to_string(i + 1) + ": " + bad);
+  return r;
 }
 
 Tf delete_roots(const Tf& tf, const std::vector<std::string>& which) {

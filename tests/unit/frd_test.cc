@@ -95,6 +95,36 @@ TEST(Frd, BadDocumentsNameFileAndPath) {
       HasSubstr("/points/0/valid"));
 }
 
+// Numeric nonsense is refused with the file and point named: sigma <= 0, coherence > 1, absurd or
+// non-finite magnitudes (fit exited 0 on these before).
+TEST(Frd, NumericNonsenseIsRefusedNamingThePoint) {
+  auto err = [](const std::string& point) {
+    try {
+      frd_from_json(Json::parse(R"({"format":"fralab-frd/1","pair":"a:b","points":[)" +
+                                std::string(R"({"w":1,"mag":1,"phase_deg":0},)") + point + "]}"),
+                    "m.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma":0})"),
+              HasSubstr("m.json: /points/1/sigma: sigma 0.000000 must be > 0"));
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma":-0.1})"), HasSubstr("/points/1/sigma"));
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"coherence":2})"),
+              HasSubstr("/points/1: coherence 2.000000 must lie in [0, 1]"));
+  EXPECT_THAT(err(R"({"w":2,"mag":9e18,"phase_deg":0})"),
+              HasSubstr("/points/1: mag 9000000000000000000.000000 is not an amplitude ratio"));
+  EXPECT_EQ(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma":0.01,"coherence":1.0})"), "no error");
+  FrdPoint p;
+  p.w = 1;
+  p.mag = std::nan("");
+  EXPECT_THAT(frd_point_problem(p), HasSubstr("mag"));
+  p.mag = 1;
+  p.phase_deg = INFINITY;
+  EXPECT_THAT(frd_point_problem(p), HasSubstr("phase_deg is not finite"));
+}
+
 TEST(Frd, PairsSplitAndNameTheirFiles) {
   EXPECT_EQ(split_pair("u_Wf:N"), std::make_pair(std::string("u_Wf"), std::string("N")));
   EXPECT_EQ(pair_file_stem("u_Wf:N"), "u_Wf_N");

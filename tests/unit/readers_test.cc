@@ -65,6 +65,22 @@ TEST(Readers, CsvErrorsNameFileAndLine) {
       << error_of(f);
 }
 
+TEST(Readers, CsvNonsenseIsRefusedNamingTheLine) {
+  auto err = [](const std::string& text) {
+    try {
+      read_frd_csv(write("nonsense.csv", text));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(err("w,mag,phase_deg,sigma\n1,1,0,0.1\n2,1,0,0\n"),
+              ::testing::HasSubstr("nonsense.csv:3: sigma must be > 0"));
+  EXPECT_THAT(err("w,mag,phase_deg\n1,9e18,0\n"), ::testing::HasSubstr("nonsense.csv:2: mag"));
+  EXPECT_THAT(err("w,mag,phase_deg\n1,nan,0\n"), ::testing::HasSubstr("nonsense.csv:2"));
+  EXPECT_EQ(err("w,mag,phase_deg,sigma\n1,1,0,0.1\n"), "no error");
+}
+
 TEST(Readers, TfnsDeckWithUnitOverrides) {
   std::string deck = std::string("C        3         2     0.005      0.02       0.1      0.01\n") +
                      "O       10        40      0.01\n" + "P03 Z02\n" + "*\n" +

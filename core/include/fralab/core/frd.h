@@ -40,6 +40,14 @@ struct Frd {
   std::string source;
 };
 
+/// Largest |E2/E1| a point may claim: beyond it a magnitude is nonsense (a corrupt file), refused.
+inline constexpr double kMaxFrdMagnitude = 1e12;
+
+/// What is numerically wrong with a point, "" when nothing: w not finite or <= 0; mag not finite,
+/// < 0 or > kMaxFrdMagnitude; phase not finite; a sigma given (>= 0) that is not finite or is 0;
+/// a coherence given (>= 0) that is not finite or exceeds 1 (+1e-9 for rounding).
+std::string frd_point_problem(const FrdPoint& p);
+
 /// Splits "E1:E2"; InputError naming the text otherwise.
 std::pair<std::string, std::string> split_pair(const std::string& pair);
 /// "E1_E2", the file stem of a pair.

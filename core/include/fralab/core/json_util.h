@@ -27,7 +27,11 @@ struct JsonWhere {
 /// Throws InputError "FILE: PATH: message".
 [[noreturn]] void json_fail(const JsonWhere& where, const std::string& message);
 
-/// Parses a JSON file; syntax errors name the file, line and column.
+/// Deepest nesting a fralab JSON file may have (fralab's own files use fewer than 8 levels).
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Parses a JSON file; syntax errors name the file, line and column; nesting deeper than
+/// kMaxJsonDepth is refused naming the file (a hostile file cannot exhaust the stack).
 Json json_load_file(const std::string& file);
 
 /// Writes pretty JSON (2-space indent, trailing newline); throws InputError when it cannot.

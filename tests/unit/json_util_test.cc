@@ -1,0 +1,43 @@
+// JSON reading (core/json_util.h): a file nested deeper than kMaxJsonDepth is refused naming the
+// file (200,000 levels overflowed the stack of the readers before), ordinary files read.
+#include "fralab/core/json_util.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace fralab {
+namespace {
+
+std::string write(const std::string& name, const std::string& text) {
+  const std::string p = (std::filesystem::temp_directory_path() /
+                         ("json_util_test_" + std::to_string(getpid()) + "_" + name))
+                            .string();
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(JsonUtil, NestingBeyondTheLimitIsRefusedNamingTheFile) {
+  const std::string deep = write("deep.json", std::string(200000, '[') + std::string(200000, ']'));
+  try {
+    json_load_file(deep);
+    ADD_FAILURE() << "200,000 levels accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("deep.json: JSON nested deeper than 64 levels"));
+  }
+  const std::string at_limit =
+      write("limit.json", std::string(kMaxJsonDepth, '[') + std::string(kMaxJsonDepth, ']'));
+  EXPECT_NO_THROW(json_load_file(at_limit));
+  const std::string over =
+      write("over.json", std::string(kMaxJsonDepth + 1, '[') + std::string(kMaxJsonDepth + 1, ']'));
+  EXPECT_THROW(json_load_file(over), InputError);
+  const Json j = json_load_file(write("ok.json", R"({"a": [1, {"b": 2}]})"));
+  EXPECT_EQ(j["a"][1]["b"], 2);
+  EXPECT_THROW(json_load_file(write("bad.json", "{\"a\": ")), InputError);
+}
+
+}  // namespace
+}  // namespace fralab
