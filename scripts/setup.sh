@@ -8,7 +8,8 @@ PKGS=(build-essential cmake pkg-config git
       libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev gnuplot-nox iproute2 util-linux nftables)
 # --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
-if [ "${1:-}" = "--test" ]; then PKGS+=(octave octave-signal); fi
+# clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh).
+if [ "${1:-}" = "--test" ]; then PKGS+=(octave octave-signal clang libclang-rt-14-dev); fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

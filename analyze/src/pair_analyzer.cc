@@ -51,8 +51,11 @@ static std::pair<std::string, double> first_excited(const StatusEvent& st) {
 void PairAnalyzer::on_status(const StatusEvent& st) {
   if (st.state == RunState::kIntegrate) {
     if (!wants(st)) return;
+    // A window of more than 10^9 samples (11 days at 1 kHz) or before the run is no status the
+    // acquisition makes: a corrupt record.
     if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
-        !(st.sample_rate_hz > 0)) {
+        !(st.sample_rate_hz > 0) || st.n_samples > 1000000000 || st.sample < 0 ||
+        !std::isfinite(st.frequency_hz) || !std::isfinite(st.sample_rate_hz)) {
       FrdPoint p;
       p.step = st.step;
       p.valid = false;
@@ -76,6 +79,13 @@ void PairAnalyzer::on_block(const Block& b) {
                      (c1 < 0 ? e1_ : e2_) + " (pair " + pair_ + ")");
   }
   if (seqs_.count(b.seq)) return;  // duplicate delivery: the first copy counts
+  // Samples are kept contiguously from base_: a block 10^8 samples (28 h at 1 kHz) beyond what is
+  // kept, or before it by as much, is no block of this run's stream (a corrupt record).
+  const int64_t kept_end = base_ + int64_t(have_.size());
+  if (b.start_sample > kept_end + 100000000 || b.start_sample + b.n_samples < base_ - 100000000)
+    throw InputError("tape block seq " + std::to_string(b.seq) + " starts at sample " +
+                     std::to_string(b.start_sample) + ", far from the samples so far (" +
+                     std::to_string(base_) + "-" + std::to_string(kept_end) + "): corrupt");
   ++blocks_seen_;
   seqs_[b.seq] = {b.start_sample, b.start_sample + b.n_samples};
   if (x1_.empty() && have_.empty()) base_ = std::min<int64_t>(b.start_sample, 0);
@@ -109,25 +119,42 @@ bool PairAnalyzer::covers(int64_t a, int64_t b) const {
 
 std::string PairAnalyzer::describe_gaps(int64_t a, int64_t b) const {
   std::string out;
-  int64_t n = a;
-  while (n < b) {
-    bool h = n >= base_ && n - base_ < int64_t(have_.size()) && have_[n - base_];
-    if (h) {
-      ++n;
-      continue;
+  auto add = [&](int64_t first, int64_t last) {
+    out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(first) + "-" +
+           std::to_string(last);
+  };
+  auto have = [&](int64_t n) { return have_[size_t(n - base_)] != 0; };
+  // Samples outside what is stored are one gap each side (no sample-by-sample walk there).
+  const int64_t lo = std::max(a, base_), hi = std::min(b, base_ + int64_t(have_.size()));
+  if (lo >= hi) {
+    add(a, b - 1);
+  } else {
+    if (a < lo) add(a, lo - 1);
+    for (int64_t n = lo; n < hi;) {
+      if (have(n)) {
+        ++n;
+        continue;
+      }
+      const int64_t first = n;
+      while (n < hi && !have(n)) ++n;
+      add(first, n - 1);
     }
-    int64_t s = n;
-    while (n < b && !(n >= base_ && n - base_ < int64_t(have_.size()) && have_[n - base_])) ++n;
-    out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(s) + "-" +
-           std::to_string(n - 1);
+    if (hi < b) add(hi, b - 1);
   }
   // Name the sequence numbers that are absent between the lowest and highest seen.
   if (!seqs_.empty()) {
+    // As ranges ("7", "9-12"), at most 10 of them.
     std::string missing;
+    int ranges = 0;
     int64_t prev = seqs_.begin()->first;
-    for (auto it = std::next(seqs_.begin()); it != seqs_.end(); ++it) {
-      for (int64_t q = prev + 1; q < it->first; ++q)
-        missing += (missing.empty() ? "" : ",") + std::to_string(q);
+    for (auto it = std::next(seqs_.begin()); it != seqs_.end() && ranges <= 10; ++it) {
+      if (it->first > prev + 1) {
+        missing += (missing.empty() ? "" : ",") +
+                   (++ranges > 10 ? std::string("...")
+                    : it->first == prev + 2
+                        ? std::to_string(prev + 1)
+                        : std::to_string(prev + 1) + "-" + std::to_string(it->first - 1));
+      }
       prev = it->first;
     }
     if (!missing.empty()) out += " (tape block seq " + missing + " missing)";

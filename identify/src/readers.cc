@@ -133,10 +133,14 @@ FitInput read_tfns_deck(const std::string& file) {
       if (flag == 'C') {
         r.has_control = true;
         std::string nd = trim(field(line, 2, 9)), nn = trim(field(line, 11, 10));
-        if (!nd.empty())
-          r.options.den_order_start = int(to_number(nd, where + " (C card, columns 2-10)"));
-        if (!nn.empty())
-          r.options.num_order_start = int(to_number(nn, where + " (C card, columns 11-20)"));
+        auto order = [&](const std::string& text, const std::string& at) {
+          const double v = to_number(text, at);
+          if (!(v >= 0 && v <= 40 && v == std::floor(v)))
+            throw InputError(at + ": an order is a whole number 0-40, found " + text);
+          return int(v);
+        };
+        if (!nd.empty()) r.options.den_order_start = order(nd, where + " (C card, columns 2-10)");
+        if (!nn.empty()) r.options.num_order_start = order(nn, where + " (C card, columns 11-20)");
         std::string cs = trim(field(line, 21, 10)), ct = trim(field(line, 31, 10));
         if (!cs.empty()) r.options.c_phi = to_number(cs, where + " (C card, columns 21-30)");
         if (!ct.empty()) r.options.c_n = to_number(ct, where + " (C card, columns 31-40)");

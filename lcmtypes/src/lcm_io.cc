@@ -4,6 +4,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -40,9 +41,15 @@ static Block from(const Msg& m, const char* type) {
                      ": n_values " + std::to_string(m.n_values) + " != n_channels " +
                      std::to_string(m.n_channels) + " * n_samples " + std::to_string(m.n_samples));
   }
-  if (!(m.sample_rate_hz > 0.0)) {
+  if (!(m.sample_rate_hz > 0.0) || !std::isfinite(m.sample_rate_hz)) {
     throw InputError(std::string("fralab.") + type + " seq " + std::to_string(m.seq) +
-                     ": sample_rate_hz must be > 0");
+                     ": sample_rate_hz must be a finite > 0");
+  }
+  // No lab run reaches 10^13 samples (300 years at 1 kHz) or blocks of 10^7: a corrupt record.
+  if (m.start_sample < 0 || m.start_sample > 10000000000000LL || m.n_samples > 10000000) {
+    throw InputError(std::string("fralab.") + type + " seq " + std::to_string(m.seq) +
+                     ": start_sample " + std::to_string(m.start_sample) + ", n_samples " +
+                     std::to_string(m.n_samples) + " are not a block of a run (corrupt)");
   }
   Block b;
   b.run_id = m.run_id;
@@ -67,6 +74,75 @@ int64_t crc_of(tape_block_t m) {
 
 }  // namespace
 
+namespace {
+
+// A walk over the wire format of the messages read from files, with bounds: LCM's generated
+// decoders size their arrays from the counts in the bytes before checking that the bytes hold them
+// (a count of 10^9 allocates 32 GB: found by fuzzing), so the counts are checked here first.
+class Wire {
+ public:
+  Wire(const void* data, size_t size) : p_(static_cast<const uint8_t*>(data)), n_(size) {}
+  bool skip(size_t k) {
+    if (k > n_ - at_) return ok_ = false;
+    at_ += k;
+    return true;
+  }
+  int64_t i32() {
+    if (!skip(4)) return -1;
+    const uint8_t* q = p_ + at_ - 4;
+    return int32_t(uint32_t(q[0]) << 24 | uint32_t(q[1]) << 16 | uint32_t(q[2]) << 8 | q[3]);
+  }
+  void str() {
+    const int64_t len = i32();
+    if (len < 1) ok_ = false;
+    if (ok_) skip(size_t(len));
+  }
+  // `count` elements of at least `min_size` bytes each must fit in what is left.
+  bool fits(int64_t count, size_t min_size) {
+    if (count < 0 || uint64_t(count) * min_size > n_ - at_) ok_ = false;
+    return ok_;
+  }
+  bool ok() const { return ok_; }
+
+ private:
+  const uint8_t* p_;
+  size_t n_, at_ = 0;
+  bool ok_ = true;
+};
+
+bool tape_block_wire_ok(const void* data, size_t size) {
+  Wire w(data, size);
+  w.skip(8);
+  w.str();            // run_id
+  w.skip(8 + 8 + 8);  // seq, start_sample, sample_rate_hz
+  const int64_t nc = w.i32();
+  if (!w.fits(nc, 5)) return false;
+  for (int64_t c = 0; c < nc && w.ok(); ++c) w.str();
+  w.i32();  // n_samples
+  const int64_t nv = w.i32();
+  return w.fits(nv, 8);
+}
+
+}  // namespace
+
+bool status_wire_ok(const void* data, size_t size) {
+  Wire w(data, size);
+  w.skip(8);
+  w.str();
+  w.skip(8 + 8 + 8);
+  w.str();  // excitation
+  w.str();  // state
+  w.skip(4 + 4 + 8 + 8 + 4 + 8);
+  const int64_t ni = w.i32();
+  if (!w.fits(ni, 5 + 8)) return false;
+  for (int64_t i = 0; i < ni && w.ok(); ++i) w.str();
+  w.skip(size_t(std::max<int64_t>(ni, 0)) * 8);
+  w.str();  // message
+  w.skip(4);
+  const int64_t nl = w.i32();
+  return w.fits(nl, 8);
+}
+
 tape_block_t to_tape_msg(const Block& b) {
   tape_block_t m = to_msg<tape_block_t>(b);
   m.crc32 = crc_of(m);
@@ -87,6 +163,13 @@ Block from_msg(const tape_block_t& m) {
 }
 
 Block decode_tape_block(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  auto refuse = [&] {
+    return InputError("channel " + channel + ": message of " + std::to_string(rbuf->data_size) +
+                      " bytes is not a fralab.tape_block_t (wrong type or corrupt): check what "
+                      "publishes on " +
+                      channel);
+  };
+  if (!tape_block_wire_ok(rbuf->data, rbuf->data_size)) throw refuse();
   tape_block_t m;
   const int n = m.decode(rbuf->data, 0, int(rbuf->data_size));
   if (n >= 0 && uint32_t(n) == rbuf->data_size) return from_msg(m);
@@ -94,8 +177,7 @@ Block decode_tape_block(const lcm::ReceiveBuffer* rbuf, const std::string& chann
   tape_block_v1_t v1;
   const int n1 = v1.decode(rbuf->data, 0, int(rbuf->data_size));
   if (n1 >= 0 && uint32_t(n1) == rbuf->data_size) return from(v1, "tape_block_v1_t");
-  decode_checked<tape_block_t>(rbuf, channel);  // throws, naming the channel
-  throw InputError("channel " + channel + ": not a tape block");
+  throw refuse();
 }
 Block from_msg(const command_block_t& m) { return from(m, "command_block_t"); }
 

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "fralab/ack_t.hpp"
@@ -75,8 +76,18 @@ std::optional<std::string> peek_run_id(const void* data, size_t size);
 
 /// Decodes a message of type Msg from a raw buffer; InputError naming the channel and the expected
 /// type when the bytes are not that type (fingerprint mismatch, truncated).
+/// Whether the counts in an excitation_status_t's bytes fit in them (checked before decoding:
+/// LCM's generated decoders allocate what the counts say first).
+bool status_wire_ok(const void* data, size_t size);
+
 template <class Msg>
 Msg decode_checked(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  if constexpr (std::is_same_v<Msg, excitation_status_t>) {
+    if (!status_wire_ok(rbuf->data, rbuf->data_size))
+      throw InputError("channel " + channel + ": a message of " + std::to_string(rbuf->data_size) +
+                       " bytes whose counts exceed its bytes: not a fralab.excitation_status_t");
+  }
+  static_assert(!std::is_same_v<Msg, tape_block_t>, "tape blocks: use decode_tape_block");
   Msg m;
   int n = m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size));
   if (n < 0 || static_cast<uint32_t>(n) != rbuf->data_size) {

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Fuzzes every reader (tape, model, frd, csv, tfns) with libFuzzer under AddressSanitizer and
+# UndefinedBehaviorSanitizer: configures build-fuzz/ with clang (-DFRALAB_FUZZ=ON), builds the
+# fuzz_<reader> executables and runs each for RUNS executions (default 100000) from the seed corpus
+# tests/fuzz/corpus/<reader>. A crash stops with the input kept in build-fuzz/crashes/<reader>/
+# (add it to tests/fuzz/regressions/<reader>/ once fixed: fuzz_regression_test replays it).
+# Prints, per reader, executions, seconds and crashes; exits non-zero on any crash.
+# Usage: fuzz.sh [RUNS] [READER...]
+set -uo pipefail
+cd "$(dirname "$0")/.."
+runs=${1:-100000}
+shift || true
+readers=("$@")
+[ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns)
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -DFRALAB_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  >/dev/null || exit 2
+targets=()
+for r in "${readers[@]}"; do targets+=("fuzz_$r"); done
+cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]}" >build-fuzz/build.log 2>&1 ||
+  { tail -30 build-fuzz/build.log; exit 2; }
+bad=0
+for r in "${readers[@]}"; do
+  work=$(mktemp -d)
+  cp tests/fuzz/corpus/"$r"/* "$work"/
+  mkdir -p build-fuzz/crashes/"$r"
+  t0=$(date +%s)
+  ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
+    build-fuzz/bin/fuzz_"$r" -runs="$runs" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
+    -artifact_prefix=build-fuzz/crashes/"$r"/ "$work" >build-fuzz/fuzz_"$r".log 2>&1
+  rc=$?
+  t1=$(date +%s)
+  execs=$(grep -o 'Done [0-9]* runs' build-fuzz/fuzz_"$r".log | grep -o '[0-9]*' | tail -1)
+  printf 'fuzz %-5s: %s executions in %d s, %s\n' "$r" "${execs:-?}" "$((t1 - t0))" \
+    "$([ $rc -eq 0 ] && echo "no crash" || echo "CRASH (rc $rc): see build-fuzz/fuzz_$r.log")"
+  [ $rc -eq 0 ] || { bad=1; grep -m5 -E "ERROR|SUMMARY|runtime error|terminate" build-fuzz/fuzz_"$r".log; }
+  rm -rf "$work"
+done
+exit $bad

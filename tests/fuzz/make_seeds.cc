@@ -1,0 +1,99 @@
+// Writes the fuzz seed corpus (tests/fuzz/corpus/<reader>/seed*): small valid inputs made with
+// the library code itself. Usage: fuzz_make_seeds DIR
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <numbers>
+
+#include "fralab/core/frd.h"
+#include "fralab/lcm_io.h"
+#include "fralab/plant/embedded_models.h"
+#include "fralab/plant/model.h"
+
+using namespace fralab;
+
+int main(int argc, char** argv) {
+  if (argc != 2) return 2;
+  const std::string d = argv[1];
+  {  // A tape: start, integrate and done status, three tape blocks of 40 samples (a 25 Hz sine).
+    lcm::LogFile log(d + "/tape/seed.tape", "w");
+    int64_t num = 0;
+    auto put = [&](const char* ch, const auto& msg) {
+      std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
+      msg.encode(buf.data(), 0, int(buf.size()));
+      lcm::LogEvent ev{num++, 0, ch, int32_t(buf.size()), buf.data()};
+      log.writeEvent(&ev);
+    };
+    StatusEvent e;
+    e.run_id = "seed";
+    e.sample_rate_hz = 1000;
+    e.inputs = {"Wf"};
+    e.amplitudes = {1.0};
+    e.frequency_hz = 25;
+    e.state = RunState::kStart;
+    e.seq = -1;
+    put(kStatusChannel, to_status_msg(e));
+    e.state = RunState::kIntegrate;
+    e.seq = 0;
+    e.sample = 0;
+    e.n_samples = 120;
+    e.n_cycles = 3;
+    put(kStatusChannel, to_status_msg(e));
+    for (int b = 0; b < 3; ++b) {
+      Block blk;
+      blk.run_id = "seed";
+      blk.seq = b;
+      blk.start_sample = 40 * b;
+      blk.sample_rate_hz = 1000;
+      blk.channels = {"u_Wf", "Wf", "P3"};
+      blk.n_samples = 40;
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 40; ++k)
+          blk.samples.push_back((c + 1) *
+                                std::sin(2 * std::numbers::pi * 25 * (40 * b + k) / 1000));
+      blk.final_block = b == 2;
+      put(kTapeChannel, to_tape_msg(blk));
+    }
+    e.state = RunState::kDone;
+    e.seq = 1;
+    e.sample = 120;
+    put(kStatusChannel, to_status_msg(e));
+  }
+  // A model: the smallest embedded-style plant, one input and one output.
+  std::ofstream(d + "/model/seed.json") << R"({"format": "fralab-model/1", "name": "seed",
+  "inputs": [{"name": "Wf", "units": "lb/hr", "full_scale": 3000,
+    "actuator": {"tf": {"gain": 1, "poles": [{"wn": 134, "zeta": 0.172}]},
+                 "nonlinearity": [{"type": "hysteresis", "width": 6}]}}],
+  "outputs": [{"name": "P3", "units": "psi", "noise_rms": 0.01,
+    "sensor": {"tf": {"gain": 1, "poles": [{"real": -50}]}}}],
+  "paths": [{"output": "P3", "input": "Wf",
+    "tf": {"gain": 0.03, "zeros": [{"real": 192}], "poles": [{"real": -2.8}], "delay_s": 0.011}}]}
+)";
+  Frd f;
+  f.pair = "Wf:P3";
+  for (int i = 0; i < 4; ++i) {
+    FrdPoint p;
+    p.w = 0.5 * (i + 1);
+    p.mag = 0.03 / (1 + i);
+    p.phase_deg = -10.0 * i;
+    p.sigma = 1e-4;
+    p.coherence = 0.99;
+    f.points.push_back(p);
+  }
+  save_frd(d + "/frd/seed.json", f);
+  std::ofstream(d + "/csv/seed.csv")
+      << "w,mag,phase_deg,sigma\n0.5,0.03,-1,0.001\n1,0.02,-5,0.001\n2,0.01,-20,0.001\n";
+  // TFNS data cards: column 1 flag, 15-29 frequency, 30-44 and 45-59 the value's two parts.
+  auto card = [](char flag, const std::string& f, const std::string& a, const std::string& b) {
+    std::string l(60, ' ');
+    l[0] = flag;
+    l.replace(14, f.size(), f);
+    l.replace(29, a.size(), a);
+    l.replace(44, b.size(), b);
+    return l + "\n";
+  };
+  std::ofstream(d + "/tfns/seed.deck")
+      << "C        2         1     0.005      0.02       0.1      0.01\n*\n"
+      << card(' ', "1.0", "20.0", "-45.0") << card(' ', "2.0", "16.0", "-60.0")
+      << card('B', "H1.0", "M2.0", "R-1.2") << card('P', "R10.0", "1.0", "-1.5") << "*\n";
+  return 0;
+}

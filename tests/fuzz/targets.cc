@@ -1,0 +1,62 @@
+#include "targets.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "fralab/core/frd.h"
+#include "fralab/identify/readers.h"
+#include "fralab/plant/model.h"
+#include "tape_analysis.h"
+
+namespace fralab::fuzz {
+
+namespace {
+
+std::string scratch(const std::string& reader) {
+  static const std::string dir = [] {
+    const auto d =
+        std::filesystem::temp_directory_path() / ("fralab_fuzz_" + std::to_string(getpid()));
+    std::filesystem::create_directories(d);
+    return d.string();
+  }();
+  return dir + "/input." + reader;
+}
+
+}  // namespace
+
+int run(const std::string& reader, const uint8_t* data, size_t size) {
+  const std::string path = scratch(reader);
+  {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) throw std::runtime_error("cannot write " + path);
+    std::fwrite(data, 1, size, f);
+    std::fclose(f);
+  }
+  try {
+    if (reader == "tape") {
+      std::string warning;
+      read_tape_file(
+          path, [](const TapeEvent&) {}, &warning);
+      AnalyzerOptions o;
+      analyze_tape_file(path, {"u_Wf:Wf", "Wf:P3"}, o);
+    } else if (reader == "model") {
+      load_model(path);
+    } else if (reader == "frd") {
+      load_frd(path);
+    } else if (reader == "csv") {
+      read_frd_csv(path);
+    } else if (reader == "tfns") {
+      read_fit_input(path);
+    } else {
+      throw std::logic_error("no fuzz target " + reader);
+    }
+  } catch (const InputError&) {
+    // a clean refusal
+  }
+  return 0;
+}
+
+}  // namespace fralab::fuzz

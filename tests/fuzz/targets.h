@@ -1,0 +1,18 @@
+// The fuzz targets, one per reader: each writes the bytes to a scratch file and reads it the way
+// fralab does. A clean refusal is an InputError; anything else (a crash, a sanitizer report, any
+// other exception escaping) is a finding. Shared by the libFuzzer executables (scripts/fuzz.sh,
+// ASan+UBSan) and by fuzz_regression_test, which replays the corpus and every kept crash in the
+// ordinary build.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace fralab::fuzz {
+
+/// The readers fuzzed: "tape" (read_tape_file + the tape analysis), "model" (load_model), "frd"
+/// (load_frd), "csv" (read_frd_csv), "tfns" (read_tfns_deck, then read_fit_input's checks).
+int run(const std::string& reader, const uint8_t* data, size_t size);
+
+}  // namespace fralab::fuzz
