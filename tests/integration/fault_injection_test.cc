@@ -23,6 +23,7 @@
 using fralab::Json;
 using fralab::json_load_file;
 using fralab::testing::sh;
+using fralab::testing::slurp;
 using fralab::testing::tmpdir;
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
@@ -33,13 +34,6 @@ const std::string kBin = FRALAB_BIN_DIR;
 const std::string kScripts = FRALAB_SCRIPTS_DIR;
 const std::string kRun =
     " measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3 --seed 3 ";
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // The undisturbed run every other run is compared with.
 const std::string& reference() {

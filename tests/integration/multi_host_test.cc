@@ -12,6 +12,7 @@
 #include "shell.h"
 
 using fralab::testing::sh;
+using fralab::testing::slurp;
 using fralab::testing::tmpdir;
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
@@ -22,13 +23,6 @@ const std::string kBin = FRALAB_BIN_DIR;
 const std::string kScripts = FRALAB_SCRIPTS_DIR;
 const std::string kRun =
     " measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3 --seed 4 ";
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 TEST(MultiHost, ModulesOnAnotherHostThroughItsDeputyGiveTheOneHostNumbers) {
   const std::string one = tmpdir("one_host"), two = tmpdir("two_hosts");
