@@ -7,7 +7,8 @@
 //   - four CPU hogs while runs go as fast as the consumers keep up (--speed 0), N runs;
 //   - SIGKILL of each process type mid-run, then `fralab measure --resume DIR`;
 //   - SIGTERM / SIGINT to the launcher: no process left, the abort on the tape, resume;
-//   - a stopped (SIGSTOP) analyser: the run fails naming it as silent.
+//   - a stopped (SIGSTOP) analyser: the run fails naming it as silent;
+//   - two runs sharing one port: neither takes the other's messages.
 // FRALAB_FAULT_HOG_RUNS sets the number of runs under CPU hogs (default 20).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -152,6 +153,21 @@ TEST_P(Kill, AKilledProcessFailsTheRunAndResumeGivesTheUninterruptedNumbers) {
 INSTANTIATE_TEST_SUITE_P(Faults, Kill,
                          ::testing::Values("plant", "acquire", "analyze", "record", "identify",
                                            "launcher"));
+
+// Two runs forced onto one URL (one port: Linux hands both runs' datagrams to both): every process
+// takes only its run's messages, and both runs come out identical to the undisturbed one.
+TEST(Faults, TwoRunsSharingAPortNeverMix) {
+  reference();
+  const std::string d = tmpdir("shared_port");
+  const std::string url = "'udpm://239.255.9.9:24680?ttl=0'";
+  const auto c = sh("(" + kBin + "/fralab" + kRun + "--lcm-url " + url + " --out " + d + "/a & " +
+                    kBin + "/fralab" + kRun + "--lcm-url " + url + " --out " + d +
+                    "/b & wait %1; echo a=$?; wait %2; echo b=$?)");
+  EXPECT_THAT(c.output, HasSubstr("a=0")) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("b=0")) << c.output;
+  expect_identical(d + "/a");
+  expect_identical(d + "/b");
+}
 
 TEST(Faults, AStoppedAnalyserIsNamedAsSilent) {
   const std::string d = tmpdir("sigstop");
