@@ -26,6 +26,7 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
        "analyze or identify through the deputy HOST (fralab-deputy --name HOST); repeatable")
       ->delimiter(',');
   c->add_option("--deputy-url", m.deputy_url, "the deputies' LCM URL (multi-host)");
+  c->add_flag("!--no-progress", m.progress, "no progress line (it is shown on a terminal only)");
   c->add_option("--stall-timeout", m.stall_timeout_s,
                 "seconds a stream may stand still (retransmitted) before the run fails")
       ->capture_default_str();

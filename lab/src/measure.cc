@@ -16,6 +16,7 @@
 #include "fralab/core/text.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/lab/deputy.h"
+#include "fralab/lab/progress.h"
 #include "fralab/lab/resume.h"
 #include "fralab/lab/supervisor.h"
 #include "fralab/lcm_io.h"
@@ -357,9 +358,59 @@ MeasureResult run_measure(const MeasureOptions& given) {
                                       o.out + "/acquire.json"};
       for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
       const auto t0 = std::chrono::steady_clock::now();
+      // The progress line, on a terminal only: it listens to the run's status events and
+      // retransmission requests.
+      ProgressLine progress;
+      std::unique_ptr<lcm::LCM> watch, watch_ctl;
+      std::string shown;
+      auto since = [&](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+      };
+      auto last_draw = t0;
+      struct Listener {
+        ProgressLine* p;
+        std::string run_id;
+        void on_status(const lcm::ReceiveBuffer* rb, const std::string& ch) {
+          const auto m = decode_checked<excitation_status_t>(rb, ch);
+          if (m.run_id == run_id) p->on_status(from_msg(m));
+        }
+        void on_flow(const lcm::ReceiveBuffer* rb, const std::string& ch) {
+          const auto f = decode_checked<flow_t>(rb, ch);
+          if (f.run_id == run_id && f.kind == "resend") p->on_resent(f.to_seq - f.from_seq + 1);
+        }
+      } listener{&progress, r.run_id};
+      if (isatty(STDERR_FILENO) && o.progress) {
+        watch = std::make_unique<lcm::LCM>(url);
+        watch_ctl = std::make_unique<lcm::LCM>(control_url_for(url));
+        if (watch->good() && watch_ctl->good()) {
+          watch->subscribe(kStatusChannel, &Listener::on_status, &listener);
+          watch_ctl->subscribe(kFlowChannel, &Listener::on_flow, &listener);
+        } else {
+          watch.reset();
+        }
+      }
+      auto draw = [&] {
+        if (!watch) return;
+        try {
+          while (watch->handleTimeout(0) > 0 || watch_ctl->handleTimeout(0) > 0) {
+          }
+        } catch (const InputError&) {  // a malformed status: the line is only a face
+        }
+        if (since(last_draw) < 0.2) return;
+        last_draw = std::chrono::steady_clock::now();
+        const std::string l = progress.line(since(t0));
+        if (l != shown && !l.empty()) std::cerr << "\r" << l << "\033[K" << std::flush;
+        shown = l;
+      };
       sup.start({"acquire", acq, log("acquire"), host_of("acquire")});
       waits.push_back("acquire");
-      sup.wait_for(waits, o.timeout_s);
+      try {
+        sup.wait_for(waits, o.timeout_s, draw);
+      } catch (...) {
+        if (!shown.empty()) std::cerr << "\n";
+        throw;
+      }
+      if (!shown.empty()) std::cerr << "\r" << progress.line(since(t0)) << "\033[K\n";
       r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     const auto t_fit = std::chrono::steady_clock::now();

@@ -119,7 +119,8 @@ std::string Supervisor::reason(const Proc& p) const {
          (p.spec.log_file.empty() ? "" : " (log: " + p.spec.log_file + ")");
 }
 
-void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_s) {
+void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_s,
+                          const std::function<void()>& on_poll) {
   const auto t0 = std::chrono::steady_clock::now();
   for (;;) {
     if (const int sig = stop_signal())
@@ -147,6 +148,7 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
       throw InputError("timed out after " + std::to_string(int(timeout_s)) + " s waiting for " +
                        who);
     }
+    if (on_poll) on_poll();
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 }

@@ -37,6 +37,7 @@ struct MeasureOptions {
   /// every host (a shared folder).
   std::map<std::string, std::string> hosts;
   std::string deputy_url;  // "" = kDefaultDeputyUrl
+  bool progress = true;    // the progress line on stderr when it is a terminal (lab/progress.h)
 };
 
 struct MeasureResult {

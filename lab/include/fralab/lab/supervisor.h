@@ -5,6 +5,7 @@
 
 #include <sys/types.h>
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -77,7 +78,9 @@ class Supervisor {
   /// Waits until every process named has exited with status 0. If any supervised process exits
   /// non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout throws too, and
   /// a stop signal caught (catch_stop_signals) throws Interrupted.
-  void wait_for(const std::vector<std::string>& names, double timeout_s);
+  /// `on_poll` (optional) is called on every poll (every 20 ms): a progress line, for instance.
+  void wait_for(const std::vector<std::string>& names, double timeout_s,
+                const std::function<void()>& on_poll = {});
   /// Sends `sig` and waits up to timeout_s for the exit (then SIGKILL).
   void stop(const std::string& name, int sig, double timeout_s);
   bool running(const std::string& name) const;
