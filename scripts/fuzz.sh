@@ -9,6 +9,9 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 runs=${1:-100000}
+# A fixed seed makes the ctest run reproducible (the same inputs every time); FUZZ_SEED=0 lets
+# libFuzzer pick one (exploring further, as a long run by hand should).
+seed=${FUZZ_SEED:-1}
 shift || true
 readers=("$@")
 [ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns)
@@ -25,7 +28,7 @@ for r in "${readers[@]}"; do
   mkdir -p build-fuzz/crashes/"$r"
   t0=$(date +%s)
   ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
-    build-fuzz/bin/fuzz_"$r" -runs="$runs" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
+    build-fuzz/bin/fuzz_"$r" -runs="$runs" -seed="$seed" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
     -artifact_prefix=build-fuzz/crashes/"$r"/ "$work" >build-fuzz/fuzz_"$r".log 2>&1
   rc=$?
   t1=$(date +%s)

@@ -23,7 +23,7 @@ Json json_load_file(const std::string& file) {
   Json j;
   try {
     j = Json::parse(in, limit, true, false);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // parse_error, a number overflowing (out_of_range), ...
     throw InputError(file + ": malformed JSON: " + e.what());
   } catch (const std::bad_alloc&) {
     throw InputError(file + ": too large to read into memory");

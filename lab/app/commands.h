@@ -21,5 +21,6 @@ void add_analyze_command(CLI::App& app);
 void add_fit_command(CLI::App& app);
 void add_diagnose_command(CLI::App& app);
 void add_tape_command(CLI::App& app);
+void add_monitor_command(CLI::App& app);
 
 }  // namespace fralab

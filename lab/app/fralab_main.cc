@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   fralab::add_fit_command(app);
   fralab::add_diagnose_command(app);
   fralab::add_tape_command(app);
+  fralab::add_monitor_command(app);
   try {
     app.parse(argc, argv);  // the chosen subcommand's callback runs here
   } catch (const CLI::ParseError& e) {

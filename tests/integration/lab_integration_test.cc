@@ -257,6 +257,52 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
   EXPECT_THAT(c.output, ::testing::HasSubstr("is not a fralab.tape_block_t")) << c.output;
 }
 
+// `fralab monitor` on a tape: one row per point of the pair, the measured values as the analyser
+// gives them, beside the simulation (here the engine measured itself: differences within noise).
+TEST(Lab, MonitorShowsThePairPointByPointAgainstTheSimulation) {
+  const std::string& d = measured();
+  Cmd c = sh(kBin + "/fralab monitor --log " + d + "/tape.lcmlog --pair Wf:P3 --simulation " + d +
+             "/engine.json");
+  ASSERT_EQ(c.status, 0) << c.output;
+  const Frd f = load_frd(d + "/frd/Wf_P3.json");
+  std::istringstream in(c.output);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_THAT(line, ::testing::StartsWith("Wf:P3 against"));
+  std::getline(in, line);
+  EXPECT_THAT(line, ::testing::HasSubstr("sim_mag"));
+  size_t rows = 0;
+  while (std::getline(in, line)) {
+    ASSERT_LT(rows, f.points.size()) << line;
+    std::istringstream r(line);
+    double f_hz, mag, ph, smag, sdeg, ddb;
+    std::string bar;
+    r >> f_hz >> mag >> ph >> bar >> smag >> sdeg >> bar >> ddb;
+    EXPECT_NEAR(mag, f.points[rows].mag, 1e-5 * f.points[rows].mag) << line;
+    EXPECT_NEAR(f_hz, f.points[rows].w / (2 * M_PI), 1e-3 * f_hz) << line;
+    EXPECT_LT(std::abs(ddb), 0.5) << line;  // the engine against itself: within noise
+    ++rows;
+  }
+  EXPECT_EQ(rows, f.points.size());
+}
+
+// Live: the monitor follows a running lab's curves on its URL and ends when the pair is complete.
+TEST(Lab, MonitorFollowsARunningLab) {
+  const std::string d = tmpdir("monitor_live");
+  const std::string url = "'udpm://239.255.9.10:24682?ttl=0'";
+  Cmd c = sh("(" + kBin + "/fralab monitor --lcm-url " + url + " --pair Wf:P3 --idle 60 > " + d +
+             "/monitor.txt & m=$!; " + kBin + "/fralab measure --engine j85_95" + kSmall +
+             "--seed 5 --lcm-url " + url + " --out " + d + "/run; echo measure=$?; wait $m; " +
+             "echo monitor=$?)");
+  EXPECT_THAT(c.output, ::testing::HasSubstr("measure=0")) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("monitor=0")) << c.output;
+  std::ifstream in(d + "/monitor.txt");
+  std::string line;
+  int rows = -2;  // the title and the header
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, int(load_frd(d + "/run/frd/Wf_P3.json").points.size()));
+}
+
 TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
   std::string d = tmpdir("multisine");
   Cmd c = sh(kBin +

@@ -1,0 +1,101 @@
+// `fralab monitor`: follow a running lab (its FRALAB_FRD on --lcm-url) or a tape being written
+// (--log, read as it grows) and print the chosen pair's points as they arrive, beside the
+// simulation when --simulation is given (lab/monitor.h). Ends when the pair is complete (the
+// analyser's final curve, or the tape's final block analysed), or after --idle seconds without
+// anything new.
+#include <chrono>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <thread>
+
+#include "commands.h"
+#include "fralab/diagnose/diagnose.h"
+#include "fralab/lab/monitor.h"
+#include "fralab/plant/embedded_models.h"
+#include "tape_analysis.h"
+
+namespace fralab {
+
+namespace {
+
+struct MonitorCommand {
+  std::string pair, url, log, simulation, run_id;
+  double idle_s = 10;
+};
+
+void run(const MonitorCommand& c) {
+  std::optional<Model> sim;
+  if (!c.simulation.empty()) sim = load_model_or_embedded(c.simulation);
+  std::cout << c.pair << (sim ? " against " + sim->name : std::string()) << "\n"
+            << monitor_header(bool(sim)) << "\n";
+  std::map<double, FrdPoint> shown;  // by w: a point is printed once
+  auto show = [&](const Frd& f) {
+    for (const FrdPoint& p : f.points) {
+      if (shown.count(p.w)) continue;
+      shown[p.w] = p;
+      std::optional<std::complex<double>> s;
+      if (sim) s = model_pair_response(*sim, c.pair, p.w, p.amplitude);
+      std::cout << monitor_row(p, s) << "\n" << std::flush;
+    }
+  };
+  using Clock = std::chrono::steady_clock;
+  auto last_new = Clock::now();
+  auto idle = [&] {
+    return std::chrono::duration<double>(Clock::now() - last_new).count() > c.idle_s;
+  };
+  if (!c.log.empty()) {  // a tape, perhaps still being written
+    TapeFeeder feeder({c.pair}, {}, c.run_id);
+    int64_t offset = 0;
+    while (!feeder.all_done() && !idle()) {
+      const int64_t n = follow_tape_file(c.log, &offset, [&](const TapeEvent& ev) {
+        feeder.feed(ev.channel, ev.data, ev.datalen);
+      });
+      if (n > 0) last_new = Clock::now();
+      show(feeder.analyzers()[0]->frd());
+      if (n == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    if (!feeder.all_done()) feeder.flush();
+    show(feeder.analyzers()[0]->frd());
+    return;
+  }
+  lcm::LCM lcm(resolve_lcm_url(c.url));
+  if (!lcm.good()) throw InputError("cannot open LCM at " + c.url);
+  struct Listener {
+    const MonitorCommand* c;
+    std::optional<Frd> latest;
+    bool complete = false;
+    void on_frd(const lcm::ReceiveBuffer* rb, const std::string& ch) {
+      const frd_t m = decode_checked<frd_t>(rb, ch);
+      if (m.pair != c->pair || (!c->run_id.empty() && m.run_id != c->run_id)) return;
+      latest = from_frd_msg(m);
+      complete |= m.complete;
+    }
+  } listener{&c};
+  lcm.subscribe(kFrdChannel, &Listener::on_frd, &listener)->setQueueCapacity(10000);
+  while (!listener.complete && !idle()) {
+    if (lcm.handleTimeout(100) > 0 && listener.latest) {
+      last_new = Clock::now();
+      show(*listener.latest);
+    }
+  }
+  if (listener.latest) show(*listener.latest);
+}
+
+}  // namespace
+
+void add_monitor_command(CLI::App& app) {
+  auto mc = std::make_shared<MonitorCommand>();
+  auto* c =
+      app.add_subcommand("monitor", "follow a running lab or a tape: one pair, point by point");
+  c->add_option("--pair", mc->pair, "E1:E2 (response E2/E1)")->required();
+  auto* url = c->add_option("--lcm-url", mc->url, "a running lab's URL (its run.json lcm_url)");
+  c->add_option("--log", mc->log, "a tape, complete or still being written")->excludes(url);
+  c->add_option("--simulation", mc->simulation, "model file or embedded name to compare with");
+  c->add_option("--run-id", mc->run_id, "only this run");
+  c->add_option("--idle", mc->idle_s, "stop after this many seconds without a new point")
+      ->capture_default_str();
+  c->callback([mc] { run(*mc); });
+}
+
+}  // namespace fralab
