@@ -101,7 +101,7 @@ Json AcquisitionNode::run() {
         else if (s == Stream::kStatus)
           for (int64_t k = r->from; k <= r->to; ++k) publish_status(events[size_t(k)]);
         else
-          publish_flow(control_, o_.run_id, "resend", "tape", r->from, r->to);
+          publish_flow(data_, o_.run_id, "resend", "tape", r->from, r->to);
       }
       const std::string why = flow.stalled(s, now);
       if (!why.empty()) throw InputError(why);
@@ -176,7 +176,7 @@ Json AcquisitionNode::run() {
            flow.acked(Stream::kTape) >= nblocks - 1 &&
            flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus);
   });
-  for (int i = 0; i < 3; ++i) publish_flow(control_, o_.run_id, "close", "", 0, nblocks - 1);
+  for (int i = 0; i < 3; ++i) publish_flow(data_, o_.run_id, "close", "", 0, nblocks - 1);
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   // Engine time of this run (a resumed run: from its first block on).
   const double engine_s =

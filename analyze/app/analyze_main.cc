@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
         live.announce_ready();
         last_ready = Clock::now();
       }
-      handle_either(lcm, ctl, 100);
+      lcm.handleTimeout(100);  // the control URL is only published to
       if (!live.error().empty()) throw InputError(live.error());
       if (live.done() && done_at == Clock::time_point{}) done_at = Clock::now();
       if (live.done() && since(done_at) > linger) break;
@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
     // Hands the complete curves to the identifier, republishing until it has acknowledged each.
     const auto t_hand = Clock::now();
     while (live.identifier_heard() && !live.curves_taken() && since(t_hand) < handover) {
-      handle_either(lcm, ctl, 200);
+      lcm.handleTimeout(200);
       live.republish_untaken();
     }
     if (live.identifier_heard() && !live.curves_taken())

@@ -10,8 +10,8 @@ AnalyzerNode::AnalyzerNode(lcm::LCM& data, lcm::LCM& control, const std::vector<
       name_(name.empty() ? pairs.front() : std::move(name)) {
   for (const char* ch : {kTapeChannel, kStatusChannel})
     data_.subscribe(ch, &AnalyzerNode::on_msg, this)->setQueueCapacity(100000);
-  for (const char* ch : {kFlowChannel, kAckChannel})
-    control_.subscribe(ch, &AnalyzerNode::on_control, this)->setQueueCapacity(100000);
+  for (const char* ch : {kFlowChannel, kFrdAckChannel})
+    data_.subscribe(ch, &AnalyzerNode::on_control, this)->setQueueCapacity(100000);
 }
 
 void AnalyzerNode::announce_ready() { ack("ready", -1); }

@@ -3,10 +3,10 @@
 // duplicates dropped, gaps held until retransmitted), each pair's curve is republished on
 // FRALAB_FRD as it grows, and the last tape block and status event held without a gap are
 // acknowledged under the consumer's name on the control instance (streams "tape" and "status";
-// again on every duplicate, so a lost acknowledgement is mended). From the control instance it
+// again on every duplicate, so a lost acknowledgement is mended). From the data instance it also
 // hears the acquisition's "close" (FRALAB_FLOW) and the identifier's acknowledgements of complete
-// curves (FRALAB_ACK, consumer "identify", streams "ready" and "frd:<pair>"). Tests run it
-// in-process over memq://.
+// curves (FRALAB_FRD_ACK, consumer "identify", streams "ready" and "frd:<pair>"); it never reads
+// the control instance (every consumer's acknowledgements). Tests run it in-process over memq://.
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>

@@ -1,5 +1,5 @@
 // fralab-identify: the live identifier. Collects the analysers' finished curves of a run
-// (FRALAB_FRD, complete = true, each acknowledged on the control URL), fits every pair, publishes
+// (FRALAB_FRD, complete = true, each acknowledged on FRALAB_FRD_ACK), fits every pair, publishes
 // each fit (FRALAB_TF), and writes DIR/tf/<E1>_<E2>.json and the transfer matrix
 // DIR/transfer_matrix.{json,md}.
 #include <CLI/CLI.hpp>
@@ -14,8 +14,8 @@ using namespace fralab;
 
 namespace {
 
-// Complete curves of the run, each acknowledged to its analyser on the control instance (consumer
-// "identify", stream "frd:<pair>"; again for every copy, so a lost acknowledgement is mended).
+// Complete curves of the run, each acknowledged to its analyser (FRALAB_FRD_ACK on the data URL,
+// consumer "identify", stream "frd:<pair>"; again for every copy, so a lost one is mended).
 struct Collector {
   std::string run_id;
   lcm::LCM* control = nullptr;
@@ -27,7 +27,7 @@ struct Collector {
       if (!run_id.empty() && m.run_id != run_id) return;
       if (!m.complete) return;
       if (!complete.count(m.pair)) complete[m.pair] = from_frd_msg(m);
-      publish_ack(*control, m.run_id, "identify", "frd:" + m.pair, 0);
+      publish_ack(*control, m.run_id, "identify", "frd:" + m.pair, 0, kFrdAckChannel);
     } catch (const std::exception& e) {
       error = e.what();
     }
@@ -43,9 +43,6 @@ int main(int argc, char** argv) {
   double timeout = 3600;
   app.add_option("--lcm-url", url);
   app.add_option("--run-id", run_id);
-  std::string ctl_url;
-  app.add_option("--control-url", ctl_url,
-                 "LCM URL for acknowledgements (default: --lcm-url with port + 1)");
   app.add_option("--expect", expect, "number of pairs to wait for")->required();
   app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")
       ->required();
@@ -58,17 +55,14 @@ int main(int argc, char** argv) {
     parse_delay_option(delay, &o);
     lcm::LCM lcm(resolve_lcm_url(url));
     if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
-                                 : resolve_lcm_url(ctl_url));
-    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
-    Collector c{run_id, &ctl, {}, ""};
+    Collector c{run_id, &lcm, {}, ""};
     lcm.subscribe(kFrdChannel, &Collector::on_frd, &c)->setQueueCapacity(100000);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_ready = t0 - std::chrono::seconds(1);
     while (int(c.complete.size()) < expect) {
       // Says it is there, so the analysers hand their curves over until acknowledged.
       if (std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(500)) {
-        publish_ack(ctl, run_id, "identify", "ready", -1);
+        publish_ack(lcm, run_id, "identify", "ready", -1, kFrdAckChannel);
         last_ready = std::chrono::steady_clock::now();
       }
       lcm.handleTimeout(100);

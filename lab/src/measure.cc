@@ -361,7 +361,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
       // The progress line, on a terminal only: it listens to the run's status events and
       // retransmission requests.
       ProgressLine progress;
-      std::unique_ptr<lcm::LCM> watch, watch_ctl;
+      std::unique_ptr<lcm::LCM> watch;
       std::string shown;
       auto since = [&](std::chrono::steady_clock::time_point t) {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -381,10 +381,9 @@ MeasureResult run_measure(const MeasureOptions& given) {
       } listener{&progress, r.run_id};
       if (isatty(STDERR_FILENO) && o.progress) {
         watch = std::make_unique<lcm::LCM>(url);
-        watch_ctl = std::make_unique<lcm::LCM>(control_url_for(url));
-        if (watch->good() && watch_ctl->good()) {
+        if (watch->good()) {
           watch->subscribe(kStatusChannel, &Listener::on_status, &listener);
-          watch_ctl->subscribe(kFlowChannel, &Listener::on_flow, &listener);
+          watch->subscribe(kFlowChannel, &Listener::on_flow, &listener);
         } else {
           watch.reset();
         }
@@ -392,7 +391,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
       auto draw = [&] {
         if (!watch) return;
         try {
-          while (watch->handleTimeout(0) > 0 || watch_ctl->handleTimeout(0) > 0) {
+          while (watch->handleTimeout(0) > 0) {
           }
         } catch (const InputError&) {  // a malformed status: the line is only a face
         }

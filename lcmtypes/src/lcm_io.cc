@@ -298,13 +298,13 @@ std::optional<std::string> peek_run_id(const void* data, size_t size) {
 }
 
 void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string& consumer,
-                 const std::string& stream, int64_t seq) {
+                 const std::string& stream, int64_t seq, const char* channel) {
   ack_t a;
   a.run_id = run_id;
   a.consumer = consumer;
   a.stream = stream;
   a.seq = seq;
-  control.publish(kAckChannel, &a);
+  control.publish(channel, &a);
 }
 
 void publish_flow(lcm::LCM& control, const std::string& run_id, const std::string& kind,

@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
         plant.announce_ready();  // the acquisition waits for this before the first command
         last_ready = Clock::now();
       }
-      handle_either(lcm, ctl, 100);
+      lcm.handleTimeout(100);  // the control URL is only published to
       if (!plant.error().empty()) throw InputError(plant.error());
       if (plant.done() && done_at == Clock::time_point{}) done_at = Clock::now();
       if (!keep_running && plant.done() &&

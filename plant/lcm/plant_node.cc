@@ -9,7 +9,7 @@ PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, siz
       keep_(keep_blocks),
       commands_(plant_.next_seq()) {
   data_.subscribe(kCmdChannel, &PlantNode::on_command, this)->setQueueCapacity(100000);
-  control_.subscribe(kFlowChannel, &PlantNode::on_flow, this)->setQueueCapacity(100000);
+  data_.subscribe(kFlowChannel, &PlantNode::on_flow, this)->setQueueCapacity(100000);
 }
 
 void PlantNode::announce_ready() { ack("ready", -1); }

@@ -19,7 +19,8 @@ namespace fralab {
 
 class PlantNode {
  public:
-  /// Subscribes to FRALAB_CMD on `data` and FRALAB_FLOW on `control` (may be `data`). The first
+  /// Subscribes to FRALAB_CMD and FRALAB_FLOW on `data`; acknowledges on `control` (may be
+  /// `data`). The first
   /// command expected is the plant's next_seq() (0, or where a replayed plant stands: resume).
   PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks = 1024);
   /// "Ready" (stream "ready", seq -1): the acquisition waits for it before the first command.

@@ -33,13 +33,18 @@ inline constexpr const char* kStatusChannel = "FRALAB_STATUS";
 inline constexpr const char* kAckChannel = "FRALAB_ACK";
 inline constexpr const char* kFrdChannel = "FRALAB_FRD";
 inline constexpr const char* kTfChannel = "FRALAB_TF";
+// On the data URL (not the control URL, whose every acknowledgement each listener would have to
+// read: 28 analysers x 30 acknowledgements a block): the acquisition's flow requests, and the
+// identifier's acknowledgements of complete curves.
 inline constexpr const char* kFlowChannel = "FRALAB_FLOW";
+inline constexpr const char* kFrdAckChannel = "FRALAB_FRD_ACK";
 
-/// Publishes an acknowledgement (ack_t.lcm: consumer, stream, seq) on the control instance.
-void publish_ack(lcm::LCM& control, const std::string& run_id, const std::string& consumer,
-                 const std::string& stream, int64_t seq);
-/// Publishes a flow-control request (flow_t.lcm: "resend" or "close") on the control instance.
-void publish_flow(lcm::LCM& control, const std::string& run_id, const std::string& kind,
+/// Publishes an acknowledgement (ack_t.lcm: consumer, stream, seq) on `channel` (kAckChannel on
+/// the control instance; kFrdAckChannel on the data instance for the identifier's).
+void publish_ack(lcm::LCM& lcm, const std::string& run_id, const std::string& consumer,
+                 const std::string& stream, int64_t seq, const char* channel = kAckChannel);
+/// Publishes a flow-control request (flow_t.lcm: "resend" or "close") on the data instance.
+void publish_flow(lcm::LCM& data, const std::string& run_id, const std::string& kind,
                   const std::string& stream, int64_t from_seq, int64_t to_seq);
 
 /// A tape block carrying its checksum (tape_block_t.lcm: crc32).
