@@ -17,7 +17,8 @@ declare -A allowed=(
   [analyze]="core analyze"
   [identify]="core analyze identify"
   [diagnose]="core plant analyze diagnose"
-  [lab]="core lcm plant acquire analyze identify diagnose lab"
+  [exchange]="core analyze identify exchange"
+  [lab]="core lcm plant acquire analyze identify diagnose exchange lab"
 )
 
 module_of_include() {  # the module an include names, or "" for a non-fralab header
@@ -30,6 +31,7 @@ module_of_include() {  # the module an include names, or "" for a non-fralab hea
     *'fralab/analyze/'*) echo analyze ;;
     *'fralab/identify/'*) echo identify ;;
     *'fralab/diagnose/'*) echo diagnose ;;
+    *'fralab/exchange/'*) echo exchange ;;
     *'fralab/lab/'*) echo lab ;;
     *) echo "" ;;
   esac

@@ -36,6 +36,26 @@ Complex Tf::rational(Complex s) const {
 
 Complex Tf::at(double w) const { return rational(Complex(0.0, w)) * std::polar(1.0, -w * delay_s); }
 
+namespace {
+// prod of the factors as a polynomial, highest power first.
+std::vector<double> expand(const std::vector<Root>& roots, double scale) {
+  std::vector<double> c{scale};
+  for (const Root& r : roots) {
+    const std::vector<double> f =
+        r.pair ? std::vector<double>{1.0 / (r.wn * r.wn), 2.0 * r.zeta / r.wn, 1.0}
+               : std::vector<double>{-1.0 / r.real, 1.0};
+    std::vector<double> out(c.size() + f.size() - 1, 0.0);
+    for (size_t i = 0; i < c.size(); ++i)
+      for (size_t k = 0; k < f.size(); ++k) out[i + k] += c[i] * f[k];
+    c = std::move(out);
+  }
+  return c;
+}
+}  // namespace
+
+std::vector<double> Tf::numerator_coefficients() const { return expand(zeros, gain); }
+std::vector<double> Tf::denominator_coefficients() const { return expand(poles, 1.0); }
+
 int Tf::num_order() const {
   int n = 0;
   for (const Root& z : zeros) n += z.order();

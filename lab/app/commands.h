@@ -22,5 +22,7 @@ void add_fit_command(CLI::App& app);
 void add_diagnose_command(CLI::App& app);
 void add_tape_command(CLI::App& app);
 void add_monitor_command(CLI::App& app);
+void add_import_command(CLI::App& app);
+void add_export_command(CLI::App& app);
 
 }  // namespace fralab

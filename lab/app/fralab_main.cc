@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   fralab::add_diagnose_command(app);
   fralab::add_tape_command(app);
   fralab::add_monitor_command(app);
+  fralab::add_import_command(app);
+  fralab::add_export_command(app);
   try {
     app.parse(argc, argv);  // the chosen subcommand's callback runs here
   } catch (const CLI::ParseError& e) {

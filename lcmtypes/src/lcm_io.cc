@@ -605,4 +605,78 @@ std::vector<Block> read_tape_blocks(const std::string& path, const std::string& 
   return out;
 }
 
+TapeRun read_tape_run(const std::string& path, const std::string& run_id) {
+  TapeRun run;
+  run.run_id = run_id;
+  std::map<int64_t, Block> blocks;
+  std::set<std::pair<int64_t, int>> seen_events;  // (seq, state)
+  std::vector<StatusEvent> events;
+  read_tape_file(path, [&](const TapeEvent& ev) {
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    try {
+      if (ev.channel == kTapeChannel) {
+        Block b = decode_tape_block(&rb, ev.channel);
+        if (run.run_id.empty()) run.run_id = b.run_id;
+        if (b.run_id == run.run_id && b.seq >= 0 && !blocks.count(b.seq))
+          blocks.emplace(b.seq, std::move(b));
+      } else if (ev.channel == kStatusChannel) {
+        StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
+        const auto key = std::make_pair(e.seq, e.seq < 0 ? int(e.state) : 0);
+        if (seen_events.insert(key).second) events.push_back(std::move(e));
+      }
+    } catch (const InputError& e) {
+      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
+    }
+  });
+  if (blocks.empty())
+    throw InputError(path + ": no tape blocks" +
+                     (run_id.empty() ? std::string() : " of run " + run_id));
+  for (auto& e : events)
+    if (e.run_id == run.run_id) run.events.push_back(std::move(e));
+  int64_t want = 0;
+  for (auto& [seq, b] : blocks) {
+    if (seq != want)
+      throw InputError(path + ": run " + run.run_id + " lacks tape block seq " +
+                       std::to_string(want));
+    run.blocks.push_back(std::move(b));
+    ++want;
+  }
+  return run;
+}
+
+void write_tape_file(const std::string& path, const std::vector<Block>& blocks,
+                     const std::vector<StatusEvent>& events) {
+  lcm::LogFile log(path, "w");
+  if (!log.good()) throw InputError(path + ": cannot be written");
+  int64_t eventnum = 0;
+  auto put = [&](const char* channel, const auto& msg, double t_s) {
+    std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
+    msg.encode(buf.data(), 0, int(buf.size()));
+    lcm::LogEvent ev;
+    ev.eventnum = eventnum++;
+    ev.timestamp = int64_t(std::llround(t_s * 1e6));
+    ev.channel = channel;
+    ev.datalen = int32_t(buf.size());
+    ev.data = buf.data();
+    if (log.writeEvent(&ev) != 0) throw InputError(path + ": write failed");
+  };
+  auto time_of = [](const StatusEvent& e) {
+    return e.sample_rate_hz > 0 ? double(e.sample) / e.sample_rate_hz : 0.0;
+  };
+  size_t next = 0;
+  for (const Block& b : blocks) {
+    const int64_t last = b.start_sample + b.n_samples - 1;
+    while (next < events.size() &&
+           (events[next].seq < 0 && events[next].state == RunState::kStart ||
+            events[next].sample <= last)) {
+      put(kStatusChannel, to_status_msg(events[next]), time_of(events[next]));
+      ++next;
+    }
+    put(kTapeChannel, to_tape_msg(b), double(b.start_sample) / b.sample_rate_hz);
+  }
+  for (; next < events.size(); ++next)
+    put(kStatusChannel, to_status_msg(events[next]), time_of(events[next]));
+  if (std::fflush(log.getFilePtr()) != 0) throw InputError(path + ": write failed");
+}
+
 }  // namespace fralab

@@ -15,6 +15,8 @@
 #include <tuple>
 
 #include "fralab/core/frd.h"
+#include "fralab/core/text.h"
+#include "fralab/core/tf.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/model.h"
 #include "shell.h"
@@ -326,4 +328,88 @@ TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
   }
   Json run = json_load_file(d + "/acquire.json");
   EXPECT_EQ(run["excitation"], "multisine");
+}
+
+// Issue 15, import/export: a measured tape written out as a time series and its schedule (CSV and
+// .mat), imported back with other block boundaries, analyses to byte-identical frd files.
+TEST(Lab, ExportedTapeReimportedGivesIdenticalFrdFiles) {
+  const std::string d = tmpdir("roundtrip"), tape = measured() + "/tape.lcmlog";
+  std::string pairs;
+  for (const auto& e : fs::directory_iterator(measured() + "/frd"))
+    pairs += " --pair " + load_frd(e.path().string()).pair;
+  Cmd a = sh(kBin + "/fralab analyze --log " + tape + pairs + " --out " + d + "/orig");
+  ASSERT_EQ(a.status, 0) << a.output;
+  for (const std::string ext : {"csv", "mat"}) {
+    Cmd x = sh(kBin + "/fralab export --tape " + tape + " --to " + ext + " --out " + d +
+               "/series." + ext);
+    ASSERT_EQ(x.status, 0) << x.output;
+    EXPECT_THAT(x.output, ::testing::HasSubstr("status events to " + d + "/series.schedule.json"));
+    Cmd i = sh(kBin + "/fralab import --series " + d + "/series." + ext + " --schedule " + d +
+               "/series.schedule.json --block 333 --out " + d + "/re_" + ext + ".lcmlog");
+    ASSERT_EQ(i.status, 0) << i.output;
+    Cmd r = sh(kBin + "/fralab analyze --log " + d + "/re_" + ext + ".lcmlog" + pairs + " --out " +
+               d + "/re_" + ext);
+    ASSERT_EQ(r.status, 0) << r.output;
+    int compared = 0;
+    for (const auto& e : fs::directory_iterator(d + "/orig/frd")) {
+      const std::string other = d + "/re_" + ext + "/frd/" + e.path().filename().string();
+      EXPECT_EQ(fralab::testing::slurp(e.path().string()), fralab::testing::slurp(other))
+          << ext << ": " << other;
+      ++compared;
+    }
+    EXPECT_GE(compared, 10) << ext;
+  }
+  // A recording with a sample missing is refused, naming the line.
+  std::ifstream in(d + "/series.csv");
+  std::ofstream out(d + "/gap.csv");
+  std::string line;
+  for (int n = 0; std::getline(in, line); ++n)
+    if (n != 1000) out << line << "\n";
+  out.close();
+  Cmd g = sh(kBin + "/fralab import --series " + d + "/gap.csv --schedule " + d +
+             "/series.schedule.json --out " + d + "/gap.lcmlog");
+  EXPECT_NE(g.status, 0);
+  EXPECT_THAT(g.output, ::testing::HasSubstr("gap.csv: line 1001: a gap of 1 samples"));
+  EXPECT_FALSE(fs::exists(d + "/gap.lcmlog"));
+}
+
+// Issue 15, export: the results load in Octave (`load`), with names and units, and the exported
+// num/den reproduce the fitted tf; the CSV reads with dlmread.
+TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
+  if (sh("command -v octave-cli").status != 0) GTEST_SKIP() << "octave-cli not installed";
+  const std::string d = tmpdir("export");
+  Cmd m = sh(kBin + "/fralab export --from " + measured() + " --out " + d + "/r.mat");
+  ASSERT_EQ(m.status, 0) << m.output;
+  EXPECT_THAT(m.output, ::testing::HasSubstr("and the state model"));
+  Cmd c = sh(kBin + "/fralab export --from " + measured() + " --to csv --out " + d + "/csv");
+  ASSERT_EQ(c.status, 0) << c.output;
+  const Frd frd = load_frd(measured() + "/frd/Wf_P3.json");
+  const Tf tf = tf_from_json(json_load_file(measured() + "/tf/Wf_P3.json"), {"tf", ""}, nullptr);
+  const double w = frd.points[1].w;
+  const std::string script =
+      "load('" + d + "/r.mat'); s = tf.Wf_P3; w = " + lossless(w) +
+      "; G = polyval(s.num, 1j*w) / polyval(s.den, 1j*w) * exp(-1j*w*s.delay_s);"
+      "x = dlmread('" +
+      d +
+      "/csv/frd/Wf_P3.csv', ',', 2, 0);"
+      "printf('%.17g %.17g %.17g %.17g %.17g %d %d %s|%s|%s|%s|%s\\n', real(G), imag(G), "
+      "frd.Wf_P3.mag(2), x(2,3), abs(frd.Wf_P3.H(2)), rows(ss.A), numel(ss.outputs), "
+      "units.P3, units.Wf, frd.Wf_P3.units, s.output, inputs{1});";
+  Cmd o = sh("octave-cli --no-gui --eval \"" + script + "\"");
+  ASSERT_EQ(o.status, 0) << o.output;
+  std::istringstream in(o.output);
+  double re = 0, im = 0, mag_mat = 0, mag_csv = 0, abs_h = 0;
+  int states = 0, outputs = 0;
+  std::string names;
+  in >> re >> im >> mag_mat >> mag_csv >> abs_h >> states >> outputs;
+  std::getline(in >> std::ws, names);
+  const Complex want = tf.at(w);
+  EXPECT_NEAR(re, want.real(), 1e-12 * std::abs(want)) << o.output;
+  EXPECT_NEAR(im, want.imag(), 1e-12 * std::abs(want)) << o.output;
+  EXPECT_EQ(mag_mat, frd.points[1].mag);
+  EXPECT_EQ(mag_csv, frd.points[1].mag);
+  EXPECT_NEAR(abs_h, frd.points[1].mag, 1e-15 * frd.points[1].mag);
+  EXPECT_GE(states, 1);
+  EXPECT_EQ(outputs, 5);
+  EXPECT_EQ(names, "psi|lb/hr|psi per lb/hr|P3|Wf") << o.output;
 }

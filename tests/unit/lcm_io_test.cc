@@ -318,3 +318,56 @@ TEST(LcmUrl, PrivateUrlsUseAnEvenPortAndThePeekFindsTheRunId) {
   buf[8] = 0x7f;  // absurd length
   EXPECT_EQ(peek_run_id(buf.data(), buf.size()), std::nullopt);
 }
+
+// write_tape_file and read_tape_run: blocks and status events out and back, each field kept.
+TEST(TapeFile, WrittenRunReadsBackWithItsBlocksAndEvents) {
+  std::vector<Block> blocks(3);
+  for (int i = 0; i < 3; ++i) {
+    Block& b = blocks[size_t(i)];
+    b.run_id = "r1";
+    b.seq = i;
+    b.start_sample = 500 + 4 * i;
+    b.sample_rate_hz = 1000;
+    b.channels = {"u_X", "Y"};
+    b.n_samples = 4;
+    for (int k = 0; k < 8; ++k) b.samples.push_back(0.1 * k + i + 1e-13 * k);
+    b.final_block = i == 2;
+  }
+  StatusEvent start, integ;
+  start.run_id = integ.run_id = "r1";
+  start.seq = -1;
+  start.state = RunState::kStart;
+  integ.seq = 0;
+  integ.state = RunState::kIntegrate;
+  integ.sample = 505;
+  integ.frequency_hz = 2.5;
+  integ.ref_phase_rad = 0.25;
+  integ.n_samples = 6;
+  integ.inputs = {"X"};
+  integ.amplitudes = {1.5};
+  const std::string path = tmp("run.lcmlog");
+  write_tape_file(path, blocks, {start, integ});
+  const TapeRun run = read_tape_run(path);
+  EXPECT_EQ(run.run_id, "r1");
+  ASSERT_EQ(run.blocks.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(run.blocks[size_t(i)].samples, blocks[size_t(i)].samples);
+    EXPECT_EQ(run.blocks[size_t(i)].start_sample, blocks[size_t(i)].start_sample);
+    EXPECT_EQ(run.blocks[size_t(i)].final_block, i == 2);
+  }
+  ASSERT_EQ(run.events.size(), 2u);
+  EXPECT_EQ(run.events[0].state, RunState::kStart);
+  EXPECT_EQ(run.events[1].frequency_hz, 2.5);
+  EXPECT_EQ(run.events[1].ref_phase_rad, 0.25);
+  EXPECT_EQ(run.events[1].amplitudes, std::vector<double>{1.5});
+  // The recorder's order: the integrate event (sample 505) is written before block 1 (504..507).
+  std::vector<std::string> order;
+  read_tape_file(path, [&](const TapeEvent& e) { order.push_back(e.channel); });
+  EXPECT_THAT(order, testing::ElementsAre(kStatusChannel, kTapeChannel, kStatusChannel,
+                                          kTapeChannel, kTapeChannel));
+  // A run with a block missing is refused, naming the seq.
+  write_tape_file(path, {blocks[0], blocks[2]}, {start});
+  EXPECT_THAT([&] { read_tape_run(path); },
+              testing::ThrowsMessage<InputError>(testing::HasSubstr("lacks tape block seq 1")));
+  fs::remove(path);
+}

@@ -99,3 +99,27 @@ TEST(Tf, JsonRoundTripKeepsEveryField) {
   Tf b = tf_from_json(tf_to_json(a), {"t", ""});
   for (double w : {0.3, 3.0, 30.0, 300.0}) EXPECT_EQ(a.at(w), b.at(w));
 }
+
+// num/den, highest power first: 2 [1 - s/4] / ([s/2 + 1][(s/10)^2 + 2 (0.3) s/10 + 1]).
+TEST(Tf, PolynomialCoefficientsAreTheFactorsExpanded) {
+  Tf tf;
+  tf.gain = 2.0;
+  tf.zeros = {Root::Real(4.0)};
+  tf.poles = {Root::Real(-2.0), Root::Pair(10.0, 0.3)};
+  const auto num = tf.numerator_coefficients(), den = tf.denominator_coefficients();
+  ASSERT_EQ(num.size(), 2u);
+  EXPECT_DOUBLE_EQ(num[0], -0.5);
+  EXPECT_DOUBLE_EQ(num[1], 2.0);
+  ASSERT_EQ(den.size(), 4u);
+  EXPECT_DOUBLE_EQ(den[0], 0.5 * 0.01);         // s^3
+  EXPECT_DOUBLE_EQ(den[1], 0.01 + 0.5 * 0.06);  // s^2
+  EXPECT_DOUBLE_EQ(den[2], 0.06 + 0.5);         // s
+  EXPECT_DOUBLE_EQ(den[3], 1.0);
+  for (double w : {0.3, 3.0, 30.0}) {
+    const Complex s{0, w};
+    Complex n = 0, d = 0;
+    for (double c : num) n = n * s + c;
+    for (double c : den) d = d * s + c;
+    EXPECT_LT(std::abs(n / d - tf.rational(s)), 1e-14 * std::abs(tf.rational(s))) << w;
+  }
+}

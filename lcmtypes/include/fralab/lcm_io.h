@@ -154,6 +154,26 @@ int64_t follow_tape_file(const std::string& path, int64_t* offset,
 std::vector<Block> read_tape_blocks(const std::string& path, const std::string& run_id,
                                     int64_t below);
 
+/// One run of a tape file: its tape blocks in seq order (each once, retransmitted copies dropped;
+/// the abort's operating-point block, seq -1, left out) and its status events in tape order (each
+/// seq once; the start and abort events, seq -1, kept). `run_id` "" takes the first tape block's
+/// run. InputError naming the file when the run has no blocks, a block is missing or an event does
+/// not decode.
+struct TapeRun {
+  std::string run_id;
+  std::vector<Block> blocks;
+  std::vector<StatusEvent> events;
+};
+TapeRun read_tape_run(const std::string& path, const std::string& run_id = "");
+
+/// Writes a tape file (an LCM log lcm-logplayer replays) as the recorder would have recorded the
+/// run: the start event, then each block preceded by the status events that take effect before
+/// its last sample, then the remaining events; blocks on FRALAB_TAPE with their checksum, events
+/// on FRALAB_STATUS, timestamps on the sample clock (microseconds). InputError naming the file
+/// when it cannot be written.
+void write_tape_file(const std::string& path, const std::vector<Block>& blocks,
+                     const std::vector<StatusEvent>& events);
+
 /// `fralab tape`: per LCM channel the event count, the tape's channels, block sequence with the
 /// missing seqs named, excitation states, samples and engine time. Errors name the file and event.
 Json tape_summary(const std::string& path);

@@ -58,6 +58,11 @@ struct Tf {
   double high_frequency_gain() const;
   /// Series connection: gains multiply, roots and delays are concatenated / added.
   Tf operator*(const Tf& other) const;
+  /// The rational part as polynomials in s, highest power first (MATLAB's and Octave's
+  /// `tf(num, den)` convention): num = gain * prod of the zero factors, den = prod of the pole
+  /// factors, each factor unity at s = 0 (so den's last coefficient is 1 and num(0) = gain).
+  std::vector<double> numerator_coefficients() const;
+  std::vector<double> denominator_coefficients() const;
 };
 
 /// Reads a tf object (contracts 1). Throws InputError naming `where` for a missing gain, a root at

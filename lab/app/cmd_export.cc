@@ -1,0 +1,99 @@
+// `fralab export`: results for MATLAB, Octave, Python and spreadsheets (exchange/results_export.h),
+// or a run's tape as a time series and its schedule (exchange/tape_series.h), which `fralab
+// import` turns back into the same tape.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "commands.h"
+#include "fralab/core/error.h"
+#include "fralab/exchange/results_export.h"
+#include "fralab/exchange/tape_series.h"
+#include "fralab/lcm_io.h"
+
+namespace fs = std::filesystem;
+
+namespace fralab {
+
+namespace {
+
+struct ExportCommand {
+  std::string from, tape, run_id, to = "mat", out, schedule_out;
+};
+
+// Units of the tape's channels from the engine.json a measure directory keeps beside its tape.
+void units_from_engine(const std::string& tape, TimeSeries* s) {
+  const fs::path engine = fs::path(tape).parent_path() / "engine.json";
+  if (!fs::exists(engine)) return;
+  const Json j = json_load_file(engine.string());
+  for (const char* key : {"inputs", "outputs"}) {
+    if (!j.contains(key) || !j[key].is_array()) continue;
+    for (const auto& c : j[key]) {
+      if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("units") ||
+          !c["units"].is_string())
+        continue;
+      for (const std::string& ch :
+           {c["name"].get<std::string>(), "u_" + c["name"].get<std::string>()}) {
+        const int i = s->channel_index(ch);
+        if (i >= 0) s->units[size_t(i)] = c["units"];
+      }
+    }
+  }
+}
+
+void run(const ExportCommand& c) {
+  if (c.to != "mat" && c.to != "csv") throw InputError("--to " + c.to + ": mat or csv");
+  if (c.from.empty() == c.tape.empty())
+    throw InputError("give one of --from DIR (results) and --tape TAPE (a time series)");
+  if (!c.from.empty()) {
+    const std::string out =
+        !c.out.empty() ? c.out : c.from + (c.to == "mat" ? "/fralab.mat" : "/export");
+    const ExportSummary s =
+        c.to == "mat" ? export_results_mat(c.from, out) : export_results_csv(c.from, out);
+    std::printf("fralab: exported %d frequency responses, %d transfer functions%s to %s\n", s.frd,
+                s.tf, s.state_model ? " and the state model" : "", s.written.c_str());
+    return;
+  }
+  const TapeRun run = read_tape_run(c.tape, c.run_id);
+  TimeSeries series = blocks_to_series(run.blocks, c.tape);
+  units_from_engine(c.tape, &series);
+  Schedule schedule;
+  schedule.sample_rate_hz = series.sample_rate_hz;
+  schedule.run_id = run.run_id;
+  schedule.events = run.events;
+  const std::string out =
+      !c.out.empty() ? c.out : fs::path(c.tape).replace_extension("." + c.to).string();
+  const std::string sched_out = !c.schedule_out.empty()
+                                    ? c.schedule_out
+                                    : fs::path(out).replace_extension(".schedule.json").string();
+  if (c.to == "mat")
+    write_mat_series(out, series);
+  else
+    write_csv_series(out, series);
+  json_save_file(sched_out, schedule_to_json(schedule));
+  std::printf(
+      "fralab: run %s: %lld samples of %zu channels at %g Hz to %s, %zu status events to %s\n",
+      run.run_id.c_str(), static_cast<long long>(series.n_samples), series.channels.size(),
+      series.sample_rate_hz, out.c_str(), schedule.events.size(), sched_out.c_str());
+}
+
+}  // namespace
+
+void add_export_command(CLI::App& app) {
+  auto ec = std::make_shared<ExportCommand>();
+  auto* c = app.add_subcommand(
+      "export",
+      "results (frd, tf, transfer matrix, state model) or a tape's time series, to .mat or CSV");
+  c->add_option("--from", ec->from, "a measure directory: its frd/, tf/, transfer_matrix.json");
+  c->add_option("--tape", ec->tape, "a tape: its run as a time series and a schedule");
+  c->add_option("--run", ec->run_id, "with --tape: the run id (default: the tape's first run)");
+  c->add_option("--to", ec->to, "mat (default) or csv");
+  c->add_option("--out", ec->out,
+                "the .mat file or CSV folder (default DIR/fralab.mat, DIR/export; with --tape "
+                "TAPE.mat or TAPE.csv)");
+  c->add_option("--schedule-out", ec->schedule_out,
+                "with --tape: the schedule (default OUT with .schedule.json)");
+  c->callback([ec] { run(*ec); });
+}
+
+}  // namespace fralab

@@ -1,0 +1,265 @@
+// The exchange library (issue 15): time series in CSV, WAV and .mat read onto the sample clock,
+// every malformed file refused naming what and where; schedules; a run's blocks as a series and
+// back; the results written to .mat read back by matio.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sndfile.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "fralab/core/error.h"
+#include "fralab/exchange/mat_file.h"
+#include "fralab/exchange/schedule.h"
+#include "fralab/exchange/tape_series.h"
+#include "fralab/exchange/time_series.h"
+
+using namespace fralab;
+using testing::HasSubstr;
+using testing::ThrowsMessage;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string tmp(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("fralab_exchange_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return (d / name).string();
+}
+
+void write_text(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+// Two channels at 200 Hz from sample 40: values that are not short decimals (lossless writing).
+TimeSeries known_series() {
+  TimeSeries s;
+  s.channels = {"u_X", "Y"};
+  s.units = {"mm", "bar"};
+  s.sample_rate_hz = 200;
+  s.start_sample = 40;
+  s.n_samples = 50;
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < 50; ++k) s.samples.push_back(std::sin(0.1 * k + c) / 3.0 + 1e-9 * k);
+  return s;
+}
+
+std::string read_error(const std::string& csv, double fs = 100) {
+  const std::string p = tmp("bad.csv");
+  write_text(p, csv);
+  try {
+    to_time_series(read_csv_series(p, {}), fs);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST(TimeSeriesCsv, WrittenSeriesReadsBackBitForBitOnTheSameSamples) {
+  const TimeSeries s = known_series();
+  const std::string p = tmp("s.csv");
+  write_csv_series(p, s);
+  const TimeSeries r = to_time_series(read_csv_series(p, {}), 200);
+  EXPECT_EQ(r.channels, s.channels);
+  EXPECT_EQ(r.units, s.units);
+  EXPECT_EQ(r.start_sample, 40);
+  EXPECT_EQ(r.n_samples, 50);
+  EXPECT_EQ(r.samples, s.samples);  // exact: lossless text
+}
+
+TEST(TimeSeriesCsv, MalformedFilesAreRefusedNamingTheLineAndChannel) {
+  EXPECT_THAT(read_error("time,y\n0,1\n"), HasSubstr("no time column 't' (columns: time, y"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.01,2\n0.005,3\n"),
+              HasSubstr("line 4: time goes back or stands still"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.01,2\n0.04,3\n"),
+              HasSubstr("line 4: a gap of 2 samples before t = 0.04 s"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.01,NaN\n"),
+              HasSubstr("line 3 (t = 0.01 s): channel 'y' is NaN"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.0105,2\n"),
+              HasSubstr("line 3: t = 0.0105 s is off the 100 Hz"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.01,2,3\n"),
+              HasSubstr("bad.csv:3: 3 fields, the header names 2"));
+  EXPECT_THAT(read_error("t,y\n0,1\n0.01,abc\n"),
+              HasSubstr("bad.csv:3: column 'y': 'abc' is not a number"));
+  EXPECT_THAT(read_error("t,y,y\n0,1,1\n"), HasSubstr("column 'y' named twice"));
+  EXPECT_THAT(read_error("# only a comment\n"), HasSubstr("no header row"));
+  EXPECT_THAT(read_error("t,y\n"), HasSubstr("no data rows"));
+  EXPECT_EQ(read_error("t,y\n0,1\n0.01,2\n"), "(no error)");
+}
+
+TEST(TimeSeriesWav, ChannelsAreScaledAndOffsetOnTheFileClock) {
+  const std::string p = tmp("s.wav");
+  SF_INFO info{};
+  info.samplerate = 1000;
+  info.channels = 2;
+  info.format = SF_FORMAT_WAV | SF_FORMAT_DOUBLE;
+  SNDFILE* f = sf_open(p.c_str(), SFM_WRITE, &info);
+  ASSERT_NE(f, nullptr);
+  std::vector<double> frames;
+  for (int k = 0; k < 300; ++k) {
+    frames.push_back(0.5 * std::sin(0.01 * k));
+    frames.push_back(-0.25 + 0.001 * k);
+  }
+  ASSERT_EQ(sf_writef_double(f, frames.data(), 300), 300);
+  sf_close(f);
+
+  SeriesReadOptions o;
+  o.wav_channels = {"u_X", "Y"};
+  o.wav_scale = {10.0, 4.0};
+  o.wav_offset = {100.0, 0.0};
+  const TimeSeries s = to_time_series(read_wav_series(p, o), 0);
+  EXPECT_EQ(s.sample_rate_hz, 1000);
+  ASSERT_EQ(s.n_samples, 300);
+  for (int k = 0; k < 300; ++k) {
+    EXPECT_NEAR(s.at(0, k), 100 + 5 * std::sin(0.01 * k), 1e-12) << k;
+    EXPECT_NEAR(s.at(1, k), -1 + 0.004 * k, 1e-12) << k;
+  }
+  // The schedule's clock must be the file's.
+  EXPECT_THAT([&] { to_time_series(read_wav_series(p, o), 2000); },
+              ThrowsMessage<InputError>(HasSubstr("sampled at 1000 Hz, the schedule at 2000 Hz")));
+  o.wav_channels = {"u_X"};
+  o.wav_scale = o.wav_offset = {};
+  EXPECT_THAT([&] { read_wav_series(p, o); },
+              ThrowsMessage<InputError>(HasSubstr("2 channels in the file, 1 named")));
+  o.wav_channels = {};
+  EXPECT_THAT([&] { read_wav_series(p, o); },
+              ThrowsMessage<InputError>(HasSubstr("names no channels")));
+  write_text(p, "not a wav");
+  o.wav_channels = {"a", "b"};
+  EXPECT_THAT([&] { read_wav_series(p, o); }, ThrowsMessage<InputError>(HasSubstr("s.wav")));
+}
+
+TEST(TimeSeriesMat, WrittenSeriesReadsBackBitForBit) {
+  const TimeSeries s = known_series();
+  const std::string p = tmp("s.mat");
+  write_mat_series(p, s);
+  const TimeSeries r = to_time_series(read_mat_series(p, {}), 200);
+  EXPECT_EQ(r.channels, s.channels);
+  EXPECT_EQ(r.start_sample, 40);
+  EXPECT_EQ(r.samples, s.samples);
+  SeriesReadOptions o;
+  o.time_column = "time";
+  EXPECT_THAT([&] { read_mat_series(p, o); },
+              ThrowsMessage<InputError>(HasSubstr("no time vector 'time' (vectors: t, u_X, Y")));
+  write_text(p, "garbage");
+  EXPECT_THAT([&] { read_mat_series(p, {}); },
+              ThrowsMessage<InputError>(HasSubstr("not a .mat file matio can read")));
+}
+
+TEST(MatFile, ValuesReadBackThroughMatio) {
+  const std::string p = tmp("v.mat");
+  MatValue st = MatValue::structure();
+  st.add("name", MatValue::str("Wf:P3"));
+  st.add("H", MatValue::complex_column({{1, -2}, {0.5, 0.25}}));
+  write_mat_file(
+      p,
+      {{"w", MatValue::column({1, 2, 4})}, {"names", MatValue::str_list({"a", "bc"})}, {"s", st}});
+  std::vector<std::string> skipped;
+  const auto v = read_mat_vectors(p, &skipped);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_EQ(v[0].first, "w");
+  EXPECT_EQ(v[0].second, (std::vector<double>{1, 2, 4}));
+  EXPECT_EQ(skipped, (std::vector<std::string>{"names", "s"}));
+  EXPECT_THAT(
+      [&] {
+        write_mat_file(p, {{"1x", MatValue::scalar(1)}});
+      },
+      ThrowsMessage<InputError>(HasSubstr("'1x' is not a MATLAB name")));
+}
+
+TEST(Schedule, JsonRoundTripKeepsEveryFieldAndErrorsNameThePath) {
+  Schedule s;
+  s.sample_rate_hz = 1000;
+  s.run_id = "r";
+  StatusEvent e;
+  e.seq = 3;
+  e.sample = 1234;
+  e.excitation = Excitation::kMultisine;
+  e.state = RunState::kIntegrate;
+  e.frequency_hz = 0.1 + 1e-12;
+  e.ref_phase_rad = 1.0 / 3.0;
+  e.n_samples = 4000;
+  e.inputs = {"A", "B"};
+  e.amplitudes = {0.5, 0.25};
+  e.period_samples = 2000;
+  e.lines = {3, 5};
+  e.line_input = {0, 1};
+  s.events = {e};
+  const std::string p = tmp("s.schedule.json");
+  json_save_file(p, schedule_to_json(s));
+  const Schedule r = load_schedule(p);
+  ASSERT_EQ(r.events.size(), 1u);
+  const StatusEvent& x = r.events[0];
+  EXPECT_EQ(x.frequency_hz, e.frequency_hz);
+  EXPECT_EQ(x.ref_phase_rad, e.ref_phase_rad);
+  EXPECT_EQ(x.lines, e.lines);
+  EXPECT_EQ(x.line_input, e.line_input);
+  EXPECT_EQ(x.run_id, "r");
+  EXPECT_EQ(x.sample_rate_hz, 1000);
+  EXPECT_EQ(x.excitation, Excitation::kMultisine);
+
+  Json j = schedule_to_json(s);
+  j["events"][0]["state"] = "running";
+  EXPECT_THAT([&] { schedule_from_json(j, "f.json"); },
+              ThrowsMessage<InputError>(HasSubstr("running")));
+  j = schedule_to_json(s);
+  j["events"][0]["amplitudes"] = {1.0};
+  EXPECT_THAT([&] { schedule_from_json(j, "f.json"); },
+              ThrowsMessage<InputError>(HasSubstr("f.json: /events/0: 1 amplitudes for 2 inputs")));
+  j = schedule_to_json(s);
+  j["events"][0]["frequency_hz"] = 600;
+  EXPECT_THAT([&] { schedule_from_json(j, "f.json"); },
+              ThrowsMessage<InputError>(HasSubstr("/events/0/frequency_hz")));
+  j = schedule_to_json(s);
+  j["format"] = "other/1";
+  EXPECT_THAT([&] { schedule_from_json(j, "f.json"); },
+              ThrowsMessage<InputError>(HasSubstr("expected fralab-schedule/1")));
+}
+
+TEST(TapeSeries, BlocksToSeriesAndBackKeepEverySampleWhateverTheBlockSize) {
+  const TimeSeries s = known_series();
+  Schedule sched;
+  sched.sample_rate_hz = 200;
+  sched.run_id = "imp";
+  StatusEvent e;
+  e.state = RunState::kIntegrate;
+  e.sample = 45;
+  e.n_samples = 40;
+  e.inputs = {"X"};
+  e.amplitudes = {1.0};
+  sched.events = {e};
+  const auto blocks = series_to_blocks(s, sched, 7);
+  ASSERT_EQ(blocks.size(), 8u);  // 7 x 7 + 1
+  EXPECT_EQ(blocks.back().n_samples, 1);
+  EXPECT_TRUE(blocks.back().final_block);
+  EXPECT_FALSE(blocks[6].final_block);
+  EXPECT_EQ(blocks[3].start_sample, 40 + 21);
+  EXPECT_EQ(blocks[3].run_id, "imp");
+  const TimeSeries back = blocks_to_series(blocks, "t");
+  EXPECT_EQ(back.samples, s.samples);
+  EXPECT_EQ(back.start_sample, 40);
+
+  // Refusals: an excited input without a channel, integration beyond the series, another rate,
+  // blocks with a gap.
+  Schedule bad = sched;
+  bad.events[0].inputs = {"Z"};
+  EXPECT_THAT([&] { series_to_blocks(s, bad, 7); },
+              ThrowsMessage<InputError>(
+                  HasSubstr("excites Z but the series has neither a channel u_Z nor Z")));
+  bad = sched;
+  bad.events[0].n_samples = 80;
+  EXPECT_THAT([&] { series_to_blocks(s, bad, 7); },
+              ThrowsMessage<InputError>(
+                  HasSubstr("integrates samples 45 .. 125, the series holds 40 .. 90")));
+  bad = sched;
+  bad.sample_rate_hz = 100;
+  EXPECT_THAT([&] { series_to_blocks(s, bad, 7); },
+              ThrowsMessage<InputError>(HasSubstr("sampled at 200 Hz, the schedule at 100 Hz")));
+  auto gappy = blocks;
+  gappy.erase(gappy.begin() + 2);
+  EXPECT_THAT([&] { blocks_to_series(gappy, "t"); },
+              ThrowsMessage<InputError>(HasSubstr(
+                  "block seq 3: starts at sample 61, the previous block ended before 54")));
+}
