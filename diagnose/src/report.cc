@@ -42,7 +42,34 @@ bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
                      p.sigma,
                      {{"simulation", p.sim}, {"extended model", p.ext}}});
   }
-  return render_bode_plots(plots, dir + "/plots");
+  const std::string pdir = dir + "/plots";
+  if (!render_bode_plots(plots, pdir) ||
+      !render_bode_plots(plots, pdir, "plots_svg.gp", PlotFormat::kSvg))
+    return false;
+  // The overview: outputs (rows) by inputs (columns), in order of first appearance.
+  std::vector<std::string> rows, cols;
+  auto add = [](std::vector<std::string>& v, const std::string& s) {
+    if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
+  };
+  for (const auto& p : d.pairs) {
+    const auto [x, y] = split_pair(p.pair);
+    if (x.rfind("u_", 0) == 0) continue;
+    add(cols, x);
+    add(rows, y);
+  }
+  if (rows.empty()) return true;
+  std::vector<std::vector<const BodePlot*>> grid(rows.size(),
+                                                 std::vector<const BodePlot*>(cols.size()));
+  for (size_t i = 0; i < d.pairs.size(); ++i) {
+    const auto [x, y] = split_pair(d.pairs[i].pair);
+    const auto r = std::find(rows.begin(), rows.end(), y),
+               c = std::find(cols.begin(), cols.end(), x);
+    if (r != rows.end() && c != cols.end())
+      grid[size_t(r - rows.begin())][size_t(c - cols.begin())] = &plots[i];
+  }
+  const std::string title = "measured (points), simulation (red), extended model (blue, dashed)";
+  return render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kPng) &&
+         render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kSvg);
 }
 
 void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
@@ -106,6 +133,10 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
        << p.chi2_ext << " | " << p.error_sim << " | " << p.error_ext << " |\n";
   }
   if (plots) {
+    if (std::filesystem::exists(dir + "/plots/overview.png"))
+      md << "\n## The transfer matrix at a glance\n\nGain (dB) above phase (degrees) of each "
+            "output (rows) per input (columns) over frequency (Hz).\n\n"
+         << "![the transfer matrix: measured, simulation, extended model](plots/overview.png)\n";
     md << "\n## Bode plots (measured with sigma, simulation, extended model; residuals "
           "measured/model)\n\n";
     for (const auto& p : d.pairs)
@@ -125,7 +156,7 @@ std::string diagnosis_summary(const Diagnosis& d, const std::string& dir) {
     for (const auto& [k, v] : f.parameters) s << " " << k << "=" << v;
     for (const auto& [k, v] : f.text_parameters) s << " " << k << "=" << v;
   }
-  s << "\n  report: " << dir << "/report.md";
+  s << "\n  report: " << dir << "/report.md, " << dir << "/report.html";
   return s.str();
 }
 

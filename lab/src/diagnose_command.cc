@@ -59,6 +59,7 @@ std::string run_diagnose(const DiagnoseCommand& c) {
              "/extended_model.json");  // it must be a valid fralab-model/1 the plant can run
   const bool plots = c.plots && render_diagnosis_plots(d, c.out);
   write_diagnosis_report(d, sim.name, data_name, plots, c.out);
+  write_report_html(c.out, "Diagnosis: " + sim.name);
   return diagnosis_summary(d, c.out);
 }
 }  // namespace fralab

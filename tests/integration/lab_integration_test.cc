@@ -376,7 +376,8 @@ TEST(Lab, ExportedTapeReimportedGivesIdenticalFrdFiles) {
 // Issue 15, export: the results load in Octave (`load`), with names and units, and the exported
 // num/den reproduce the fitted tf; the CSV reads with dlmread.
 TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
-  if (sh("command -v octave-cli").status != 0) GTEST_SKIP() << "octave-cli not installed";
+  ASSERT_EQ(sh("command -v octave-cli").status, 0)
+      << "octave-cli: scripts/setup.sh --test installs it";
   const std::string d = tmpdir("export");
   Cmd m = sh(kBin + "/fralab export --from " + measured() + " --out " + d + "/r.mat");
   ASSERT_EQ(m.status, 0) << m.output;
@@ -412,4 +413,49 @@ TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
   EXPECT_GE(states, 1);
   EXPECT_EQ(outputs, 5);
   EXPECT_EQ(names, "psi|lb/hr|psi per lb/hr|P3|Wf") << o.output;
+}
+
+// Issue 15, report.html: one self-contained page (every figure an inline SVG, the overview of the
+// transfer matrix among them) that a real browser renders: headless Chromium loads it and takes a
+// screenshot in which the simulation's red and the extended model's blue curves are drawn.
+TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
+  ASSERT_EQ(sh("command -v chromium").status, 0) << "chromium: scripts/setup.sh --test installs it";
+  ASSERT_EQ(sh("command -v octave-cli").status, 0);
+  const std::string d = tmpdir("html");
+  Cmd g = sh(kBin + "/fralab diagnose --simulation j85_95_sim --measured " + measured() +
+             " --out " + d + "/dg");
+  ASSERT_EQ(g.status, 0) << g.output;
+  EXPECT_THAT(g.output, ::testing::HasSubstr(d + "/dg/report.html"));
+  const std::string html = fralab::testing::slurp(d + "/dg/report.html");
+  const size_t pairs = json_load_file(d + "/dg/diagnosis.json")["pairs"].size();
+  ASSERT_GE(pairs, 5u);
+  size_t svgs = 0;
+  for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1))
+    ++svgs;
+  EXPECT_EQ(svgs, pairs + 1) << "one figure per pair and the overview";
+  EXPECT_EQ(html.find("<img"), std::string::npos) << "no figure left outside the page";
+  EXPECT_THAT(html, ::testing::HasSubstr("<h2>The transfer matrix at a glance</h2>"));
+  EXPECT_THAT(html, ::testing::HasSubstr("<table>"));
+  const std::string flags =
+      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+      "--disable-background-networking --disable-component-update --disable-sync --user-data-dir=" +
+      d + "/profile ";
+  Cmd dom = sh("timeout 120 chromium" + flags + "--dump-dom file://" + d + "/dg/report.html");
+  ASSERT_EQ(dom.status, 0) << dom.output;
+  EXPECT_THAT(dom.output, ::testing::HasSubstr("<h2>Findings</h2>"));
+  Cmd shot = sh("timeout 120 chromium" + flags + "--window-size=1100,2000 --screenshot=" + d +
+                "/shot.png file://" + d + "/dg/report.html");
+  ASSERT_EQ(shot.status, 0) << shot.output;
+  // Pixels of the simulation's red (#d62728) and the extended model's blue (#1f77b4).
+  Cmd px =
+      sh("octave-cli --no-gui --eval \"x = double(imread('" + d +
+         "/shot.png')); near = @(c) sum(sum(abs(x(:,:,1)-c(1)) < 40 & abs(x(:,:,2)-c(2)) < 40 "
+         "& abs(x(:,:,3)-c(3)) < 40)); printf('%d %d %d\\\\n', near([214 39 40]), near([31 119 "
+         "180]), columns(x));\"");
+  ASSERT_EQ(px.status, 0) << px.output;
+  int red = 0, blue = 0, width = 0;
+  std::istringstream(px.output) >> red >> blue >> width;
+  EXPECT_EQ(width, 1100) << px.output;
+  EXPECT_GT(red, 200) << px.output;
+  EXPECT_GT(blue, 100) << px.output;
 }

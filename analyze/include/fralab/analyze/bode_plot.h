@@ -29,11 +29,27 @@ struct BodePlot {
   std::vector<BodeCurve> models;           // at most 4
 };
 
+/// The picture format: PNG (pngcairo) for report.md, SVG for report.html (inlined).
+enum class PlotFormat { kPng, kSvg };
+
 /// Writes dir/STEM.dat for every plot and one gnuplot script dir/SCRIPT, and renders dir/STEM.png
-/// with a single gnuplot run. Returns false (nothing rendered) when gnuplot is not installed or
-/// fails; the .dat files and the script are written either way. Throws InputError when a plot's
-/// arrays disagree in length or it has more than 4 model curves.
+/// (or .svg) with a single gnuplot run. Returns false (nothing rendered) when gnuplot is not
+/// installed or fails; the .dat files and the script are written either way. Throws InputError
+/// when a plot's arrays disagree in length or it has more than 4 model curves.
 bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& dir,
-                       const std::string& script = "plots.gp");
+                       const std::string& script = "plots.gp",
+                       PlotFormat format = PlotFormat::kPng);
+
+/// The overview of a transfer matrix as one picture (the report's Figures 1-3 drawn): a grid of
+/// small Bode plots, one column per input (`cols`), two rows per output (`rows`: gain in dB above,
+/// phase in degrees below, over frequency in Hz), the measured points in black and each model's
+/// curve in its colour as in render_bode_plots. grid[r][c] is the plot of output r / input c, or
+/// null (an empty cell). Reads the .dat files render_bode_plots wrote in `dir` (call it first);
+/// renders dir/STEM.png or .svg. false when gnuplot is missing or fails; InputError when the grid
+/// is not rows x cols.
+bool render_bode_overview(const std::vector<std::vector<const BodePlot*>>& grid,
+                          const std::vector<std::string>& rows,
+                          const std::vector<std::string>& cols, const std::string& title,
+                          const std::string& dir, const std::string& stem, PlotFormat format);
 
 }  // namespace fralab

@@ -13,13 +13,20 @@ namespace fralab {
 /// its validation when present. InputError when DIR has no frd/ or no frd files.
 std::vector<MeasuredPair> read_measured_dir(const std::string& dir);
 
-/// One PNG per pair in DIR/plots: measured (with sigma bars), simulation, extended model, and the
-/// residuals. false when gnuplot is missing or failed (the report then has no figures).
+/// One PNG and one SVG per pair in DIR/plots: measured (with sigma bars), simulation, extended
+/// model, and the residuals; and the overview of the transfer matrix (plots/overview.png, .svg:
+/// every pair whose E1 is not an actuator command u_X, outputs by inputs, render_bode_overview).
+/// false when gnuplot is missing or failed (the report then has no figures).
 bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir);
 
 /// DIR/report.md: errors, findings with their explanation, the per-pair table, the figures.
 void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
                             const std::string& data_name, bool plots, const std::string& dir);
+
+/// DIR/report.html beside DIR/report.md (written first): the same report rendered from its
+/// markdown by cmark-gfm, one self-contained file: each figure's SVG (plots/STEM.svg) inline in
+/// place of its PNG. InputError when report.md is missing or the page cannot be written.
+void write_report_html(const std::string& dir, const std::string& title);
 
 /// The findings as printed on the terminal: a count and errors, one line per finding.
 std::string diagnosis_summary(const Diagnosis& d, const std::string& dir);
