@@ -38,6 +38,28 @@ struct Results {
   Json state_model;                          // null when absent
 };
 
+}  // namespace
+
+std::map<std::string, std::string> channel_units(const std::string& model_file) {
+  std::map<std::string, std::string> units;
+  if (!fs::exists(model_file)) return units;
+  const Json j = json_load_file(model_file);
+  for (const char* key : {"inputs", "outputs"}) {
+    if (!j.contains(key) || !j[key].is_array()) continue;
+    for (const auto& c : j[key]) {
+      if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("units") ||
+          !c["units"].is_string())
+        continue;
+      const std::string name = c["name"];
+      units[name] = c["units"];
+      if (std::string(key) == "inputs") units["u_" + name] = c["units"];
+    }
+  }
+  return units;
+}
+
+namespace {
+
 std::vector<fs::path> json_files(const fs::path& dir) {
   std::vector<fs::path> out;
   if (!fs::is_directory(dir)) return out;
@@ -81,21 +103,7 @@ Results load_results(const std::string& dir) {
     }
     if (j.contains("state_model") && j["state_model"].is_object()) r.state_model = j["state_model"];
   }
-  const fs::path engine = fs::path(dir) / "engine.json";
-  if (fs::exists(engine)) {
-    const Json j = json_load_file(engine.string());
-    for (const char* key : {"inputs", "outputs"}) {
-      if (!j.contains(key) || !j[key].is_array()) continue;
-      for (const auto& c : j[key]) {
-        if (!c.is_object() || !c.contains("name") || !c["name"].is_string()) continue;
-        const std::string name = c["name"];
-        const std::string unit =
-            c.contains("units") && c["units"].is_string() ? c["units"].get<std::string>() : "";
-        r.units[name] = unit;
-        if (std::string(key) == "inputs") r.units["u_" + name] = unit;
-      }
-    }
-  }
+  r.units = channel_units((fs::path(dir) / "engine.json").string());
   return r;
 }
 

@@ -23,21 +23,10 @@ struct ExportCommand {
 
 // Units of the tape's channels from the engine.json a measure directory keeps beside its tape.
 void units_from_engine(const std::string& tape, TimeSeries* s) {
-  const fs::path engine = fs::path(tape).parent_path() / "engine.json";
-  if (!fs::exists(engine)) return;
-  const Json j = json_load_file(engine.string());
-  for (const char* key : {"inputs", "outputs"}) {
-    if (!j.contains(key) || !j[key].is_array()) continue;
-    for (const auto& c : j[key]) {
-      if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("units") ||
-          !c["units"].is_string())
-        continue;
-      for (const std::string& ch :
-           {c["name"].get<std::string>(), "u_" + c["name"].get<std::string>()}) {
-        const int i = s->channel_index(ch);
-        if (i >= 0) s->units[size_t(i)] = c["units"];
-      }
-    }
+  const auto units = channel_units((fs::path(tape).parent_path() / "engine.json").string());
+  for (size_t i = 0; i < s->channels.size(); ++i) {
+    auto it = units.find(s->channels[i]);
+    if (it != units.end()) s->units[i] = it->second;
   }
 }
 

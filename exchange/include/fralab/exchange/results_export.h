@@ -22,9 +22,14 @@
 // JSON stays what `fralab measure` writes (contracts 1 and 4).
 #pragma once
 
+#include <map>
 #include <string>
 
 namespace fralab {
+
+/// Each channel's engineering unit from a fralab-model/1 file (an input's unit also for its
+/// command u_<input>); {} when the file does not exist, entries without units skipped.
+std::map<std::string, std::string> channel_units(const std::string& model_file);
 
 struct ExportSummary {
   int frd = 0, tf = 0;
