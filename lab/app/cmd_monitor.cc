@@ -20,7 +20,7 @@ namespace fralab {
 namespace {
 
 struct MonitorCommand {
-  std::string pair, url, log, simulation, run_id;
+  std::string pair, url, log, simulation, run_id, plot;
   double idle_s = 10;
 };
 
@@ -30,14 +30,27 @@ void run(const MonitorCommand& c) {
   std::cout << c.pair << (sim ? " against " + sim->name : std::string()) << "\n"
             << monitor_header(bool(sim)) << "\n";
   std::map<double, FrdPoint> shown;  // by w: a point is printed once
+  auto sim_at = [&](const FrdPoint& p) -> std::optional<std::complex<double>> {
+    if (!sim) return std::nullopt;
+    return model_pair_response(*sim, c.pair, p.w, p.amplitude);
+  };
+  const std::string title = c.pair + (sim ? " against " + sim->name : std::string());
+  auto plot = [&](bool live) {
+    if (c.plot.empty()) return;
+    std::vector<FrdPoint> pts;
+    for (const auto& [w, p] : shown) pts.push_back(p);
+    write_monitor_page(c.plot, title, pts, sim_at, live);
+  };
+  plot(true);
   auto show = [&](const Frd& f) {
+    bool added = false;
     for (const FrdPoint& p : f.points) {
       if (shown.count(p.w)) continue;
       shown[p.w] = p;
-      std::optional<std::complex<double>> s;
-      if (sim) s = model_pair_response(*sim, c.pair, p.w, p.amplitude);
-      std::cout << monitor_row(p, s) << "\n" << std::flush;
+      added = true;
+      std::cout << monitor_row(p, sim_at(p)) << "\n" << std::flush;
     }
+    if (added) plot(true);
   };
   using Clock = std::chrono::steady_clock;
   auto last_new = Clock::now();
@@ -57,6 +70,7 @@ void run(const MonitorCommand& c) {
     }
     if (!feeder.all_done()) feeder.flush();
     show(feeder.analyzers()[0]->frd());
+    plot(false);
     return;
   }
   lcm::LCM lcm(resolve_lcm_url(c.url));
@@ -80,6 +94,7 @@ void run(const MonitorCommand& c) {
     }
   }
   if (listener.latest) show(*listener.latest);
+  plot(false);
 }
 
 }  // namespace
@@ -93,6 +108,9 @@ void add_monitor_command(CLI::App& app) {
   c->add_option("--log", mc->log, "a tape, complete or still being written")->excludes(url);
   c->add_option("--simulation", mc->simulation, "model file or embedded name to compare with");
   c->add_option("--run-id", mc->run_id, "only this run");
+  c->add_option("--plot", mc->plot,
+                "also a live Bode plot: this HTML page, redrawn at each point, reloading itself "
+                "until the pair is complete");
   c->add_option("--idle", mc->idle_s, "stop after this many seconds without a new point")
       ->capture_default_str();
   c->callback([mc] { run(*mc); });

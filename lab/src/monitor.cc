@@ -1,8 +1,15 @@
 #include "fralab/lab/monitor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
+#include <sstream>
+
+#include "fralab/analyze/bode_plot.h"
+#include "fralab/core/error.h"
 
 namespace fralab {
 
@@ -39,6 +46,65 @@ std::string monitor_row(const FrdPoint& p, const std::optional<std::complex<doub
     row += b;
   }
   return row;
+}
+
+bool write_monitor_page(
+    const std::string& page, const std::string& title, const std::vector<FrdPoint>& points,
+    const std::function<std::optional<std::complex<double>>(const FrdPoint&)>& sim, bool live,
+    int refresh_s) {
+  namespace fs = std::filesystem;
+  const fs::path path(page);
+  const fs::path dir = path.parent_path() / (path.stem().string() + ".plot");
+  std::vector<FrdPoint> pts;
+  for (const auto& p : points)
+    if (p.valid) pts.push_back(p);
+  std::sort(pts.begin(), pts.end(), [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+  BodePlot plot{title, "pair", {}, {}, {}, {}};
+  BodeCurve simulation{"simulation", {}};
+  bool all_sim = !pts.empty(), all_sigma = !pts.empty();
+  for (const auto& p : pts) {
+    plot.w.push_back(p.w);
+    plot.meas.push_back(p.value());
+    plot.sigma.push_back(p.sigma);
+    all_sigma = all_sigma && p.sigma > 0;
+    const auto g = sim ? sim(p) : std::nullopt;
+    all_sim = all_sim && g.has_value();
+    simulation.g.push_back(g.value_or(0.0));
+  }
+  if (!all_sigma) plot.sigma.clear();
+  if (all_sim) plot.models.push_back(simulation);
+  std::string figure;
+  bool drawn = false;
+  if (!pts.empty()) {
+    drawn = render_bode_plots({plot}, dir.string(), "plot.gp", PlotFormat::kSvg);
+    if (drawn) {
+      std::ifstream in(dir / "pair.svg");
+      std::ostringstream svg;
+      svg << in.rdbuf();
+      const std::string text = svg.str();
+      const size_t at = text.find("<svg");
+      drawn = at != std::string::npos;
+      if (drawn) figure = text.substr(at);
+    }
+  }
+  if (!drawn)
+    figure = pts.empty() ? "<p>No point yet.</p>" : "<p>No plot: gnuplot is missing or failed.</p>";
+  std::ostringstream html;
+  html << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
+  if (live) html << "<meta http-equiv=\"refresh\" content=\"" << refresh_s << "\">\n";
+  html << "<title>fralab monitor</title>\n<style>body{font-family:sans-serif;margin:1em}svg{max-"
+          "width:100%;height:auto}</style>\n</head>\n<body>\n<p>"
+       << pts.size() << " points" << (live ? " so far (the page reloads itself)" : ", complete")
+       << "</p>\n"
+       << figure << "\n</body>\n</html>\n";
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << html.str();
+    if (!out) throw InputError(tmp.string() + ": cannot be written");
+  }
+  fs::rename(tmp, path);
+  return drawn;
 }
 
 }  // namespace fralab

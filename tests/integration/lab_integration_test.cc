@@ -263,9 +263,14 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
 // gives them, beside the simulation (here the engine measured itself: differences within noise).
 TEST(Lab, MonitorShowsThePairPointByPointAgainstTheSimulation) {
   const std::string& d = measured();
+  const std::string page = tmpdir("monitor_plot") + "/wf_p3.html";
   Cmd c = sh(kBin + "/fralab monitor --log " + d + "/tape.lcmlog --pair Wf:P3 --simulation " + d +
-             "/engine.json");
+             "/engine.json --plot " + page);
   ASSERT_EQ(c.status, 0) << c.output;
+  // The live plot's last page: complete, every point drawn, no longer reloading.
+  const std::string html = fralab::testing::slurp(page);
+  EXPECT_THAT(html, ::testing::HasSubstr("<svg"));
+  EXPECT_THAT(html, ::testing::Not(::testing::HasSubstr("refresh")));
   const Frd f = load_frd(d + "/frd/Wf_P3.json");
   std::istringstream in(c.output);
   std::string line;
