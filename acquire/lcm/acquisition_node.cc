@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <map>
+#include <set>
 
 #include "fralab/lcm_io.h"
 
@@ -32,6 +34,54 @@ struct AcquisitionNode::Acks {
   }
 };
 
+// A free-running plant's tape, as the acquisition watches it: how far the plant's clock has
+// played, which tape blocks exist, and the samples it held (its command buffer ran dry).
+struct AcquisitionNode::TapeWatch {
+  std::string run_id;
+  int64_t played = 0;      // samples played: the end of the furthest tape block seen
+  int64_t last_seq = -1;   // the furthest tape block seen
+  int64_t final_seq = -1;  // the plant's final tape block, once seen
+  std::set<int64_t> seen;  // tape seqs seen
+  std::vector<std::pair<int64_t, int64_t>> held;  // [first, last] samples held
+  int64_t held_samples = 0;
+  void on_tape(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
+    Block b;
+    try {
+      b = decode_tape_block(rbuf, ch);
+    } catch (const std::exception&) {
+      return;  // corrupt or foreign: the consumers ask for it again
+    }
+    if (b.run_id != run_id || b.seq < 0 || !seen.insert(b.seq).second) return;
+    played = std::max(played, b.start_sample + b.n_samples);
+    last_seq = std::max(last_seq, b.seq);
+    if (b.final_block) final_seq = b.seq;
+    const int c = b.channel_index(kUnderrunChannel);
+    for (int k = 0; c >= 0 && k < b.n_samples; ++k) {
+      if (b.at(c, k) == 0.0) continue;
+      const int64_t n = b.start_sample + k;
+      ++held_samples;
+      if (!held.empty() && held.back().second + 1 == n)
+        held.back().second = n;
+      else
+        held.push_back({n, n});
+    }
+  }
+  /// Every tape block up to `seq` seen (none lost on the way to the acquisition).
+  int64_t contiguous() const {
+    int64_t c = -1;
+    for (int64_t s : seen) {
+      if (s != c + 1) break;
+      c = s;
+    }
+    return c;
+  }
+  bool held_in(int64_t a, int64_t b) const {  // any held sample in [a, b)
+    for (const auto& [f, l] : held)
+      if (f < b && l >= a) return true;
+    return false;
+  }
+};
+
 AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campaign& campaign,
                                  AcquisitionLoopOptions o)
     : data_(data),
@@ -41,9 +91,19 @@ AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campai
       acks_(std::make_unique<Acks>(o_.run_id, FlowControl(o_.consumers, o_.flow))) {
   sub_ = control_.subscribe(kAckChannel, &Acks::on_ack, acks_.get());
   sub_->setQueueCapacity(100000);
+  if (o_.acquire.free_running) {
+    tape_ = std::make_unique<TapeWatch>();
+    tape_->run_id = o_.run_id;
+    tape_sub_ = data_.subscribe(kTapeChannel, &TapeWatch::on_tape, tape_.get());
+    tape_sub_->setQueueCapacity(100000);
+    acks_->flow.tape_on_plant_clock();
+  }
 }
 
-AcquisitionNode::~AcquisitionNode() { control_.unsubscribe(sub_); }
+AcquisitionNode::~AcquisitionNode() {
+  control_.unsubscribe(sub_);
+  if (tape_sub_) data_.unsubscribe(tape_sub_);
+}
 
 Json AcquisitionNode::run() {
   lcm::LCM& data = data_;
@@ -94,6 +154,7 @@ Json AcquisitionNode::run() {
     handle_either(data_, control_, poll_ms);
     if (!acq.error.empty()) throw InputError(acq.error);
     const double now = acq.now();
+    if (tape_ && tape_->last_seq >= 0) flow.published(Stream::kTape, tape_->last_seq);
     for (Stream s : {Stream::kCommand, Stream::kTape, Stream::kStatus}) {
       if (auto r = flow.due(s, now)) {
         if (s == Stream::kCommand)
@@ -141,13 +202,23 @@ Json AcquisitionNode::run() {
   const int64_t nblocks = command_block_count(campaign, o.block);
   size_t ev = size_t(o_.first_status);
   next_block = o_.first_block;
+  const bool free = tape_ != nullptr;
+  // Free-running: the last event ("done") and the final block wait until every step is known to
+  // have been played without a held sample (run_free below).
+  const size_t n_events = free ? events.size() - 1 : events.size();
+  const int64_t lead_samples = int64_t(o.lead) * o.block;
   for (int64_t b = o_.first_block; b < nblocks; ++b) {
-    const Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
-    wait_until([&] {
-      return flow.acked(Stream::kCommand) >= b - o.window &&
-             flow.acked(Stream::kTape) >= b - o.window;
-    });
-    if (o.speed > 0) {
+    Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
+    if (free) {  // ahead of the plant's clock by at most `lead` blocks; the plant does not wait
+      blk.final_block = false;
+      wait_until([&] { return blk.start_sample - tape_->played < lead_samples; });
+    } else {
+      wait_until([&] {
+        return flow.acked(Stream::kCommand) >= b - o.window &&
+               flow.acked(Stream::kTape) >= b - o.window;
+      });
+    }
+    if (o.speed > 0 && !free) {
       auto due =
           t0 + std::chrono::duration<double>(double(blk.start_sample) / o.sample_rate_hz / o.speed);
       while (Clock::now() < due)
@@ -156,7 +227,7 @@ Json AcquisitionNode::run() {
     // The block's status events, held by every consumer before the block goes out: a window's
     // definition always precedes its samples, however datagrams are lost.
     bool new_status = false;
-    while (ev < events.size() &&
+    while (ev < n_events &&
            (events[ev].sample < blk.start_sample + blk.n_samples || blk.final_block)) {
       publish_status(events[ev]);
       flow.published(Stream::kStatus, events[ev].seq);
@@ -170,13 +241,114 @@ Json AcquisitionNode::run() {
     flow.published(Stream::kCommand, b);
     next_block = b + 1;
   }
+  int64_t last_command = nblocks - 1, last_tape = nblocks - 1;
+  Json repeats = Json::array();
+  if (free) {
+    // Play out, look at the tape for held samples in any step, repeat those steps at the end,
+    // until none is touched; then "done" and the final block.
+    int64_t pos = total, cmd_seq = nblocks, status_seq = events.back().seq;
+    auto publish_block = [&](Block c) {
+      c.seq = cmd_seq++;
+      wait_until([&] { return c.start_sample - tape_->played < lead_samples; });
+      command_block_t m = to_command_msg(c);
+      data.publish(kCmdChannel, &m);
+      flow.published(Stream::kCommand, c.seq);
+    };
+    auto idle_block = [&](bool final) {
+      Block c = abort_block(campaign, 0, pos, o.block, o.sample_rate_hz, o_.run_id);
+      c.final_block = final;
+      publish_block(c);
+      pos += o.block;
+    };
+    auto publish_event = [&](const StatusEvent& e) {
+      publish_status(e);
+      flow.published(Stream::kStatus, e.seq);
+      wait_until([&] { return flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus); });
+    };
+    // Each step's span (settle and integrate) and its integrate event, latest run of it.
+    std::map<int, std::pair<int64_t, int64_t>> span;
+    std::map<int, StatusEvent> integ;
+    int64_t settle_at = 0;
+    for (const auto& e : events) {
+      if (e.state == RunState::kSettle) settle_at = e.sample;
+      if (e.state != RunState::kIntegrate) continue;
+      span[e.step] = {std::min(settle_at, e.sample), e.sample + e.n_samples};
+      integ[e.step] = e;
+    }
+    double t_asked = -1;
+    for (int round = 0;; ++round) {
+      // Idle blocks keep the plant fed until it has played (and the acquisition seen, without a
+      // gap) everything commanded so far.
+      const int64_t target = pos;
+      while (!(tape_->played >= target && tape_->contiguous() == tape_->last_seq)) {
+        if (pos - tape_->played < lead_samples) {
+          idle_block(false);
+          continue;
+        }
+        pump(5);
+        const int64_t c = tape_->contiguous();
+        if (c < tape_->last_seq && acq.now() - t_asked > 0.2) {  // lost on the way here
+          publish_flow(data_, o_.run_id, "resend", "tape", c + 1, tape_->last_seq);
+          t_asked = acq.now();
+        }
+      }
+      std::vector<int> hit;
+      for (const auto& [step, sp] : span)
+        if (tape_->held_in(sp.first, sp.second)) hit.push_back(step);
+      if (hit.empty()) break;
+      if (round >= o.max_repeats)
+        throw InputError(
+            "the free-running plant's command buffer ran dry in " + std::to_string(hit.size()) +
+            " steps again after " + std::to_string(round) +
+            " rounds of repeats (held samples: " + std::to_string(tape_->held_samples) +
+            "): the commands do not reach the plant in time; lower --speed or raise --lead");
+      for (int step : hit) {
+        const StatusEvent& e = integ[step];
+        int input = -1;
+        for (size_t i = 0; i < e.amplitudes.size(); ++i)
+          if (e.amplitudes[i] > 0 && input < 0) input = int(i);
+        SineStep s;
+        s.f_hz = e.frequency_hz;
+        s.n_cycles = e.n_cycles;
+        s.integrate_samples = e.n_samples;
+        s.settle_samples = span[step].second - span[step].first - e.n_samples;
+        const SteppedSineCampaign rep(campaign.inputs(), {input}, {s}, o.sample_rate_hz, o_.run_id);
+        const int64_t start = pos;
+        for (StatusEvent x : rep.events()) {
+          if (x.state != RunState::kSettle && x.state != RunState::kIntegrate) continue;
+          x.sample += start;
+          x.seq = status_seq++;
+          x.step = e.step;
+          x.n_steps = e.n_steps;
+          if (x.state == RunState::kIntegrate) integ[step] = x;
+          publish_event(x);
+        }
+        for (int64_t k = 0; k < command_block_count(rep, o.block); ++k) {
+          Block c = command_block(rep, k, o.block, o.sample_rate_hz, o_.run_id);
+          c.start_sample += start;
+          c.final_block = false;
+          publish_block(c);
+        }
+        pos = start + rep.total_samples();
+        span[step] = {start, pos};
+        repeats.push_back({{"step", step}, {"frequency_hz", e.frequency_hz}, {"round", round + 1}});
+      }
+    }
+    StatusEvent done = events.back();
+    done.seq = status_seq;
+    done.sample = pos;
+    publish_event(done);
+    idle_block(true);
+    last_command = cmd_seq - 1;
+    wait_until([&] { return tape_->final_seq >= 0; });
+    last_tape = tape_->final_seq;
+  }
   // Everyone holds everything: the run is judged by what was measured.
   wait_until([&] {
-    return flow.acked(Stream::kCommand) >= nblocks - 1 &&
-           flow.acked(Stream::kTape) >= nblocks - 1 &&
+    return flow.acked(Stream::kCommand) >= last_command && flow.acked(Stream::kTape) >= last_tape &&
            flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus);
   });
-  for (int i = 0; i < 3; ++i) publish_flow(data_, o_.run_id, "close", "", 0, nblocks - 1);
+  for (int i = 0; i < 3; ++i) publish_flow(data_, o_.run_id, "close", "", 0, last_command);
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   // Engine time of this run (a resumed run: from its first block on).
   const double engine_s =
@@ -190,7 +362,14 @@ Json AcquisitionNode::run() {
           {"samples", total},
           {"excitation", to_string(campaign.events().front().excitation)},
           {"retransmissions", flow.retransmissions()},
-          {"items_retransmitted", flow.items_retransmitted()}};
+          {"items_retransmitted", flow.items_retransmitted()},
+          {"plant_clock", free ? "free" : "lockstep"}};
+  if (free) {
+    sj["held_samples"] = tape_->held_samples;
+    sj["repeated_steps"] = repeats;
+    sj["engine_time_s"] = double(tape_->played) / o.sample_rate_hz;  // held and repeated included
+    sj["speedup"] = sj["engine_time_s"].get<double>() / std::max(wall, 1e-9);
+  }
   return sj;
 }
 

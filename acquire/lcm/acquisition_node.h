@@ -7,6 +7,15 @@
 // FRALAB_FLOW "resend"); when every consumer holds everything, "close" (three times) ends the
 // run. The plant and the analysers may share the instances (memq:// in tests: everything runs in
 // the caller's thread, dispatched while this waits for acknowledgements).
+//
+// Free-running plant (AcquireOptions::free_running, issue 15): no acknowledgement from the plant
+// is awaited; command blocks go out while they are less than `lead` blocks ahead of the plant's
+// clock (the tape it publishes, watched here). The campaign's "done" and final block are held
+// back: idle blocks (every input at its operating point) keep the plant fed until it has played
+// everything; each step whose settle or integration held a sample (the tape's "underrun" channel)
+// is repeated at the end with its own settle (same step index; the analyser has marked the first
+// point invalid), round after round, at most max_repeats; then "done" and the final block. The
+// summary adds plant_clock, held_samples and repeated_steps.
 #pragma once
 
 #include <functional>
@@ -53,12 +62,15 @@ class AcquisitionNode {
 
  private:
   struct Acks;
+  struct TapeWatch;
   lcm::LCM& data_;
   lcm::LCM& control_;
   const Campaign& campaign_;
   AcquisitionLoopOptions o_;
   std::unique_ptr<Acks> acks_;
   lcm::Subscription* sub_ = nullptr;
+  std::unique_ptr<TapeWatch> tape_;  // free-running plant only
+  lcm::Subscription* tape_sub_ = nullptr;
 };
 
 }  // namespace fralab

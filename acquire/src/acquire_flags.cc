@@ -32,6 +32,14 @@ void add_acquire_flags(CLI::App* c, AcquireOptions& o) {
       ->capture_default_str();
   c->add_option("--settle-time-constant-s", o.slowest_time_constant_s,
                 "settling time constant, s (default: the model's slowest)");
+  c->add_flag("--free-running", o.free_running,
+              "the plant runs on its own clock at --speed (not in lockstep); commands are kept "
+              "--lead blocks ahead and a step an underrun touches is repeated");
+  c->add_option("--lead", o.lead, "free-running: command blocks ahead of the plant's clock")
+      ->capture_default_str();
+  c->add_option("--max-repeats", o.max_repeats,
+                "free-running: rounds of repeated steps before the run fails")
+      ->capture_default_str();
 }
 
 std::vector<std::string> acquire_flags(const AcquireOptions& o) {
@@ -62,6 +70,9 @@ std::vector<std::string> acquire_flags(const AcquireOptions& o) {
                                 "--settle-time-constant-s",
                                 lossless(o.slowest_time_constant_s)};
   if (o.odd_lines) f.push_back("--odd-lines");
+  if (o.free_running)
+    f.insert(f.end(), {"--free-running", "--lead", std::to_string(o.lead), "--max-repeats",
+                       std::to_string(o.max_repeats)});
   if (!o.inputs.empty()) f.insert(f.end(), {"--input", o.inputs});
   return f;
 }

@@ -29,6 +29,12 @@ void AcquireOptions::validate() const {
   if (block < 1) throw InputError("--block must be >= 1");
   if (window < 1) throw InputError("--window must be >= 1");
   if (!(speed >= 0)) throw InputError("--speed must be >= 0");
+  if (free_running && !(speed > 0))
+    throw InputError("--free-running needs --speed > 0 (the plant runs on its own clock)");
+  if (free_running && excitation != Excitation::kStepped)
+    throw InputError("--free-running repeats the steps an underrun touches: stepped sine only");
+  if (lead < 1) throw InputError("--lead must be >= 1");
+  if (max_repeats < 0) throw InputError("--max-repeats must be >= 0");
   if (!(amplitude_scale > 0)) throw InputError("--amplitude-scale must be > 0");
   if (multisine_phases != "schroeder" && multisine_phases != "random")
     throw InputError("--multisine-phases \"" + multisine_phases + "\": schroeder or random");

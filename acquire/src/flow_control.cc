@@ -84,7 +84,7 @@ void FlowControl::published(Stream s, int64_t seq) {
 }
 
 int64_t FlowControl::available(Stream s) const {
-  if (s == Stream::kTape)
+  if (s == Stream::kTape && !tape_on_plant_clock_)
     return std::max<int64_t>(acked(Stream::kCommand), floor_[int(Stream::kTape)]);
   return st(s).published;
 }

@@ -12,6 +12,8 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
   c->add_option("--lcm-url", m.lcm_url, "LCM URL (default: a private one per run)");
   c->add_flag("--no-noise", m.no_noise, "plant noise off");
+  c->add_option("--plant-jitter-ms", m.plant_jitter_ms,
+                "with --free-running: the plant's tick times off by up to this much");
   c->add_option_function<std::vector<std::string>>(
        "--on",
        [&m](const std::vector<std::string>& v) {

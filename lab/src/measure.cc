@@ -295,6 +295,10 @@ MeasureResult run_measure(const MeasureOptions& given) {
                                              "--sample-rate",
                                              lossless(o.acquire.sample_rate_hz)};
       if (o.no_noise) plant_args.push_back("--no-noise");
+      if (o.acquire.free_running)  // on its own clock, a tape block per command block's length
+        plant_args.insert(plant_args.end(), {"--free-running", "--speed", lossless(o.acquire.speed),
+                                             "--tick", std::to_string(o.acquire.block),
+                                             "--jitter-ms", lossless(o.plant_jitter_ms)});
       if (o.resume) {
         plant_args.insert(plant_args.end(),
                           {"--replay", tape, "--replay-blocks", std::to_string(rp.first_block)});

@@ -2,7 +2,8 @@
 
 namespace fralab {
 
-PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks)
+PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks,
+                     int tick_samples)
     : plant_(std::move(plant)),
       data_(data),
       control_(control),
@@ -10,6 +11,27 @@ PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, siz
       commands_(plant_.next_seq()) {
   data_.subscribe(kCmdChannel, &PlantNode::on_command, this)->setQueueCapacity(100000);
   data_.subscribe(kFlowChannel, &PlantNode::on_flow, this)->setQueueCapacity(100000);
+  if (tick_samples > 0) buffer_.emplace(tick_samples);
+}
+
+void PlantNode::publish_tape(const Block& b) {
+  tape_block_t msg = to_tape_msg(b);
+  data_.publish(kTapeChannel, &msg);
+  kept_[msg.seq] = std::move(msg);
+  while (kept_.size() > keep_) kept_.erase(kept_.begin());
+}
+
+bool PlantNode::tick() {
+  if (!buffer_ || !error_.empty()) return false;
+  try {
+    std::optional<Block> cmd = buffer_->next();
+    if (!cmd || plant_.done()) return false;
+    publish_tape(plant_.advance(*cmd));
+    return true;
+  } catch (const std::exception& e) {
+    error_ = e.what();
+    return false;
+  }
 }
 
 void PlantNode::announce_ready() { ack("ready", -1); }
@@ -32,6 +54,14 @@ void PlantNode::on_command(const lcm::ReceiveBuffer* rbuf, const std::string& ch
       return;
     }
     const int64_t seq = cmd.seq;
+    if (buffer_) {  // free-running: buffered by its samples, the contiguous part acknowledged
+      if (!plant_.done()) buffer_->add(cmd);
+      if (commands_.offer(seq, std::move(cmd)) != InOrder<Block>::Offer::kDuplicate)
+        while (commands_.pop()) {
+        }
+      ack("command", commands_.delivered());
+      return;
+    }
     if (plant_.done() ||
         commands_.offer(seq, std::move(cmd)) == InOrder<Block>::Offer::kDuplicate) {
       ack("command", commands_.delivered());  // its acknowledgement was lost: say it again
@@ -39,10 +69,7 @@ void PlantNode::on_command(const lcm::ReceiveBuffer* rbuf, const std::string& ch
     }
     bool moved = false;
     while (auto c = commands_.pop()) {
-      tape_block_t msg = to_tape_msg(plant_.advance(*c));
-      data_.publish(kTapeChannel, &msg);
-      kept_[msg.seq] = std::move(msg);
-      while (kept_.size() > keep_) kept_.erase(kept_.begin());
+      publish_tape(plant_.advance(*c));
       moved = true;
     }
     if (moved) ack("command", commands_.delivered());

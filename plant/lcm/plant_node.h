@@ -5,14 +5,22 @@
 // (consumer "plant", stream "command"; again on every duplicate). The last `keep_blocks` tape
 // blocks are kept and republished when the acquisition asks (FRALAB_FLOW "resend", stream
 // "tape": a consumer lost them); "close" ends the run. Tests run it in-process over memq://.
+//
+// Free-running (tick_samples > 0, issue 15): the plant is not in lockstep; command blocks go into a
+// CommandBuffer (plant/command_buffer.h) by the samples they stamp, the contiguous part is still
+// acknowledged (so lost commands are retransmitted), and the caller's clock calls tick(): the next
+// tick_samples samples are played from the buffer, held where it ran dry (channel "underrun"),
+// and published as tape block seq = tick index.
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "fralab/core/in_order.h"
 #include "fralab/lcm_io.h"
+#include "fralab/plant/command_buffer.h"
 #include "fralab/plant/lockstep.h"
 
 namespace fralab {
@@ -22,7 +30,14 @@ class PlantNode {
   /// Subscribes to FRALAB_CMD and FRALAB_FLOW on `data`; acknowledges on `control` (may be
   /// `data`). The first
   /// command expected is the plant's next_seq() (0, or where a replayed plant stands: resume).
-  PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks = 1024);
+  PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks = 1024,
+            int tick_samples = 0);
+  /// Free-running: plays and publishes the next tick; false before the first command (the clock
+  /// has not started) and after the final tick.
+  bool tick();
+  /// Free-running: samples held because the buffer ran dry, and command blocks that came too late.
+  int64_t underrun_samples() const { return buffer_ ? buffer_->underrun_samples() : 0; }
+  int64_t late_blocks() const { return buffer_ ? buffer_->late_blocks() : 0; }
   /// "Ready" (stream "ready", seq -1): the acquisition waits for it before the first command.
   void announce_ready();
   bool started() const { return started_; }
@@ -41,7 +56,9 @@ class PlantNode {
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_flow(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void ack(const std::string& stream, int64_t seq);
+  void publish_tape(const Block& b);
   LockstepPlant plant_;
+  std::optional<CommandBuffer> buffer_;
   lcm::LCM& data_;
   lcm::LCM& control_;
   size_t keep_;

@@ -464,3 +464,88 @@ TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
   EXPECT_GT(red, 200) << px.output;
   EXPECT_GT(blue, 100) << px.output;
 }
+
+// Issue 15, a plant that is not in lockstep: on its own clock at real time, with jittered ticks,
+// fed from a command buffer kept well ahead, the free-running plant gives the lockstep numbers bit
+// for bit (the same commands at the same samples); were the buffer to run dry (a very busy
+// machine), the steps it touched are repeated and the numbers agree within noise instead.
+TEST(Lab, FreeRunningPlantAtRealTimeGivesTheLockstepNumbers) {
+  const std::string d = tmpdir("free");
+  const std::string run =
+      " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
+      "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
+  Cmd lock = sh(kBin + "/fralab measure" + run + " --out " + d + "/lockstep");
+  ASSERT_EQ(lock.status, 0) << lock.output;
+  Cmd free = sh(kBin + "/fralab measure" + run +
+                " --free-running --speed 1 --lead 50 --plant-jitter-ms 5 --out " + d + "/free");
+  ASSERT_EQ(free.status, 0) << free.output;
+  const Json acq = json_load_file(d + "/free/acquire.json");
+  EXPECT_EQ(acq["plant_clock"], "free");
+  EXPECT_GT(acq["wall_time_s"].get<double>(), 0.9 * acq["engine_time_s"].get<double>())
+      << "real time, not faster";
+  int compared = 0;
+  for (const auto& e : fs::directory_iterator(d + "/lockstep/frd")) {
+    const std::string other = d + "/free/frd/" + e.path().filename().string();
+    if (acq["held_samples"].get<int64_t>() == 0) {
+      EXPECT_EQ(fralab::testing::slurp(e.path().string()), fralab::testing::slurp(other)) << other;
+    } else {  // repeated steps: a fresh noise realisation of the same point
+      const Frd a = load_frd(e.path().string()), b = load_frd(other);
+      for (const auto& p : a.points) {
+        bool found = false;
+        for (const auto& q : b.points)
+          if (q.valid && q.w == p.w && std::abs(q.value() - p.value()) < 5 * (p.sigma + q.sigma))
+            found = true;
+        EXPECT_TRUE(found) << other << " w " << p.w;
+      }
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 11);
+}
+
+// The buffer run dry on purpose: the acquisition is stopped (SIGSTOP) for longer than its lead;
+// the plant holds, says so on the tape, the analyser refuses the touched points naming the held
+// samples, the acquisition repeats those steps, and every frequency ends with a valid point
+// within noise of the lockstep run's.
+TEST(Lab, FreeRunningPlantRepeatsTheStepsItsBufferRanDryIn) {
+  const std::string d = tmpdir("free_dry");
+  const std::string run =
+      " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
+      "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
+  Cmd lock = sh(kBin + "/fralab measure" + run + " --out " + d + "/lockstep");
+  ASSERT_EQ(lock.status, 0) << lock.output;
+  // Stopped once the plant has played about a second (the tape past 100 kB), for 2 s: 20 times
+  // the lead.
+  const std::string tape = d + "/dry/tape.lcmlog";
+  Cmd free = sh("(while [ $(stat -c %s " + tape +
+                " 2>/dev/null || echo 0) -lt 100000 ]; do sleep "
+                "0.02; done; pkill -STOP -f '^[^ ]*fralab-acquire .*" +
+                d +
+                "/dry'; sleep 2; pkill -CONT -f "
+                "'^[^ ]*fralab-acquire .*" +
+                d + "/dry') & " + kBin + "/fralab measure" + run +
+                " --free-running --speed 1 --lead 1 --out " + d + "/dry; s=$?; wait; exit $s");
+  ASSERT_EQ(free.status, 0) << free.output;
+  const Json acq = json_load_file(d + "/dry/acquire.json");
+  EXPECT_GT(acq["held_samples"].get<int64_t>(), 300) << acq.dump();
+  ASSERT_GE(acq["repeated_steps"].size(), 1u) << acq.dump();
+  EXPECT_THAT(fralab::testing::slurp(d + "/dry/logs/plant.log"),
+              ::testing::HasSubstr("the command buffer ran dry"));
+  const Frd a = load_frd(d + "/lockstep/frd/Wf_P3.json"), b = load_frd(d + "/dry/frd/Wf_P3.json");
+  int refused = 0;
+  for (const auto& q : b.points)
+    if (!q.valid) {
+      ++refused;
+      EXPECT_THAT(q.note, ::testing::HasSubstr("command buffer ran dry in the step (samples "));
+    }
+  EXPECT_GE(refused, 1);
+  for (const auto& p : a.points) {
+    int valid = 0;
+    for (const auto& q : b.points) {
+      if (!q.valid || q.w != p.w) continue;
+      ++valid;
+      EXPECT_LT(std::abs(q.value() - p.value()), 5 * (p.sigma + q.sigma)) << "w " << p.w;
+    }
+    EXPECT_EQ(valid, 1) << "w " << p.w << ": one valid point per frequency";
+  }
+}

@@ -45,6 +45,24 @@ TEST(FlowControl, AcknowledgementsArePerStreamCumulativeAndNameTheSlowest) {
   EXPECT_EQ(stream_from_string("ready"), std::nullopt);
 }
 
+// A free-running plant makes tape on its own clock: what exists is what the plant was seen to make,
+// and a consumer lacking it is served again, whatever the plant acknowledged of the commands.
+TEST(FlowControl, FreeRunningTapeIsWhatThePlantMadeNotWhatItAcknowledged) {
+  FlowControl f = lab();
+  f.tape_on_plant_clock();
+  for (const char* c : {"plant", "analyze-a", "recorder"}) f.on_ack(c, "ready", -1, 0);
+  f.on_ack("plant", "command", 20, 0);  // commands buffered far ahead
+  f.published(Stream::kTape, 7);        // tape blocks 0..7 made so far
+  EXPECT_EQ(f.available(Stream::kTape), 7);
+  f.on_ack("analyze-a", "tape", 7, 0);
+  f.on_ack("recorder", "tape", 5, 0);
+  EXPECT_FALSE(f.due(Stream::kTape, 0.1));
+  const auto r = f.due(Stream::kTape, 0.1 + kWait);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->from, 6);
+  EXPECT_EQ(r->to, 7);  // not 20
+}
+
 TEST(FlowControl, RetransmitsWhatIsMissingAfterTheWaitDoublingUntilProgress) {
   FlowControl f = lab();
   for (const char* c : {"plant", "analyze-a", "recorder"}) f.on_ack(c, "ready", -1, 0);

@@ -141,6 +141,59 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   EXPECT_EQ(invalid, 1);
 }
 
+// A free-running plant's held samples (tape channel "underrun" 1) inside a window make that point
+// invalid, naming the samples; an "underrun" channel of zeros changes nothing.
+TEST(PairAnalyzer, HeldSamplesOfAFreeRunningPlantInvalidateTheirWindow) {
+  Model m = load_model(source_path("models/j85_95.json"));
+  auto run = simulate_tape(m, {"Wf"}, band(1, 10, 3), false, 1);
+  auto full = analyse(run, "Wf:P3");
+  int64_t mid = 0;
+  int k = 0;
+  for (const auto& e : run.events)
+    if (e.state == RunState::kIntegrate && k++ == 2) mid = e.sample + e.n_samples / 2;
+  for (auto& b : run.blocks) {
+    b.channels.push_back(kUnderrunChannel);
+    for (int i = 0; i < b.n_samples; ++i)
+      b.samples.push_back(b.start_sample + i >= mid && b.start_sample + i < mid + 5 ? 1.0 : 0.0);
+  }
+  auto held = analyse(run, "Wf:P3");
+  ASSERT_EQ(held.size(), full.size());
+  int invalid = 0;
+  for (size_t i = 0; i < full.size(); ++i) {
+    if (!held[i].valid) {
+      ++invalid;
+      EXPECT_THAT(
+          held[i].note,
+          ::testing::HasSubstr("command buffer ran dry in the step (samples " +
+                               std::to_string(mid) + "-" + std::to_string(mid + 4) + " held)"));
+      EXPECT_EQ(held[i].step, full[i].step);
+    } else {
+      EXPECT_EQ(held[i].mag, full[i].mag);
+    }
+  }
+  EXPECT_EQ(invalid, 1);
+
+  // Held in the settle before the window (the transient may reach into it): refused as well.
+  auto run2 = simulate_tape(m, {"Wf"}, band(1, 10, 3), false, 1);
+  int64_t settle = -1;
+  k = 0;
+  for (const auto& e : run2.events)
+    if (e.state == RunState::kSettle && k++ == 1) settle = e.sample + 3;
+  ASSERT_GE(settle, 0);
+  for (auto& b : run2.blocks) {
+    b.channels.push_back(kUnderrunChannel);
+    for (int i = 0; i < b.n_samples; ++i)
+      b.samples.push_back(b.start_sample + i == settle ? 1.0 : 0.0);
+  }
+  auto held2 = analyse(run2, "Wf:P3");
+  ASSERT_EQ(held2.size(), full.size());
+  EXPECT_FALSE(held2[1].valid);
+  EXPECT_THAT(held2[1].note, ::testing::HasSubstr("(samples " + std::to_string(settle) + "-" +
+                                                  std::to_string(settle) + " held)"));
+  EXPECT_TRUE(held2[0].valid);
+  EXPECT_TRUE(held2[2].valid);
+}
+
 TEST(PairAnalyzer, ArrivalOrderAndDuplicatesDoNotChangeTheNumbers) {
   Model m = load_model(source_path("models/j85_95.json"));
   auto run = simulate_tape(m, {"Wf"}, band(1, 10, 3), true, 7);

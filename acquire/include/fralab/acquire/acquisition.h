@@ -39,6 +39,13 @@ struct AcquireOptions {
   int block = 100;                      // samples per command block
   int window = 2;                       // blocks in flight ahead of the slowest consumer
   double speed = 0;                     // 1 = real time, 0 = as fast as the consumers keep up
+  // A free-running plant (issue 15): it runs on its own clock at `speed` (> 0) x real time,
+  // playing commands from a buffer; the acquisition keeps `lead` blocks of commands ahead of the
+  // plant's clock (no acknowledgement awaited), watches the tape for held samples (channel
+  // "underrun") and repeats each step they touch, at most `max_repeats` rounds.
+  bool free_running = false;
+  int lead = 10;
+  int max_repeats = 3;
   /// InputError naming the option (block, window, speed, band, excitation settings).
   void validate() const;
 };
@@ -59,6 +66,5 @@ Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
 /// and the reference (ref_phase, rad; ref_freq_hz), final_block on the last one.
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id);
-
 
 }  // namespace fralab

@@ -51,10 +51,16 @@ class FlowControl {
   void on_ack(const std::string& consumer, const std::string& stream, int64_t seq, double now);
   /// Every consumer has said ready (or acknowledged anything); otherwise *missing names one.
   bool all_ready(std::string* missing) const;
-  /// The acquisition has published `seq` on `s` (command blocks, status events).
+  /// The acquisition has published `seq` on `s` (command blocks, status events); with a
+  /// free-running plant, the tape blocks it has seen the plant make.
   void published(Stream s, int64_t seq);
+  /// A free-running plant (issue 15): tape blocks are made by the plant's clock, not one per
+  /// command, so what exists on the tape is what published(kTape, ..) reported, not the plant's
+  /// command acknowledgement.
+  void tape_on_plant_clock() { tape_on_plant_clock_ = true; }
   /// The last seq that exists on `s`: the last published command or status event; for the tape,
-  /// the plant's command acknowledgement (-1 before any).
+  /// the plant's command acknowledgement (-1 before any), or with tape_on_plant_clock() the last
+  /// tape block published.
   int64_t available(Stream s) const;
   /// The lowest acknowledgement on `s` among its consumers (-1 for one that said ready and
   /// nothing more on `s`, -2 for one never heard);
@@ -93,6 +99,7 @@ class FlowControl {
   State state_[3];
   int64_t floor_[3] = {-1, -1, -1};  // what a ready consumer holds (begin_at)
   int64_t resends_ = 0, items_resent_ = 0;
+  bool tape_on_plant_clock_ = false;
 };
 
 }  // namespace fralab

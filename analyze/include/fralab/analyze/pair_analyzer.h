@@ -17,7 +17,10 @@
 // input excites, relative to |X2(k)| (the best linear approximation's nonlinear-distortion sign).
 // Arithmetic depends only on the samples and the status, never on arrival order or timing, so
 // live, replayed and offline analyses give identical numbers. A window with a missing sample
-// (lost or never-arrived block) yields a point with valid = false and a note naming the gap.
+// (lost or never-arrived block) yields a point with valid = false and a note naming the gap; so
+// does a window, or the settle before it, with a sample a free-running plant held because its
+// command buffer ran dry (tape channel "underrun" nonzero: plant/command_buffer.h), the
+// acquisition then repeating the step.
 #pragma once
 
 #include <map>
@@ -69,6 +72,7 @@ class PairAnalyzer {
  private:
   struct Window {
     StatusEvent st;
+    int64_t from = 0;  // the step's settle start (held samples there disturb the window too)
   };
   void try_complete(bool force);
   FrdPoint compute(const Window& w);
@@ -86,6 +90,11 @@ class PairAnalyzer {
   int64_t base_ = 0;
   std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)
   std::vector<char> have_;
+  // Samples a free-running plant held (tape channel "underrun"), as [first, last] runs, and the
+  // last settle status (its step and start sample).
+  std::vector<std::pair<int64_t, int64_t>> held_;
+  int settle_step_ = -1;
+  int64_t settle_from_ = 0;
   int64_t max_seen_ = -1;
   int64_t blocks_seen_ = 0;
   std::map<int64_t, std::pair<int64_t, int64_t>> seqs_;  // seq -> [start, end)

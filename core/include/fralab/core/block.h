@@ -24,6 +24,10 @@ const char* to_string(RunState s);
 Excitation excitation_from_status_word(const std::string& word);
 RunState run_state_from_string(const std::string& word);
 
+/// The tape channel a free-running plant adds (plant/command_buffer.h): 1 at a sample it held
+/// because its command buffer ran dry (not the excitation), 0 elsewhere.
+inline constexpr const char* kUnderrunChannel = "underrun";
+
 /// samples are channel-major: samples[c * n_samples + k] is channel c at sample start_sample + k.
 struct Block {
   std::string run_id;

@@ -24,7 +24,8 @@ struct MeasureOptions {
   uint64_t seed = 1;       // plant noise seed
   std::string out;
   bool no_noise = false;
-  std::string lcm_url;  // "" = a fresh private URL
+  double plant_jitter_ms = 0;  // a free-running plant's tick times off by up to this (uniform)
+  std::string lcm_url;         // "" = a fresh private URL
   double timeout_s = 3600;
   std::string fit_delay = "auto";  // the identifier's --delay
   double stall_timeout_s = 60;     // a stream standing still this long fails the run (acquire)
