@@ -212,6 +212,11 @@ RawSeries read_series(const std::string& path, const SeriesReadOptions& o) {
 TimeSeries to_time_series(const RawSeries& raw, double sample_rate_hz) {
   const std::string& path = raw.source;
   double fs = sample_rate_hz;
+  if (!raw.time.empty() && fs <= 0 && raw.time.size() >= 2) {
+    // No schedule to say it: the time column's mean rate, a whole number of Hz when that close.
+    const double est = double(raw.time.size() - 1) / (raw.time.back() - raw.time.front());
+    fs = std::abs(est - std::round(est)) <= 1e-6 * est ? std::round(est) : est;
+  }
   if (raw.time.empty()) {
     if (fs <= 0)
       fs = raw.sample_rate_hz;

@@ -13,14 +13,28 @@ namespace fralab {
 namespace {
 
 struct ImportCommand {
-  std::string series, schedule, out;
+  std::string series, schedule, out, schedule_out;
   SeriesReadOptions read;
+  ReferenceScheduleOptions reference;
+  double sample_rate_hz = 0;
   int block = 100;
 };
 
 void run(const ImportCommand& c) {
-  const Schedule schedule = load_schedule(c.schedule);
-  const TimeSeries s = to_time_series(read_series(c.series, c.read), schedule.sample_rate_hz);
+  // The schedule given, or found from the recorded reference channels.
+  Schedule schedule;
+  TimeSeries s;
+  if (!c.schedule.empty()) {
+    schedule = load_schedule(c.schedule);
+    s = to_time_series(read_series(c.series, c.read), schedule.sample_rate_hz);
+  } else {
+    s = to_time_series(read_series(c.series, c.read), c.sample_rate_hz);
+    schedule = schedule_from_reference(s, c.reference);
+    std::printf("fralab: %zu steps found from the reference channels %s, %s\n",
+                (schedule.events.size() - 2) / 2, c.reference.freq_channel.c_str(),
+                c.reference.phase_channel.c_str());
+  }
+  if (!c.schedule_out.empty()) json_save_file(c.schedule_out, schedule_to_json(schedule));
   const std::vector<Block> blocks = series_to_blocks(s, schedule, c.block);
   write_tape_file(c.out, blocks, schedule.events);
   std::printf(
@@ -40,8 +54,24 @@ void add_import_command(CLI::App& app) {
                                "a time series recorded elsewhere (.csv, .wav, .mat) and its "
                                "excitation schedule, as a fralab tape");
   c->add_option("--series", ic->series, "the recording: .csv, .wav or .mat")->required();
-  c->add_option("--schedule", ic->schedule, "the excitation schedule (fralab-schedule/1 JSON)")
-      ->required();
+  c->add_option("--schedule", ic->schedule,
+                "the excitation schedule (fralab-schedule/1 JSON); without it, the stepped-sine "
+                "schedule is found from the recorded reference (--ref-freq, --ref-phase)");
+  c->add_option("--ref-freq", ic->reference.freq_channel, "reference frequency channel, Hz")
+      ->capture_default_str();
+  c->add_option("--ref-phase", ic->reference.phase_channel, "reference phase channel, radians")
+      ->capture_default_str();
+  c->add_option("--min-cycles", ic->reference.min_cycles,
+                "without --schedule: cycles per point, as the measurement used")
+      ->capture_default_str();
+  c->add_option("--min-integrate-s", ic->reference.min_integrate_s,
+                "without --schedule: seconds per point at least, as the measurement used")
+      ->capture_default_str();
+  c->add_option("--run-id", ic->reference.run_id, "without --schedule: the tape's run id")
+      ->capture_default_str();
+  c->add_option("--sample-rate", ic->sample_rate_hz,
+                "without --schedule: Hz (default: the WAV's, or the time column's)");
+  c->add_option("--schedule-out", ic->schedule_out, "also write the schedule used (JSON)");
   c->add_option("--out", ic->out, "the tape to write (LCM log)")->required();
   c->add_option("--time", ic->read.time_column, "CSV and .mat: the time column (seconds)");
   c->add_option("--channels", ic->read.wav_channels, "WAV: the channel names, in order")

@@ -364,6 +364,25 @@ TEST(Lab, ExportedTapeReimportedGivesIdenticalFrdFiles) {
     }
     EXPECT_GE(compared, 10) << ext;
   }
+  // Without the schedule: found from the recorded reference channels (the measurement's
+  // --min-integrate-s given, as the analysis of a foreign recording would need its settings).
+  Cmd i = sh(kBin + "/fralab import --series " + d + "/series.csv --min-integrate-s 2 --out " + d +
+             "/ref.lcmlog");
+  ASSERT_EQ(i.status, 0) << i.output;
+  EXPECT_THAT(i.output, ::testing::HasSubstr("steps found from the reference channels"));
+  Cmd r = sh(kBin + "/fralab analyze --log " + d + "/ref.lcmlog" + pairs + " --out " + d + "/ref");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const auto& e : fs::directory_iterator(d + "/orig/frd")) {
+    const Frd a = load_frd(e.path().string());
+    const Frd b = load_frd(d + "/ref/frd/" + e.path().filename().string());
+    ASSERT_EQ(a.points.size(), b.points.size());
+    for (size_t k = 0; k < a.points.size(); ++k) {  // the same windows: the same numbers
+      EXPECT_EQ(a.points[k].mag, b.points[k].mag);
+      EXPECT_EQ(a.points[k].phase_deg, b.points[k].phase_deg);
+      EXPECT_EQ(a.points[k].sigma, b.points[k].sigma);
+      EXPECT_NEAR(a.points[k].amplitude, b.points[k].amplitude, 1e-12 * a.points[k].amplitude);
+    }
+  }
   // A recording with a sample missing is refused, naming the line.
   std::ifstream in(d + "/series.csv");
   std::ofstream out(d + "/gap.csv");

@@ -263,3 +263,72 @@ TEST(TapeSeries, BlocksToSeriesAndBackKeepEverySampleWhateverTheBlockSize) {
               ThrowsMessage<InputError>(HasSubstr(
                   "block seq 3: starts at sample 61, the previous block ended before 54")));
 }
+
+namespace {
+
+// fs 100 Hz from sample 10: 300 samples at 1 Hz exciting u_A (amplitude 2), then 250 at 2 Hz
+// exciting u_B (amplitude 0.5), then 20 idle; phase continuous, the reference recorded.
+TimeSeries reference_series(double f2 = 2.0) {
+  TimeSeries s;
+  s.channels = {"u_A", "u_B", "ref_phase", "ref_freq_hz"};
+  s.sample_rate_hz = 100;
+  s.start_sample = 10;
+  s.n_samples = 570;
+  s.samples.assign(4 * 570, 0.0);
+  double phi = 0.3;
+  for (int64_t k = 0; k < 570; ++k) {
+    const double f = k < 300 ? 1.0 : k < 550 ? f2 : 0.0;
+    const size_t n = size_t(s.n_samples);
+    s.samples[0 * n + size_t(k)] = 5 + (k < 300 ? 2 * std::sin(phi) : 0.0);
+    s.samples[1 * n + size_t(k)] = -1 + (k >= 300 && k < 550 ? 0.5 * std::sin(phi) : 0.0);
+    s.samples[2 * n + size_t(k)] = phi;
+    s.samples[3 * n + size_t(k)] = f;
+    phi += 2 * M_PI * f / 100;
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(ReferenceSchedule, StepsWindowsInputsAndAmplitudesComeFromTheRecordedReference) {
+  ReferenceScheduleOptions o;
+  o.min_cycles = 2;
+  o.min_integrate_s = 0;
+  const TimeSeries s = reference_series();
+  const Schedule sch = schedule_from_reference(s, o);
+  ASSERT_EQ(sch.events.size(), 6u);  // start, 2 x (settle, integrate), done
+  const StatusEvent& i0 = sch.events[2];
+  EXPECT_EQ(sch.events[1].state, RunState::kSettle);
+  EXPECT_EQ(sch.events[1].sample, 10);
+  EXPECT_EQ(sch.events[1].n_samples, 100);
+  EXPECT_EQ(i0.state, RunState::kIntegrate);
+  EXPECT_EQ(i0.sample, 110);  // the last 2 cycles (200 samples) of the 1 Hz run
+  EXPECT_EQ(i0.n_samples, 200);
+  EXPECT_EQ(i0.n_cycles, 2);
+  EXPECT_EQ(i0.inputs, (std::vector<std::string>{"A", "B"}));
+  EXPECT_NEAR(i0.amplitudes[0], 2.0, 1e-12);
+  EXPECT_EQ(i0.amplitudes[1], 0.0);
+  EXPECT_NEAR(i0.ref_phase_rad, std::fmod(s.at(2, 100), 2 * M_PI), 1e-15);
+  const StatusEvent& i1 = sch.events[4];
+  EXPECT_EQ(i1.sample, 10 + 300 + 150);  // 2 cycles at 2 Hz: 100 samples, the run's last
+  EXPECT_EQ(i1.n_samples, 100);
+  EXPECT_EQ(i1.step, 1);
+  EXPECT_EQ(i1.amplitudes[0], 0.0);
+  EXPECT_NEAR(i1.amplitudes[1], 0.5, 1e-12);
+  EXPECT_EQ(sch.events.back().state, RunState::kDone);
+  EXPECT_EQ(sch.events.back().sample, 560);
+  EXPECT_EQ(sch.events.front().seq, -1);
+  for (size_t k = 1; k < sch.events.size(); ++k) EXPECT_EQ(sch.events[k].seq, int64_t(k - 1));
+
+  // Refused: cycles that are not a whole number of samples; a run too short; no reference.
+  EXPECT_THAT([&] { schedule_from_reference(reference_series(3.0), o); },
+              ThrowsMessage<InputError>(HasSubstr("step 1 (3 Hz, t = 3.1 s): 2 cycles are")));
+  o.min_cycles = 4;
+  EXPECT_THAT(
+      [&] { schedule_from_reference(s, o); },
+      ThrowsMessage<InputError>(HasSubstr("300 samples at this frequency, 4 cycles need 400")));
+  TimeSeries no_ref = s;
+  no_ref.channels[3] = "other";
+  EXPECT_THAT([&] { schedule_from_reference(no_ref, o); },
+              ThrowsMessage<InputError>(HasSubstr("no reference channel ref_freq_hz")));
+}

@@ -38,4 +38,25 @@ Json schedule_to_json(const Schedule& s);
 Schedule schedule_from_json(const Json& j, const std::string& source);
 Schedule load_schedule(const std::string& file);
 
+/// A stepped-sine schedule found from a recorded reference alone (`fralab import --reference`):
+/// the generator's frequency (Hz) and phase (radians) channels, as fralab's own tape records them.
+/// A step is a maximal run of samples at one frequency > 0 (relative 1e-9); its integration is its
+/// last N whole cycles, N = max(min_cycles, ceil(min_integrate_s f)) as the campaign chooses them
+/// (acquire/campaign.h), L = round(N fs / f) samples (refused when N cycles are not within 1e-6 of
+/// a whole number of samples: not a fralab stepped sine), the rest its settle; the reference phase
+/// is the recorded one at the window's first sample. The excited input is the command channel
+/// u_<input> that varies over the step (the largest rms about its mean relative to the mean's
+/// size; every other u_ channel's input gets amplitude 0); its amplitude is sqrt(2) x that rms
+/// over the window (a sine's peak). InputError naming the channel or the step otherwise.
+struct ReferenceScheduleOptions {
+  std::string freq_channel = "ref_freq_hz";
+  std::string phase_channel = "ref_phase";
+  int min_cycles = 8;
+  double min_integrate_s = 4.0;
+  std::string run_id = "imported";
+  void validate() const;
+};
+struct TimeSeries;
+Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOptions& o);
+
 }  // namespace fralab

@@ -68,7 +68,8 @@ RawSeries read_mat_series(const std::string& path, const SeriesReadOptions& o);
 /// By extension: .csv, .wav, .mat; InputError naming the file otherwise.
 RawSeries read_series(const std::string& path, const SeriesReadOptions& o);
 
-/// Puts a raw series on the sample clock of `sample_rate_hz` (0: the WAV header's rate). Checks
+/// Puts a raw series on the sample clock of `sample_rate_hz` (0: the WAV header's rate, or the
+/// time column's mean rate, rounded to a whole number of Hz within 1e-6). Checks
 /// every sample is finite (a NaN names its channel, row and time), the time column increasing,
 /// without gaps and on the clock (see the header comment), and for WAV that the rates agree.
 TimeSeries to_time_series(const RawSeries& raw, double sample_rate_hz);
