@@ -11,8 +11,11 @@ PKGS=(build-essential cmake pkg-config git
       util-linux nftables)
 # --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
 # clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh).
-# chromium: report.html checked in a real browser (headless).
-if [ "${1:-}" = "--test" ]; then PKGS+=(octave octave-signal clang libclang-rt-14-dev chromium); fi
+# chromium: report.html checked in a real browser (headless); python3-scipy: the .mat export
+# loaded by scipy.io.loadmat.
+if [ "${1:-}" = "--test" ]; then
+  PKGS+=(octave octave-signal clang libclang-rt-14-dev chromium python3-scipy)
+fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -437,6 +437,28 @@ TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
   EXPECT_GE(states, 1);
   EXPECT_EQ(outputs, 5);
   EXPECT_EQ(names, "psi|lb/hr|psi per lb/hr|P3|Wf") << o.output;
+
+  // And Python: scipy.io.loadmat (Debian's python3-scipy, /usr/bin/python3).
+  ASSERT_EQ(sh("/usr/bin/python3 -c 'import scipy.io'").status, 0)
+      << "python3-scipy: scripts/setup.sh --test installs it";
+  Cmd py = sh(
+      "/usr/bin/python3 -c \"import scipy.io as sio, numpy as np; m = sio.loadmat('" + d +
+      "/r.mat', squeeze_me=True, struct_as_record=False); s = m['tf'].Wf_P3; w = " + lossless(w) +
+      "; G = np.polyval(s.num, 1j*w) / np.polyval(s.den, 1j*w) * np.exp(-1j*w*s.delay_s); "
+      "print(repr(G.real), repr(G.imag), repr(m['frd'].Wf_P3.mag[1]), m['ss'].A.shape[0], "
+      "m['units'].P3, m['outputs'][2])\"");
+  ASSERT_EQ(py.status, 0) << py.output;
+  std::istringstream pin(py.output);
+  std::string p3_unit, p3_name;
+  double pre = 0, pim = 0, pmag = 0;
+  int pstates = 0;
+  pin >> pre >> pim >> pmag >> pstates >> p3_unit >> p3_name;
+  EXPECT_NEAR(pre, want.real(), 1e-12 * std::abs(want)) << py.output;
+  EXPECT_NEAR(pim, want.imag(), 1e-12 * std::abs(want)) << py.output;
+  EXPECT_EQ(pmag, frd.points[1].mag) << py.output;
+  EXPECT_EQ(pstates, states);
+  EXPECT_EQ(p3_unit, "psi");
+  EXPECT_EQ(p3_name, "P3");
 }
 
 // Issue 15, report.html: one self-contained page (every figure an inline SVG, the overview of the
