@@ -6,9 +6,9 @@
 // --speed 1 additionally paces blocks at real time (a real test cell), --speed 0 goes as fast as
 // the consumers keep up. The results depend only on the samples, never on the speed.
 #include <CLI/CLI.hpp>
-#include <csignal>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -18,6 +18,7 @@
 
 #include "acquisition_node.h"
 #include "fralab/acquire/acquire_flags.h"
+#include "fralab/core/measurement_chain.h"
 #include "fralab/core/text.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
@@ -59,6 +60,10 @@ int main(int argc, char** argv) {
                  "resume: publish status events from this index on")
       ->capture_default_str();
   app.add_option("--summary", summary, "write a JSON summary here");
+  std::string chain;
+  app.add_option("--chain", chain,
+                 "the measurement chain (JSON, core/measurement_chain.h), put on the tape in the "
+                 "start event");
   CLI11_PARSE(app, argc, argv);
   try {
     Model model = load_model_or_embedded(engine);
@@ -78,6 +83,10 @@ int main(int argc, char** argv) {
     lo.flow = flow;
     lo.first_block = lo_first_block;
     lo.first_status = lo_first_status;
+    if (!chain.empty()) {
+      lo.start_message =
+          chain_to_message(chain_from_json(json_parse_text(chain, "--chain"), {"--chain", ""}));
+    }
     lo.flow.stall_timeout_s = stall_timeout;
     lo.stop_requested = [] { return g_stop != 0; };
     std::signal(SIGINT, on_signal);

@@ -195,6 +195,7 @@ Json AcquisitionNode::run() {
   start.seq = -1;
   start.sample = 0;
   start.n_samples = campaign.total_samples();
+  start.message = o_.start_message;
   publish_status(start);  // outside the flow control: informative
 
   const auto t0 = Clock::now();

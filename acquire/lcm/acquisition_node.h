@@ -43,6 +43,9 @@ struct AcquisitionLoopOptions {
   /// comes before is on the tape; the plant stands at the block's first sample).
   int64_t first_block = 0;
   int64_t first_status = 0;
+  /// The start event's message: the measurement chain (core/measurement_chain.h,
+  /// chain_to_message), so that the tape says how it was measured.
+  std::string start_message;
 };
 
 class AcquisitionNode {

@@ -10,9 +10,10 @@ void json_fail(const JsonWhere& where, const std::string& message) {
   throw InputError(where.str() + ": " + message);
 }
 
-Json json_load_file(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file + ": cannot open for reading (check the path)");
+namespace {
+
+// Parses `in`, whose errors name `file` (a file, or where a text came from).
+Json parse_limited(std::istream& in, const std::string& file) {
   // No fralab file nests deeper than a few levels: a depth limit keeps a hostile file (200,000
   // nested arrays) from exhausting the stack of whatever walks it.
   int64_t deepest_at = -1;
@@ -32,6 +33,19 @@ Json json_load_file(const std::string& file) {
     throw InputError(file + ": JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
                      " levels (near byte " + std::to_string(deepest_at) + "): not a fralab file");
   return j;
+}
+
+}  // namespace
+
+Json json_load_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open for reading (check the path)");
+  return parse_limited(in, file);
+}
+
+Json json_parse_text(const std::string& text, const std::string& where) {
+  std::istringstream in(text);
+  return parse_limited(in, where);
 }
 
 void json_save_file(const std::string& file, const Json& j) {

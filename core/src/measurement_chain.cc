@@ -59,4 +59,16 @@ MeasurementChain chain_from_json(const Json& j, const JsonWhere& where) {
   return c;
 }
 
+std::string chain_to_message(const MeasurementChain& c) {
+  return kChainMessagePrefix + chain_to_json(c).dump();
+}
+
+std::optional<MeasurementChain> chain_from_message(const std::string& message,
+                                                   const std::string& where) {
+  const std::string prefix = kChainMessagePrefix;
+  if (message.rfind(prefix, 0) != 0) return std::nullopt;
+  return chain_from_json(
+      json_parse_text(message.substr(prefix.size()), where + ": measurement chain"), {where, ""});
+}
+
 }  // namespace fralab

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "fralab/diagnose/report.h"
+#include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -44,10 +45,23 @@ std::string run_diagnose(const DiagnoseCommand& c) {
   // The lab's measurement chain, as the measurement recorded it (else an ideal one).
   DiagnoseOptions opt;
   const std::string run_file = data_dir + "/run.json";
+  bool chain_known = false;
   if (fs::exists(run_file)) {
     const Json run = json_load_file(run_file);
-    if (run.contains("measurement_chain"))
+    if (run.contains("measurement_chain")) {
       opt.chain = chain_from_json(run["measurement_chain"], {run_file, "/measurement_chain"});
+      chain_known = true;
+    }
+  }
+  // Else the tape's own record of it (the start event's message), when the folder has the tape.
+  const std::string tape = data_dir + "/tape.lcmlog";
+  if (!chain_known && fs::exists(tape)) {
+    for (const StatusEvent& e : read_tape_run(tape).events)
+      if (e.state == RunState::kStart)
+        if (auto c = chain_from_message(e.message, tape)) {
+          opt.chain = *c;
+          break;
+        }
   }
   Diagnosis d = diagnose(sim, data, opt);
   json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));

@@ -343,23 +343,26 @@ MeasureResult run_measure(const MeasureOptions& given) {
       }
       std::string consumers_csv;
       for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
-      std::vector<std::string> acq = {module_path("fralab-acquire"),
-                                      "--engine",
-                                      engine_file,
-                                      "--lcm-url",
-                                      url,
-                                      "--run-id",
-                                      r.run_id,
-                                      "--consumers",
-                                      consumers_csv,
-                                      "--stall-timeout",
-                                      lossless(o.stall_timeout_s),
-                                      "--first-block",
-                                      std::to_string(rp.first_block),
-                                      "--first-status",
-                                      std::to_string(rp.first_status),
-                                      "--summary",
-                                      o.out + "/acquire.json"};
+      std::vector<std::string> acq = {
+          module_path("fralab-acquire"),
+          "--engine",
+          engine_file,
+          "--lcm-url",
+          url,
+          "--run-id",
+          r.run_id,
+          "--consumers",
+          consumers_csv,
+          "--stall-timeout",
+          lossless(o.stall_timeout_s),
+          "--first-block",
+          std::to_string(rp.first_block),
+          "--first-status",
+          std::to_string(rp.first_status),
+          "--summary",
+          o.out + "/acquire.json",
+          "--chain",
+          chain_to_json(emulator_chain(model, ao.sample_rate_hz)).dump()};
       for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
       const auto t0 = std::chrono::steady_clock::now();
       // The progress line, on a terminal only: it listens to the run's status events and

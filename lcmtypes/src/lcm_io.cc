@@ -13,6 +13,7 @@
 #include <memory>
 #include <set>
 
+#include "fralab/core/measurement_chain.h"
 #include "fralab/core/text.h"
 
 namespace fralab {
@@ -554,6 +555,10 @@ Json tape_summary(const std::string& path) {
           } else if (ev.channel == kStatusChannel) {
             StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
             j["states"][to_string(e.state)] = j["states"].value(to_string(e.state), 0) + 1;
+            if (e.state == RunState::kStart && !j.contains("measurement_chain"))
+              if (auto c = chain_from_message(e.message,
+                                              path + ": event " + std::to_string(ev.eventnum)))
+                j["measurement_chain"] = chain_to_json(*c);
           }
         } catch (const InputError& e) {
           throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());

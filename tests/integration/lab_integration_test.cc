@@ -83,6 +83,10 @@ TEST(Lab, MeasureRecordsEveryChannelOnACompleteTape) {
   }
   Json run = json_load_file(d + "/run.json");
   EXPECT_GT(run["engine_time_s"].get<double>(), 50.0);
+  // The measurement chain is on the tape itself (its start event), as in run.json.
+  ASSERT_TRUE(j.contains("measurement_chain")) << info.output;
+  EXPECT_EQ(j["measurement_chain"], run["measurement_chain"]);
+  EXPECT_EQ(j["measurement_chain"]["sample_rate_hz"], 1000.0);
   // The identifier ran as a process: a tf per pair and the transfer matrix.
   Json p3 = json_load_file(d + "/tf/Wf_P3.json");
   EXPECT_EQ(p3["fit"]["status"], "converged");
@@ -504,6 +508,17 @@ TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
   EXPECT_EQ(width, 1100) << px.output;
   EXPECT_GT(red, 200) << px.output;
   EXPECT_GT(blue, 100) << px.output;
+
+  // A measure folder without its run.json (a tape and its frd brought from elsewhere): the chain
+  // is read from the tape's start event, so the comparison stays like for like.
+  fs::create_directories(d + "/bare");
+  fs::copy(measured() + "/frd", d + "/bare/frd");
+  fs::copy_file(measured() + "/tape.lcmlog", d + "/bare/tape.lcmlog");
+  Cmd bare = sh(kBin + "/fralab diagnose --simulation j85_95_sim --measured " + d + "/bare --out " +
+                d + "/dg_bare --no-plots");
+  ASSERT_EQ(bare.status, 0) << bare.output;
+  EXPECT_EQ(json_load_file(d + "/dg_bare/diagnosis.json")["measurement_chain"],
+            json_load_file(measured() + "/run.json")["measurement_chain"]);
 }
 
 // Issue 15, a plant that is not in lockstep: on its own clock at real time, with jittered ticks,

@@ -33,6 +33,8 @@ inline constexpr int kMaxJsonDepth = 64;
 /// Parses a JSON file; syntax errors name the file, line and column; nesting deeper than
 /// kMaxJsonDepth is refused naming the file (a hostile file cannot exhaust the stack).
 Json json_load_file(const std::string& file);
+/// The same for a text (a message, a flag); errors name `where`.
+Json json_parse_text(const std::string& text, const std::string& where);
 
 /// Writes pretty JSON (2-space indent, trailing newline); throws InputError when it cannot.
 void json_save_file(const std::string& file, const Json& j);

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <complex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,5 +47,14 @@ struct MeasurementChain {
 Json chain_to_json(const MeasurementChain& c);
 /// Errors name `where`.
 MeasurementChain chain_from_json(const Json& j, const JsonWhere& where);
+
+/// The chain on the tape itself: the run's start status event carries it as its message,
+/// "measurement_chain: " followed by chain_to_json's text (so a tape alone says how it was
+/// measured). chain_from_message: nullopt for any other message; InputError naming `where` for a
+/// chain that does not read.
+inline constexpr const char* kChainMessagePrefix = "measurement_chain: ";
+std::string chain_to_message(const MeasurementChain& c);
+std::optional<MeasurementChain> chain_from_message(const std::string& message,
+                                                   const std::string& where);
 
 }  // namespace fralab
