@@ -7,7 +7,7 @@ PKGS=(build-essential cmake pkg-config git
       liblcm-dev liblcm-bin liblcm-java default-jdk-headless libjchart2d-java
       libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libmatio-dev libsndfile1-dev libcmark-gfm-dev
-      libcmark-gfm-extensions-dev gnuplot-nox iproute2
+      libcmark-gfm-extensions-dev libboost-dev gnuplot-nox iproute2
       util-linux nftables)
 # --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
 # clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh).

@@ -1,6 +1,7 @@
 #include "fralab/diagnose/diagnose.h"
 
 #include <algorithm>
+#include <boost/math/tools/roots.hpp>
 #include <cmath>
 #include <functional>
 
@@ -105,6 +106,75 @@ std::string explain(const Finding& f) {
               : "; common to every path from " + f.input + ": its actuator or calibration";
   if (f.scope == Scope::kPlant) ex += "; common to every path: a plant state";
   return ex;
+}
+
+// A finding's primary parameter and its value in the simulation (nullopt: the simulation lacks
+// what the finding adds, so "the simulation's value" is the finding's absence). "" for a sign
+// error (no continuous parameter).
+std::pair<std::string, std::optional<double>> primary_parameter(const Finding& f, const Model&) {
+  switch (f.cause) {
+    case CauseKind::kTimeDelay:
+      return {"delay_s", 0.0};
+    case CauseKind::kGainMismatch:
+      return {"gain_db", 0.0};
+    case CauseKind::kPoleShift:
+      return {"to_rad_s", f.parameters.at("from_rad_s")};
+    case CauseKind::kDampingError:
+      return {"to_zeta", f.parameters.at("from_zeta")};
+    case CauseKind::kMissingLag:
+    case CauseKind::kMissingLead:
+      return {"corner_rad_s", std::nullopt};
+    case CauseKind::kMissingResonance:
+      return {"wn_rad_s", std::nullopt};
+    case CauseKind::kHysteresis:
+    case CauseKind::kDeadband:
+      return {"width", std::nullopt};
+    case CauseKind::kMeasurementCoupling:
+      return {"gain", 0.0};
+    case CauseKind::kSignError:
+      return {"", std::nullopt};
+  }
+  return {"", std::nullopt};
+}
+
+// The 1-sigma interval of a parameter: where g(v) = chi2(v) - (chi2_min + s) crosses zero on
+// each side of the fitted value v0 (g(v0) < 0). The bracket starts 1e-3 |v0| (or a floor in the
+// parameter's units) away and doubles, at most 60 times; the crossing is found by TOMS 748.
+// Scale parameters (corners, frequencies, widths) stay positive. +-inf when g never turns
+// positive.
+std::array<double, 2> parameter_interval(const std::function<double(double)>& g, double v0,
+                                         const std::string& key, const DiagnoseOptions&) {
+  const bool positive =
+      key == "corner_rad_s" || key == "wn_rad_s" || key == "to_rad_s" || key == "width";
+  const double floor = key == "delay_s" ? 1e-5 : key == "gain_db" ? 1e-3 : 1e-6;
+  std::array<double, 2> out{-INFINITY, INFINITY};
+  for (int side = 0; side < 2; ++side) {
+    const double dir = side ? 1.0 : -1.0;
+    double step = std::max(1e-3 * std::abs(v0), floor);
+    double inner = v0, outer = v0;
+    bool found = false;
+    for (int k = 0; k < 60; ++k) {
+      outer = v0 + dir * step;
+      if (positive && outer <= 0) outer = v0 * std::pow(0.5, k + 1);  // toward 0, never at it
+      if (g(outer) > 0) {
+        found = true;
+        break;
+      }
+      inner = outer;
+      step *= 2;
+    }
+    if (!found) continue;
+    boost::uintmax_t iters = 60;
+    try {
+      const auto r =
+          boost::math::tools::toms748_solve(g, std::min(inner, outer), std::max(inner, outer),
+                                            boost::math::tools::eps_tolerance<double>(30), iters);
+      out[size_t(side)] = 0.5 * (r.first + r.second);
+    } catch (const std::exception&) {  // a profile too flat to bracket cleanly: the bracket's edge
+      out[size_t(side)] = outer;
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -407,6 +477,58 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       if (i != skip) apply_finding(m, fs[i]);
     return m;
   };
+  // 4b. Every finding is resolved by the data (file comment): its primary parameter's interval,
+  // and its simulation value outside it.
+  {
+    std::vector<Finding> kept;
+    for (size_t i = 0; i < findings.size(); ++i) {
+      Finding& f = findings[i];
+      // chi2 over the finding's pairs of a model (the fitting data, sigma_eff as fitted).
+      auto chi2_of_model = [&](const Model& m) {
+        double c = 0;
+        for (const auto& p : original) {
+          if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) == f.pairs.end()) continue;
+          for (size_t q = 0; q < p.w.size(); ++q) {
+            const C g = model_pair_response(m, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0);
+            c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
+          }
+        }
+        return c;
+      };
+      size_t n = 0;
+      for (const auto& p : original)
+        if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) n += p.w.size();
+      const double c_min = chi2_of_model(with(findings, findings.size()));
+      const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+      const auto [key, sim_value] = primary_parameter(f, sim);
+      double c_sim = 0;
+      if (sim_value) {
+        std::vector<Finding> moved = findings;
+        moved[i].parameters[key] = *sim_value;
+        c_sim = chi2_of_model(with(moved, findings.size()));
+      } else {
+        c_sim = chi2_of_model(with(findings, i));  // the simulation lacks it: without it
+      }
+      if (!key.empty()) {
+        auto chi2_at = [&](double v) {
+          std::vector<Finding> moved = findings;
+          moved[i].parameters[key] = v;
+          return chi2_of_model(with(moved, findings.size())) - (c_min + s);
+        };
+        f.intervals[key] = parameter_interval(chi2_at, f.parameters.at(key), key, opt);
+      }
+      if (c_sim - c_min > s) {
+        kept.push_back(f);
+        continue;
+      }
+      std::string why = "not resolved by the data: chi2 over its pairs is " + fmt(c_min) +
+                        " with it and " + fmt(c_sim) + " at the simulation's " +
+                        (sim_value ? key + " = " + fmt(*sim_value) : std::string("(without it)")) +
+                        ", less than " + fmt(s) + " apart";
+      d.dropped.push_back({f, why});
+    }
+    findings = kept;
+  }
   // 5. Every finding earns its place on the independent validation measurement: removed from the
   // extended model, its pairs' validation error must rise. The one that helps least is dropped
   // (and said why) until every remaining one does; then the extended model must beat the
@@ -497,6 +619,17 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   return d;
 }
 
+namespace {
+// {"delay_s": [lo, hi]}, null for an unbounded side.
+Json intervals_json(const Finding& f) {
+  Json j = Json::object();
+  for (const auto& [k, v] : f.intervals)
+    j[k] = {std::isfinite(v[0]) ? Json(v[0]) : Json(nullptr),
+            std::isfinite(v[1]) ? Json(v[1]) : Json(nullptr)};
+  return j;
+}
+}  // namespace
+
 Json diagnosis_to_json(const Diagnosis& d) {
   Json j{{"format", "fralab-diagnosis/1"}, {"findings", Json::array()}};
   for (const auto& f : d.findings) {
@@ -511,7 +644,8 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"explanation", f.explanation},
                              {"error_before", f.error_before},
                              {"error_after", f.error_after},
-                             {"pairs", f.pairs}});
+                             {"pairs", f.pairs},
+                             {"intervals", intervals_json(f)}});
   }
   j["measurement_chain"] = chain_to_json(d.chain);
   j["dropped"] = Json::array();
@@ -525,6 +659,7 @@ Json diagnosis_to_json(const Diagnosis& d) {
          {"input", x.finding.input.empty() ? Json(nullptr) : Json(x.finding.input)},
          {"parameters", p},
          {"pairs", x.finding.pairs},
+         {"intervals", intervals_json(x.finding)},
          {"reason", x.reason}});
   }
   j["unexplained"] = Json::array();

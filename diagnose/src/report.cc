@@ -102,6 +102,8 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
     md << "):";
     for (const auto& [k, v] : f.parameters) md << " " << k << " = " << v;
     for (const auto& [k, v] : f.text_parameters) md << " " << k << " = " << v;
+    for (const auto& [k, v] : f.intervals)
+      md << " (" << k << " 1-sigma " << v[0] << " .. " << v[1] << ")";
     md << ". " << f.explanation << ". Error " << f.error_before << " -> " << f.error_after
        << " over ";
     for (size_t i = 0; i < f.pairs.size(); ++i) md << (i ? ", " : "") << f.pairs[i];

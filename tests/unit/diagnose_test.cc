@@ -115,6 +115,28 @@ TEST(Diagnose, TimeDelayInOnePath) {
   EXPECT_THAT(f.explanation, HasSubstr("phase residual linear in w"));
 }
 
+// The finding's explicit 1-sigma interval: where chi2 rises by 1 (the fit is exact here). For a
+// delay on u:y with relative sigma_eff r at each point, chi2(tau0 + d) - chi2(tau0) = sum (w d)^2 /
+// r^2 to first order, so the half-width is r / sqrt(sum w^2); it holds the truth.
+TEST(Diagnose, AFindingsIntervalIsWhereChi2RisesByOne) {
+  Model truth = simulation();
+  path(truth, "y").tf.delay_s = 0.011;
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  ASSERT_TRUE(f.intervals.count("delay_s"));
+  const auto [lo, hi] = f.intervals.at("delay_s");
+  const double r = std::hypot(kRelSigma, DiagnoseOptions{}.sigma_floor);
+  double sw2 = 0;
+  for (int k = 0; k <= 36; ++k) sw2 += std::pow(0.05 * std::pow(10.0, k / 10.0), 2);
+  const double half = r / std::sqrt(sw2);
+  EXPECT_NEAR(hi - f.parameters.at("delay_s"), half, 0.05 * half);
+  EXPECT_NEAR(f.parameters.at("delay_s") - lo, half, 0.05 * half);
+  EXPECT_LT(lo, 0.011);
+  EXPECT_GT(hi, 0.011);
+  EXPECT_GT(lo, 0.0) << "the simulation's 0 is outside: resolved";
+  const Json j = diagnosis_to_json(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(j["findings"][0]["intervals"]["delay_s"].size(), 2u);
+}
+
 TEST(Diagnose, MissingLag) {
   Model truth = simulation();
   path(truth, "z").tf.poles.push_back(Root::Real(-15));

@@ -30,6 +30,13 @@
 //                       actuator otherwise biases it
 //   measurement_coupling  the position channel X records X + g O: u_X:X sees F = 1 + g H_OX, every
 //                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
+// Every finding is resolved by the data: its primary parameter (delay_s, corner_rad_s, wn_rad_s,
+// to_rad_s, to_zeta, gain_db, width, gain; a sign error has none) is given a 1-sigma interval,
+// where chi2 over the finding's pairs (every other finding in place, the parameter alone moved)
+// rises by s = max(1, chi2_min / N) above its minimum (Boost.Math's TOMS 748 on the crossing, the
+// bracket widened by doubling from 1e-3 of the value); a finding whose simulation value (0 for a
+// delay, gain or coupling, the simulated pole or damping, or the finding absent for what the
+// simulation lacks) does not raise chi2 by more than s is not resolved and is dropped, said why.
 // Every finding earns its place: with a validation measurement (another seed and amplitude), a
 // finding whose removal from the extended model does not raise its pairs' validation error is
 // dropped (Diagnosis::dropped, with the figures), one at a time, the least useful first, until
@@ -122,6 +129,9 @@ struct Finding {
   std::string explanation;
   double error_before = 0, error_after = 0;
   std::vector<std::string> pairs;  // the measured pairs it explains
+  /// The primary parameter's 1-sigma interval from the data (see "resolved" in the file
+  /// comment): {lo, hi}, +-inf where chi2 never rises enough within the search range.
+  std::map<std::string, std::array<double, 2>> intervals;
 };
 
 struct PairReport {  // per pair, for the report
