@@ -16,7 +16,7 @@ declare -A allowed=(
   [acquire]="core plant acquire"
   [analyze]="core analyze"
   [identify]="core analyze identify"
-  [diagnose]="core plant analyze diagnose"
+  [diagnose]="core plant analyze identify diagnose"
   [exchange]="core analyze identify exchange"
   [lab]="core lcm plant acquire analyze identify diagnose exchange lab"
 )

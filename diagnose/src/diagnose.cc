@@ -7,6 +7,7 @@
 
 #include "causes/cause.h"
 #include "causes/measurement_coupling.h"
+#include "causes/missing_path.h"
 #include "causes/nonlinear.h"
 #include "fralab/core/numerics.h"
 #include "fralab/core/text.h"
@@ -31,6 +32,7 @@ constexpr std::pair<CauseKind, const char*> kCauseNames[] = {
     {CauseKind::kMeasurementCoupling, "measurement_coupling"},
     {CauseKind::kDampingError, "damping_error"},
     {CauseKind::kSignError, "sign_error"},
+    {CauseKind::kMissingPath, "missing_path"},
 };
 constexpr std::pair<Scope, const char*> kScopeNames[] = {{Scope::kPath, "path"},
                                                          {Scope::kOutput, "output"},
@@ -69,6 +71,13 @@ void apply_finding(Model& m, const Finding& f) {
   if (f.cause == CauseKind::kMeasurementCoupling) {
     m.inputs[m.input_index(f.input)].measurement_coupling.push_back(
         {f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
+    return;
+  }
+  if (f.cause == CauseKind::kMissingPath) {
+    if (m.path(f.output, f.input) || !f.tf) return;
+    Tf t = *f.tf;
+    t.gain = f.parameters.at("gain");
+    m.paths.push_back({f.output, f.input, t, Json::object()});
     return;
   }
   if (f.cause == CauseKind::kHysteresis || f.cause == CauseKind::kDeadband) {
@@ -247,8 +256,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   Diagnosis d;
   d.chain = opt.chain;
   d.extended = sim;
-  // Prepare the pairs the simulation can speak to.
-  std::vector<PairFit> pairs;
+  // Prepare the pairs the simulation can speak to (and those it has no path for).
+  std::vector<PairFit> pairs, absent;
   for (const auto& mp : data) {
     auto [e1, e2] = split_pair(mp.pair);
     PairFit p;
@@ -265,6 +274,10 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     }
     if (sim.input_index(p.input) < 0 || (!p.output.empty() && sim.output_index(p.output) < 0))
       continue;
+    if (!p.output.empty() && !sim.path(p.output, p.input)) {  // a path the simulation lacks
+      absent.push_back(absent_pair_points(mp, opt));
+      continue;
+    }
     for (const auto& pt : mp.frd.points) {
       if (!usable(pt, opt)) continue;
       auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain);
@@ -292,6 +305,13 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   // 1. Measurement coupling, per input: joint over u_X:X and every X:O.
   for (const auto& in : sim.inputs) {
     if (auto f = fit_measurement_coupling(sim, in, pairs, opt)) coupling_findings.push_back(*f);
+  }
+
+  // 1b. Paths the simulation lacks, where the data respond.
+  std::vector<Finding> path_findings;
+  for (const PairFit& p : absent) {
+    std::string why;
+    if (auto f = fit_missing_path(sim, p, opt, &why)) path_findings.push_back(*f);
   }
 
   // 2. Per pair: nonlinear actuators first, then up to max_causes_per_path linear causes.
@@ -387,6 +407,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   // 3. Scope: group consistent findings of the same cause.
   std::vector<bool> used(raw.size(), false);
   std::vector<Finding> findings = coupling_findings;
+  findings.insert(findings.end(), path_findings.begin(), path_findings.end());
   auto make = [&](const Cause& c, Scope scope, const std::string& in, const std::string& out,
                   const std::vector<size_t>& members) {
     Finding f;
@@ -451,6 +472,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       const Frd& f = validation ? mp.validation : mp.frd;
       bool known = false;
       for (const auto& p : original) known |= p.pair == mp.pair;
+      // A pair the simulation has no path for counts where a finding names it, never in a total
+      // (the simulation's error there is unbounded).
+      for (const auto& p : absent) known |= !which.empty() && p.pair == mp.pair;
       if (!known || f.points.empty()) continue;
       std::vector<double> w;
       std::vector<C> meas;
@@ -461,7 +485,10 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
         meas.push_back(pt.value());
         amp.push_back(pt.amplitude);
       }
-      double e = pair_error(w, meas, [&](double x, size_t i) {
+      if (w.empty()) continue;
+      // A model with no response on the pair (a path it lacks) errs by 1 there (100 %).
+      const bool responds = model_pair_response(m, mp.pair, w[0], amp[0], opt.chain).has_value();
+      double e = !responds ? 1.0 : pair_error(w, meas, [&](double x, size_t i) {
         return model_pair_response(m, mp.pair, x, amp[i], opt.chain);
       });
       s += e * e * w.size();
@@ -486,18 +513,22 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       // chi2 over the finding's pairs of a model (the fitting data, sigma_eff as fitted).
       auto chi2_of_model = [&](const Model& m) {
         double c = 0;
-        for (const auto& p : original) {
-          if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) == f.pairs.end()) continue;
-          for (size_t q = 0; q < p.w.size(); ++q) {
-            const C g = model_pair_response(m, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0);
-            c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
+        for (const std::vector<PairFit>* set :
+             {&original, static_cast<const std::vector<PairFit>*>(&absent)})
+          for (const auto& p : *set) {
+            if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) == f.pairs.end()) continue;
+            for (size_t q = 0; q < p.w.size(); ++q) {
+              const C g = model_pair_response(m, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0);
+              c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
+            }
           }
-        }
         return c;
       };
       size_t n = 0;
-      for (const auto& p : original)
-        if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) n += p.w.size();
+      for (const std::vector<PairFit>* set :
+           {&original, static_cast<const std::vector<PairFit>*>(&absent)})
+        for (const auto& p : *set)
+          if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) n += p.w.size();
       const double c_min = chi2_of_model(with(findings, findings.size()));
       const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
       const auto [key, sim_value] = primary_parameter(f, sim);
@@ -646,6 +677,7 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"error_after", f.error_after},
                              {"pairs", f.pairs},
                              {"intervals", intervals_json(f)}});
+    if (f.tf) j["findings"].back()["tf"] = tf_to_json(*f.tf);
   }
   j["measurement_chain"] = chain_to_json(d.chain);
   j["dropped"] = Json::array();

@@ -58,9 +58,10 @@ Model simulation() {
 
 // Exact data of `truth` for u:y, u:z and the actuator u_u:u, 0.05-200 rad/s at 10 per decade;
 // `h3` is the odd-harmonic level recorded on the actuator's points (the nonlinearity's trigger).
-std::vector<MeasuredPair> measure(const Model& truth, double h3 = 0.0) {
+std::vector<MeasuredPair> measure(const Model& truth, double h3 = 0.0,
+                                  const std::vector<std::string>& pairs = {"u:y", "u:z", "u_u:u"}) {
   std::vector<MeasuredPair> out;
-  for (const std::string pair : {"u:y", "u:z", "u_u:u"}) {
+  for (const std::string& pair : pairs) {
     MeasuredPair mp;
     mp.pair = pair;
     mp.frd.pair = pair;
@@ -135,6 +136,42 @@ TEST(Diagnose, AFindingsIntervalIsWhereChi2RisesByOne) {
   EXPECT_GT(lo, 0.0) << "the simulation's 0 is outside: resolved";
   const Json j = diagnosis_to_json(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(j["findings"][0]["intervals"]["delay_s"].size(), 2u);
+}
+
+// A path the simulation lacks: the data respond in u:w, the simulation has no path there; the
+// path is fitted (gain, lag, delay as the truth's) and the extended model has it.
+TEST(Diagnose, APathTheSimulationLacksIsFittedAndAdded) {
+  Model sim = simulation();
+  ModelOutput w;
+  w.name = "w";
+  w.units = "1";
+  sim.outputs.push_back(w);
+  Model truth = sim;
+  Tf t = tf(0.5, {Root::Real(-5)});
+  t.delay_s = 0.02;
+  truth.paths.push_back({"w", "u", t, Json::object()});
+  const Diagnosis d = diagnose(sim, measure(truth, 0.0, {"u:y", "u:z", "u_u:u", "u:w"}));
+  for (const auto& x : d.dropped) ADD_FAILURE() << "dropped: " << x.reason;
+  ASSERT_EQ(d.findings.size(), 1u);
+  const Finding& f = d.findings[0];
+  EXPECT_EQ(f.cause, CauseKind::kMissingPath);
+  EXPECT_EQ(f.scope, Scope::kPath);
+  EXPECT_EQ(f.input, "u");
+  EXPECT_EQ(f.output, "w");
+  EXPECT_NEAR(f.parameters.at("gain"), 0.5, 0.01 * 0.5);
+  EXPECT_NEAR(f.parameters.at("delay_s"), 0.02, 0.5e-3);
+  EXPECT_EQ(f.parameters.at("poles"), 1.0);
+  ASSERT_TRUE(f.tf);
+  EXPECT_NEAR(f.tf->poles.at(0).real, -5.0, 0.05);
+  EXPECT_EQ(f.error_before, 1.0);
+  EXPECT_LT(f.error_after, 0.01);
+  ASSERT_NE(d.extended.path("w", "u"), nullptr);
+  EXPECT_LT(std::abs(d.extended.path("w", "u")->tf.at(3.0) / t.at(3.0) - 1.0), 0.01);
+  EXPECT_THAT(f.explanation, HasSubstr("where the simulation has no path"));
+  EXPECT_EQ(diagnosis_to_json(d)["findings"][0]["cause"], "missing_path");
+  // Noise alone in a pair without a path in either: nothing.
+  const Diagnosis none = diagnose(sim, measure(sim, 0.0, {"u:y", "u:z", "u_u:u"}));
+  EXPECT_THAT(none.findings, IsEmpty());
 }
 
 TEST(Diagnose, MissingLag) {

@@ -1,5 +1,6 @@
 #include "random_plant.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -45,6 +46,7 @@ bool HiddenEffect::matches(const Finding& f) const {
 
 RandomCase random_case(uint64_t seed, int index, int n_hidden) {
   std::mt19937_64 g(seed * 1000003u + uint64_t(index));
+  std::mt19937_64 g_path(seed * 7919u + uint64_t(index) * 104729u + 17u);
   std::uniform_real_distribution<double> u(0, 1);
   auto logu = [&](double lo, double hi) { return lo * std::pow(hi / lo, u(g)); };
   RandomCase c;
@@ -84,7 +86,10 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
   for (int h = 0; h < nh; ++h) {
     const std::string in = m.inputs[g() % ni].name, out = m.outputs[g() % no].name;
     ModelPath* ep = find_path(c.engine, out, in);
-    const int kind = int(g() % 11);
+    // A path the simulation lacks (kind 11) is drawn from its own generator, 1 effect in 12, so
+    // the other kinds' cases stay the sequence they were (the figures measured before it).
+    int kind = int(g() % 11);
+    if (g_path() % 12 == 0) kind = 11;
     const bool at_input = kind == 4 || kind == 5;
     const bool at_output = kind == 10;
     const std::string key = at_input ? "in:" + in : at_output ? "out:" + out : in + ":" + out;
@@ -172,6 +177,16 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
         e.value = pr->zeta * logu(0.15, 0.4);
         e.tol_rel = 0.15;
         pr->zeta = e.value;
+        break;
+      }
+      case 11: {  // a path the simulation lacks: the engine responds there, the simulation not
+        e.cause = CauseKind::kMissingPath, e.param = "gain", e.value = ep->tf.gain;
+        e.tol_rel = 0.1;
+        auto& sp = c.simulation.paths;
+        sp.erase(
+            std::remove_if(sp.begin(), sp.end(),
+                           [&](const ModelPath& p) { return p.input == in && p.output == out; }),
+            sp.end());
         break;
       }
       case 10: {  // a sensor lag: every path into the output, reported once (scope output)

@@ -28,6 +28,9 @@
 //                       then alternately with the linear causes (a gain offset left out of the
 //                       width's fit) until the width moves by < 0.1 %: the simulation's own slow
 //                       actuator otherwise biases it
+//   missing_path        a response beyond the noise in a pair X:O the simulation has no path
+//                       for: the path fitted by TFNS (causes/missing_path.h)   gain, delay_s,
+//                       poles, zeros; its error_before is 1 (the simulation has no response)
 //   measurement_coupling  the position channel X records X + g O: u_X:X sees F = 1 + g H_OX, every
 //                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
 // Every finding is resolved by the data: its primary parameter (delay_s, corner_rad_s, wn_rad_s,
@@ -79,6 +82,7 @@ enum class CauseKind {
   kMeasurementCoupling,
   kDampingError,
   kSignError,
+  kMissingPath,
 };
 /// Where a finding sits: one path, every path into an output (its sensor), every path from an
 /// input (its actuator or calibration), every path (the plant).
@@ -132,6 +136,9 @@ struct Finding {
   /// The primary parameter's 1-sigma interval from the data (see "resolved" in the file
   /// comment): {lo, hi}, +-inf where chi2 never rises enough within the search range.
   std::map<std::string, std::array<double, 2>> intervals;
+  /// missing_path: the path fitted (the extended model's new path; its gain follows
+  /// parameters["gain"]).
+  std::optional<Tf> tf;
 };
 
 struct PairReport {  // per pair, for the report

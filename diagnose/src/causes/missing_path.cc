@@ -1,0 +1,87 @@
+#include "missing_path.h"
+
+#include <cmath>
+
+#include "fralab/identify/tfns.h"
+#include "fralab/identify/transfer_matrix.h"
+
+namespace fralab::diag {
+
+PairFit absent_pair_points(const MeasuredPair& mp, const DiagnoseOptions& opt) {
+  PairFit p;
+  p.pair = mp.pair;
+  std::tie(p.e1, p.e2) = split_pair(mp.pair);
+  p.input = p.e1;
+  p.output = p.e2;
+  for (const auto& pt : mp.frd.points) {
+    if (!(pt.valid && pt.sigma > 0 && pt.mag > 0 && pt.sigma <= opt.max_rel_sigma * pt.mag))
+      continue;
+    p.w.push_back(pt.w);
+    p.meas.push_back(pt.value());
+    p.sim.push_back(0.0);
+    p.amp.push_back(pt.amplitude);
+    p.h3.push_back(pt.h3_rel);
+    p.sig.push_back(std::hypot(pt.sigma, opt.sigma_floor * pt.mag));
+    p.factor.push_back(1.0);
+  }
+  return p;
+}
+
+std::optional<Finding> fit_missing_path(const Model& sim, const PairFit& p,
+                                        const DiagnoseOptions& opt, std::string* why) {
+  const size_t N = p.w.size();
+  if (N < 3) return std::nullopt;
+  double c0 = 0;
+  for (size_t q = 0; q < N; ++q) c0 += std::norm(p.meas[q]) / (p.sig[q] * p.sig[q]);
+  if (c0 <= N + 4 * std::sqrt(double(N))) return std::nullopt;  // within the noise
+  // What the model puts around a path: its response with a unit path in place.
+  Model unit = sim;
+  unit.paths.push_back({p.output, p.input, Tf{}, Json::object()});
+  std::vector<FrdPoint> data;
+  for (size_t q = 0; q < N; ++q) {
+    const auto around = model_pair_response(unit, p.pair, p.w[q], p.amp[q], opt.chain);
+    if (!around || std::abs(*around) == 0) continue;
+    const C g = p.meas[q] / *around;
+    FrdPoint pt;
+    pt.w = p.w[q];
+    pt.mag = std::abs(g);
+    pt.phase_deg = std::arg(g) * 180 / M_PI;
+    pt.sigma = p.sig[q] / std::abs(*around);
+    data.push_back(pt);
+  }
+  FitOptions fo;
+  fo.max_delay_s = std::max(opt.delay_max_s, 1e-3);
+  fo.max_den_order = std::min<int>(6, int(data.size()) / 2);
+  FitResult r;
+  try {
+    fo.validate();
+    r = fit_tf(data, fo);
+  } catch (const std::exception& e) {
+    if (why)
+      *why =
+          std::string("a response where the simulation has no path, but no path fits: ") + e.what();
+    return std::nullopt;
+  }
+  for (const Root& pole : r.tf.poles)
+    if (!pole.stable()) {
+      if (why) *why = "a response where the simulation has no path; the path fitted is unstable";
+      return std::nullopt;
+    }
+  Finding f;
+  f.cause = CauseKind::kMissingPath;
+  f.scope = Scope::kPath;
+  f.input = p.input;
+  f.output = p.output;
+  f.parameters = {{"gain", r.tf.gain},
+                  {"delay_s", r.tf.delay_s},
+                  {"poles", double(r.tf.poles.size())},
+                  {"zeros", double(r.tf.zeros.size())}};
+  f.tf = r.tf;
+  f.pairs = {p.pair};
+  f.explanation = "a response beyond the noise where the simulation has no path (chi2 " + fmt(c0) +
+                  " against zero over " + std::to_string(N) + " points): the path " +
+                  tf_to_text(r.tf) + " fitted";
+  return f;
+}
+
+}  // namespace fralab::diag
