@@ -68,8 +68,11 @@ bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
       grid[size_t(r - rows.begin())][size_t(c - cols.begin())] = &plots[i];
   }
   const std::string title = "measured (points), simulation (red), extended model (blue, dashed)";
-  return render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kPng) &&
-         render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kSvg);
+  // The overview is a bonus: the report references it only when it was drawn.
+  if (!render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kPng) ||
+      !render_bode_overview(grid, rows, cols, title, pdir, "overview", PlotFormat::kSvg))
+    std::filesystem::remove(pdir + "/overview.png");
+  return true;
 }
 
 void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,

@@ -29,7 +29,9 @@ void run(const MonitorCommand& c) {
   if (!c.simulation.empty()) sim = load_model_or_embedded(c.simulation);
   std::cout << c.pair << (sim ? " against " + sim->name : std::string()) << "\n"
             << monitor_header(bool(sim)) << "\n";
-  std::map<double, FrdPoint> shown;  // by w: a point is printed once
+  // By w and validity: a point is printed once (a step repeated after a refused point, e.g. a
+  // free-running plant's dry buffer, shows again).
+  std::map<std::pair<double, bool>, FrdPoint> shown;
   auto sim_at = [&](const FrdPoint& p) -> std::optional<std::complex<double>> {
     if (!sim) return std::nullopt;
     return model_pair_response(*sim, c.pair, p.w, p.amplitude);
@@ -45,8 +47,8 @@ void run(const MonitorCommand& c) {
   auto show = [&](const Frd& f) {
     bool added = false;
     for (const FrdPoint& p : f.points) {
-      if (shown.count(p.w)) continue;
-      shown[p.w] = p;
+      if (shown.count({p.w, p.valid})) continue;
+      shown[{p.w, p.valid}] = p;
       added = true;
       std::cout << monitor_row(p, sim_at(p)) << "\n" << std::flush;
     }
