@@ -525,13 +525,19 @@ TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
 // fed from a command buffer kept well ahead, the free-running plant gives the lockstep numbers bit
 // for bit (the same commands at the same samples); were the buffer to run dry (a very busy
 // machine), the steps it touched are repeated and the numbers agree within noise instead.
-TEST(Lab, FreeRunningPlantAtRealTimeGivesTheLockstepNumbers) {
-  const std::string d = tmpdir("free");
-  const std::string run =
-      " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
-      "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
-  Cmd lock = sh(kBin + "/fralab measure" + run + " --out " + d + "/lockstep");
+// A short J85 run (two steps of Wf, 5-10 Hz, about 5 s of engine time), measured in lockstep
+// into DIR/lockstep for the free-running tests to compare with.
+const std::string kFreeRun =
+    " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
+    "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
+void measure_lockstep(const std::string& d) {
+  Cmd lock = sh(kBin + "/fralab measure" + kFreeRun + " --out " + d + "/lockstep");
   ASSERT_EQ(lock.status, 0) << lock.output;
+}
+
+TEST(Lab, FreeRunningPlantAtRealTimeGivesTheLockstepNumbers) {
+  const std::string d = tmpdir("free"), run = kFreeRun;
+  measure_lockstep(d);
   Cmd free = sh(kBin + "/fralab measure" + run +
                 " --free-running --speed 1 --lead 50 --plant-jitter-ms 5 --out " + d + "/free");
   ASSERT_EQ(free.status, 0) << free.output;
@@ -564,12 +570,8 @@ TEST(Lab, FreeRunningPlantAtRealTimeGivesTheLockstepNumbers) {
 // samples, the acquisition repeats those steps, and every frequency ends with a valid point
 // within noise of the lockstep run's.
 TEST(Lab, FreeRunningPlantRepeatsTheStepsItsBufferRanDryIn) {
-  const std::string d = tmpdir("free_dry");
-  const std::string run =
-      " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
-      "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
-  Cmd lock = sh(kBin + "/fralab measure" + run + " --out " + d + "/lockstep");
-  ASSERT_EQ(lock.status, 0) << lock.output;
+  const std::string d = tmpdir("free_dry"), run = kFreeRun;
+  measure_lockstep(d);
   // Stopped once the plant has played about a second (the tape past 100 kB), for 2 s: 20 times
   // the lead.
   const std::string tape = d + "/dry/tape.lcmlog";

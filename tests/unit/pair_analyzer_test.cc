@@ -36,6 +36,14 @@ std::vector<FrdPoint> analyse(const fralab::testing::TapeRun& run, const std::st
 
 Complex pt(const FrdPoint& p) { return p.value(); }
 
+// The middle sample of the run's k-th integration window.
+int64_t window_middle(const fralab::testing::TapeRun& run, int k) {
+  int i = 0;
+  for (const auto& e : run.events)
+    if (e.state == RunState::kIntegrate && i++ == k) return e.sample + e.n_samples / 2;
+  return -1;
+}
+
 // The exact sampled response of the plant's channel to its input's command (lti.h).
 Complex sampled(const Model& m, const std::string& input, const std::string& ch, double w) {
   auto tf = m.command_chain(input, ch);
@@ -120,11 +128,7 @@ TEST(PairAnalyzer, LostBlockInvalidatesOnlyItsPointAndSaysSo) {
   auto run = simulate_tape(m, {"Wf"}, band(1, 10, 3), false, 1);
   auto full = analyse(run, "Wf:P3");
   // Drop a block inside the second integration window.
-  int64_t mid = 0;
-  int k = 0;
-  for (const auto& e : run.events)
-    if (e.state == RunState::kIntegrate && k++ == 1) mid = e.sample + e.n_samples / 2;
-  const int64_t seq = mid / 100;
+  const int64_t seq = window_middle(run, 1) / 100;
   auto lossy = analyse(run, "Wf:P3", {}, {seq});
   ASSERT_EQ(lossy.size(), full.size());
   int invalid = 0;
@@ -147,10 +151,7 @@ TEST(PairAnalyzer, HeldSamplesOfAFreeRunningPlantInvalidateTheirWindow) {
   Model m = load_model(source_path("models/j85_95.json"));
   auto run = simulate_tape(m, {"Wf"}, band(1, 10, 3), false, 1);
   auto full = analyse(run, "Wf:P3");
-  int64_t mid = 0;
-  int k = 0;
-  for (const auto& e : run.events)
-    if (e.state == RunState::kIntegrate && k++ == 2) mid = e.sample + e.n_samples / 2;
+  const int64_t mid = window_middle(run, 2);
   for (auto& b : run.blocks) {
     b.channels.push_back(kUnderrunChannel);
     for (int i = 0; i < b.n_samples; ++i)
@@ -176,7 +177,7 @@ TEST(PairAnalyzer, HeldSamplesOfAFreeRunningPlantInvalidateTheirWindow) {
   // Held in the settle before the window (the transient may reach into it): refused as well.
   auto run2 = simulate_tape(m, {"Wf"}, band(1, 10, 3), false, 1);
   int64_t settle = -1;
-  k = 0;
+  int k = 0;
   for (const auto& e : run2.events)
     if (e.state == RunState::kSettle && k++ == 1) settle = e.sample + 3;
   ASSERT_GE(settle, 0);
