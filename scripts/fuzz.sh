@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Fuzzes every reader (tape, model, frd, csv, tfns) with libFuzzer under AddressSanitizer and
-# UndefinedBehaviorSanitizer: configures build-fuzz/ with clang (-DFRALAB_FUZZ=ON), builds the
-# fuzz_<reader> executables and runs each for RUNS executions (default 100000) from the seed corpus
+# Fuzzes every reader (tape, model, frd, csv, tfns, series, schedule) with libFuzzer under
+# AddressSanitizer and UndefinedBehaviorSanitizer: configures build-fuzz/ with clang
+# (-DFRALAB_FUZZ=ON), builds the fuzz_<reader> executables and runs each for RUNS executions
+# (default 100000) from the seed corpus
 # tests/fuzz/corpus/<reader>. A crash stops with the input kept in build-fuzz/crashes/<reader>/
 # (add it to tests/fuzz/regressions/<reader>/ once fixed: fuzz_regression_test replays it).
 # Prints, per reader, executions, seconds and crashes; exits non-zero on any crash.
@@ -14,7 +15,7 @@ runs=${1:-100000}
 seed=${FUZZ_SEED:-1}
 shift || true
 readers=("$@")
-[ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns)
+[ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns series schedule)
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DFRALAB_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   >/dev/null || exit 2
 targets=()

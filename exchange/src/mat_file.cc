@@ -9,6 +9,16 @@
 
 namespace fralab {
 
+MatValue MatValue::scalar(double v) { return matrix(1, 1, {v}); }
+
+MatValue MatValue::column(const std::vector<double>& v) { return matrix(v.size(), 1, v); }
+
+MatValue MatValue::structure() {
+  MatValue m;
+  m.kind = Kind::kStruct;
+  return m;
+}
+
 MatValue MatValue::matrix(size_t rows, size_t cols, std::vector<double> v) {
   MatValue m;
   m.kind = Kind::kReal;
@@ -42,8 +52,9 @@ MatValue MatValue::str_list(const std::vector<std::string>& s) {
 }
 
 MatValue& MatValue::add(const std::string& name, MatValue v) {
-  fields.emplace_back(name, std::move(v));
-  return fields.back().second;
+  field_names.push_back(name);
+  field_values.push_back(std::move(v));
+  return field_values.back();
 }
 
 bool is_mat_name(const std::string& name) {
@@ -114,15 +125,18 @@ matvar_t* make_var(const std::string& name, const MatValue& v, const std::string
     }
     case MatValue::Kind::kStruct: {
       std::vector<const char*> names;
-      for (const auto& [f, _] : v.fields) {
+      for (const std::string& f : v.field_names) {
         if (!is_mat_name(f)) throw InputError(where + ": '" + f + "' is not a MATLAB field name");
         names.push_back(f.c_str());
       }
       size_t dims[2] = {1, 1};
       names.push_back(nullptr);  // the list ends with a null
       var = Mat_VarCreateStruct2(n, 2, dims, names.data());
-      for (const auto& [f, value] : v.fields)
-        Mat_VarSetStructFieldByName(var, f.c_str(), 0, make_var(f, value, where + "." + f, keep));
+      for (size_t k = 0; k < v.field_names.size(); ++k) {
+        const std::string& f = v.field_names[k];
+        Mat_VarSetStructFieldByName(var, f.c_str(), 0,
+                                    make_var(f, v.field_values[k], where + "." + f, keep));
+      }
       break;
     }
   }

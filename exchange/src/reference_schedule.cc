@@ -53,13 +53,17 @@ Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOpt
     const double f = s.at(size_t(cf), a);
     const std::string where = s.source + ": step " + std::to_string(r) + " (" + lossless(f) +
                               " Hz, t = " + lossless(double(s.start_sample + a) / fs) + " s)";
-    const int n = std::max(o.min_cycles, int(std::ceil(o.min_integrate_s * f)));
+    if (!(f <= fs / 2))
+      throw InputError(where + ": above half the " + lossless(fs) + " Hz sample rate");
+    const double cycles = std::max(double(o.min_cycles), std::ceil(o.min_integrate_s * f));
+    if (!(cycles <= 1e9)) throw InputError(where + ": " + lossless(cycles) + " cycles per point");
+    const int n = int(cycles);
     const double exact = n * fs / f;
     const int64_t L = std::llround(exact);
     if (std::abs(exact - double(L)) > 1e-6)
       throw InputError(where + ": " + std::to_string(n) + " cycles are " + lossless(exact) +
                        " samples, not a whole number: not a fralab stepped sine (give --schedule)");
-    if (L > b - a)
+    if (L < 2 || L > b - a)
       throw InputError(where + ": " + std::to_string(b - a) + " samples at this frequency, " +
                        std::to_string(n) + " cycles need " + std::to_string(L) +
                        " (--min-cycles, --min-integrate-s as the measurement's?)");

@@ -214,7 +214,8 @@ TimeSeries to_time_series(const RawSeries& raw, double sample_rate_hz) {
   double fs = sample_rate_hz;
   if (!raw.time.empty() && fs <= 0 && raw.time.size() >= 2) {
     // No schedule to say it: the time column's mean rate, a whole number of Hz when that close.
-    const double est = double(raw.time.size() - 1) / (raw.time.back() - raw.time.front());
+    const double span = raw.time.back() - raw.time.front();
+    const double est = span > 0 ? double(raw.time.size() - 1) / span : 0.0;
     fs = std::abs(est - std::round(est)) <= 1e-6 * est ? std::round(est) : est;
   }
   if (raw.time.empty()) {
@@ -241,8 +242,9 @@ TimeSeries to_time_series(const RawSeries& raw, double sample_rate_hz) {
   if (!raw.time.empty()) {
     auto on_clock = [&](size_t k, int64_t* sample) {
       const double t = raw.time[k];
-      if (!std::isfinite(t)) throw InputError(path + ": " + row(k) + ": time is " + lossless(t));
       const double x = t * fs;
+      if (!std::isfinite(t) || !(std::abs(x) < 9.0e15))  // sample numbers exact in a double
+        throw InputError(path + ": " + row(k) + ": time " + lossless(t) + " s is out of range");
       *sample = std::llround(x);
       return std::abs(x - double(*sample)) <= kClockTolerance;
     };

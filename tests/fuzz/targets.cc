@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "fralab/core/frd.h"
+#include "fralab/exchange/schedule.h"
+#include "fralab/exchange/time_series.h"
 #include "fralab/identify/readers.h"
 #include "fralab/plant/model.h"
 #include "tape_analysis.h"
@@ -50,6 +52,14 @@ int run(const std::string& reader, const uint8_t* data, size_t size) {
       read_frd_csv(path);
     } else if (reader == "tfns") {
       read_fit_input(path);
+    } else if (reader == "series") {  // a recording to import, its clock and its reference
+      const TimeSeries ts = to_time_series(read_csv_series(path, {}), 0);
+      ReferenceScheduleOptions o;
+      o.min_cycles = 1;
+      o.min_integrate_s = 0;
+      schedule_from_reference(ts, o);
+    } else if (reader == "schedule") {
+      load_schedule(path);
     } else {
       throw std::logic_error("no fuzz target " + reader);
     }

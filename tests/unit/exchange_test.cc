@@ -86,6 +86,7 @@ TEST(TimeSeriesCsv, MalformedFilesAreRefusedNamingTheLineAndChannel) {
   EXPECT_THAT(read_error("t,y,y\n0,1,1\n"), HasSubstr("column 'y' named twice"));
   EXPECT_THAT(read_error("# only a comment\n"), HasSubstr("no header row"));
   EXPECT_THAT(read_error("t,y\n"), HasSubstr("no data rows"));
+  EXPECT_THAT(read_error("t,y\n1e300,1\n"), HasSubstr("line 2: time 1e+300 s is out of range"));
   EXPECT_EQ(read_error("t,y\n0,1\n0.01,2\n"), "(no error)");
 }
 

@@ -23,7 +23,7 @@ std::vector<uint8_t> bytes(const fs::path& p) {
 
 TEST(FuzzRegression, EveryCorpusAndRegressionInputIsReadOrRefusedCleanly) {
   int n = 0;
-  for (const char* reader : {"tape", "model", "frd", "csv", "tfns"}) {
+  for (const char* reader : {"tape", "model", "frd", "csv", "tfns", "series", "schedule"}) {
     for (const char* set : {"corpus", "regressions"}) {
       const fs::path dir = fs::path(kFuzzDir) / set / reader;
       if (!fs::exists(dir)) continue;
@@ -34,7 +34,7 @@ TEST(FuzzRegression, EveryCorpusAndRegressionInputIsReadOrRefusedCleanly) {
       }
     }
   }
-  EXPECT_GE(n, 5);  // at least a seed per reader
+  EXPECT_GE(n, 7);  // at least a seed per reader
 }
 
 TEST(FuzzRegression, TheTwoKnownCrashesAreRefused) {

@@ -20,19 +20,19 @@ struct MatValue {
   std::vector<std::complex<double>> complex;
   std::string text;
   std::vector<std::string> texts;
-  std::vector<std::pair<std::string, MatValue>> fields;
+  // A struct's fields: names and values side by side (a std::pair of the incomplete MatValue is
+  // not allowed in the class; a std::vector of it is).
+  std::vector<std::string> field_names;
+  std::vector<MatValue> field_values;
 
-  static MatValue scalar(double v) { return matrix(1, 1, {v}); }
-  static MatValue column(const std::vector<double>& v) { return matrix(v.size(), 1, v); }
+  // (Defined out of line: the class must be complete before a MatValue is made or destroyed.)
+  static MatValue scalar(double v);
+  static MatValue column(const std::vector<double>& v);
   static MatValue matrix(size_t rows, size_t cols, std::vector<double> v);
   static MatValue complex_column(const std::vector<std::complex<double>>& v);
   static MatValue str(const std::string& s);
   static MatValue str_list(const std::vector<std::string>& s);
-  static MatValue structure() {
-    MatValue m;
-    m.kind = Kind::kStruct;
-    return m;
-  }
+  static MatValue structure();
   MatValue& add(const std::string& name, MatValue v);  // a struct's field; returns it
 };
 
