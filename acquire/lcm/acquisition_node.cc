@@ -52,6 +52,7 @@ struct AcquisitionNode::TapeWatch {
       return;  // corrupt or foreign: the consumers ask for it again
     }
     if (b.run_id != run_id || b.seq < 0 || !seen.insert(b.seq).second) return;
+    while (seen.count(contiguous_ + 1)) ++contiguous_;
     played = std::max(played, b.start_sample + b.n_samples);
     last_seq = std::max(last_seq, b.seq);
     if (b.final_block) final_seq = b.seq;
@@ -66,15 +67,9 @@ struct AcquisitionNode::TapeWatch {
         held.push_back({n, n});
     }
   }
-  /// Every tape block up to `seq` seen (none lost on the way to the acquisition).
-  int64_t contiguous() const {
-    int64_t c = -1;
-    for (int64_t s : seen) {
-      if (s != c + 1) break;
-      c = s;
-    }
-    return c;
-  }
+  /// The last tape block up to which every one was seen (none lost on the way here).
+  int64_t contiguous() const { return contiguous_; }
+  int64_t contiguous_ = -1;
   bool held_in(int64_t a, int64_t b) const {  // any held sample in [a, b)
     for (const auto& [f, l] : held)
       if (f < b && l >= a) return true;
