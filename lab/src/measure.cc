@@ -203,6 +203,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
   AcquireOptions ao = o.acquire;
   ao.inputs = inputs_csv;
+  // The lab's measurement chain: recorded in run.json and, through the acquisition, on the tape.
+  const Json chain = chain_to_json(emulator_chain(model, ao.sample_rate_hz));
   std::vector<std::string> outs;
   for (const auto& out : model.outputs) outs.push_back(out.name);
   for (int i : excite) {
@@ -227,22 +229,21 @@ MeasureResult run_measure(const MeasureOptions& given) {
     run["resumed"] = run.value("resumed", 0) + 1;
   } else {
     fs::remove(tape);
-    run =
-        Json{{"format", "fralab-run/1"},
-             {"run_id", r.run_id},
-             {"engine", model.name},
-             {"inputs", inputs_csv},
-             {"pairs", r.pairs},
-             {"options",
-              {{"seed", o.seed},
-               {"no_noise", o.no_noise},
-               {"fit_delay", o.fit_delay},
-               {"timeout_s", o.timeout_s},
-               {"stall_timeout_s", o.stall_timeout_s},
-               {"hosts", o.hosts},
-               {"deputy_url", o.deputy_url},
-               {"acquire_flags", acquire_flags(ao)}}},
-             {"measurement_chain", chain_to_json(emulator_chain(model, o.acquire.sample_rate_hz))}};
+    run = Json{{"format", "fralab-run/1"},
+               {"run_id", r.run_id},
+               {"engine", model.name},
+               {"inputs", inputs_csv},
+               {"pairs", r.pairs},
+               {"options",
+                {{"seed", o.seed},
+                 {"no_noise", o.no_noise},
+                 {"fit_delay", o.fit_delay},
+                 {"timeout_s", o.timeout_s},
+                 {"stall_timeout_s", o.stall_timeout_s},
+                 {"hosts", o.hosts},
+                 {"deputy_url", o.deputy_url},
+                 {"acquire_flags", acquire_flags(ao)}}},
+               {"measurement_chain", chain}};
   }
   run["lcm_url"] = url;
   run["state"] = "running";
@@ -343,26 +344,25 @@ MeasureResult run_measure(const MeasureOptions& given) {
       }
       std::string consumers_csv;
       for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
-      std::vector<std::string> acq = {
-          module_path("fralab-acquire"),
-          "--engine",
-          engine_file,
-          "--lcm-url",
-          url,
-          "--run-id",
-          r.run_id,
-          "--consumers",
-          consumers_csv,
-          "--stall-timeout",
-          lossless(o.stall_timeout_s),
-          "--first-block",
-          std::to_string(rp.first_block),
-          "--first-status",
-          std::to_string(rp.first_status),
-          "--summary",
-          o.out + "/acquire.json",
-          "--chain",
-          chain_to_json(emulator_chain(model, ao.sample_rate_hz)).dump()};
+      std::vector<std::string> acq = {module_path("fralab-acquire"),
+                                      "--engine",
+                                      engine_file,
+                                      "--lcm-url",
+                                      url,
+                                      "--run-id",
+                                      r.run_id,
+                                      "--consumers",
+                                      consumers_csv,
+                                      "--stall-timeout",
+                                      lossless(o.stall_timeout_s),
+                                      "--first-block",
+                                      std::to_string(rp.first_block),
+                                      "--first-status",
+                                      std::to_string(rp.first_status),
+                                      "--summary",
+                                      o.out + "/acquire.json",
+                                      "--chain",
+                                      chain.dump()};
       for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
       const auto t0 = std::chrono::steady_clock::now();
       // The progress line, on a terminal only: it listens to the run's status events and
