@@ -586,22 +586,37 @@ Json tape_summary(const std::string& path) {
   return j;
 }
 
-std::vector<Block> read_tape_blocks(const std::string& path, const std::string& run_id,
-                                    int64_t below) {
+namespace {
+
+// One run's records from a tape file: the first copy of each tape block of the run (seq >= 0,
+// below `below`) by seq, and, when `events` is given, every status event of every run in tape
+// order (the run is known only once a block names it). *run_id "" takes the first block's run.
+std::map<int64_t, Block> collect_run(const std::string& path, std::string* run_id, int64_t below,
+                                     std::vector<StatusEvent>* events) {
   std::map<int64_t, Block> got;
   read_tape_file(path, [&](const TapeEvent& ev) {
-    if (ev.channel != kTapeChannel) return;
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
-      Block b = decode_tape_block(&rb, ev.channel);
-      if (b.run_id == run_id && b.seq >= 0 && b.seq < below && !got.count(b.seq))
-        got.emplace(b.seq, std::move(b));
+      if (ev.channel == kTapeChannel) {
+        Block b = decode_tape_block(&rb, ev.channel);
+        if (run_id->empty()) *run_id = b.run_id;
+        if (b.run_id == *run_id && b.seq >= 0 && b.seq < below && !got.count(b.seq))
+          got.emplace(b.seq, std::move(b));
+      } else if (events && ev.channel == kStatusChannel) {
+        events->push_back(from_msg(decode_checked<excitation_status_t>(&rb, ev.channel)));
+      }
     } catch (const InputError& e) {
       throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
     }
   });
+  return got;
+}
+
+// Blocks 0 .. count - 1 in seq order; InputError naming the first one missing.
+std::vector<Block> blocks_in_order(const std::string& path, const std::string& run_id,
+                                   std::map<int64_t, Block>& got, int64_t count) {
   std::vector<Block> out;
-  for (int64_t s = 0; s < below; ++s) {
+  for (int64_t s = 0; s < count; ++s) {
     auto it = got.find(s);
     if (it == got.end())
       throw InputError(path + ": run " + run_id + " lacks tape block seq " + std::to_string(s));
@@ -610,42 +625,29 @@ std::vector<Block> read_tape_blocks(const std::string& path, const std::string& 
   return out;
 }
 
+}  // namespace
+
+std::vector<Block> read_tape_blocks(const std::string& path, const std::string& run_id,
+                                    int64_t below) {
+  std::string id = run_id;
+  auto got = collect_run(path, &id, below, nullptr);
+  return blocks_in_order(path, run_id, got, below);
+}
+
 TapeRun read_tape_run(const std::string& path, const std::string& run_id) {
   TapeRun run;
   run.run_id = run_id;
-  std::map<int64_t, Block> blocks;
-  std::set<std::pair<int64_t, int>> seen_events;  // (seq, state)
   std::vector<StatusEvent> events;
-  read_tape_file(path, [&](const TapeEvent& ev) {
-    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
-    try {
-      if (ev.channel == kTapeChannel) {
-        Block b = decode_tape_block(&rb, ev.channel);
-        if (run.run_id.empty()) run.run_id = b.run_id;
-        if (b.run_id == run.run_id && b.seq >= 0 && !blocks.count(b.seq))
-          blocks.emplace(b.seq, std::move(b));
-      } else if (ev.channel == kStatusChannel) {
-        StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, ev.channel));
-        const auto key = std::make_pair(e.seq, e.seq < 0 ? int(e.state) : 0);
-        if (seen_events.insert(key).second) events.push_back(std::move(e));
-      }
-    } catch (const InputError& e) {
-      throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
-    }
-  });
+  auto blocks = collect_run(path, &run.run_id, INT64_MAX, &events);
   if (blocks.empty())
     throw InputError(path + ": no tape blocks" +
                      (run_id.empty() ? std::string() : " of run " + run_id));
+  // The run's status events, each seq once (the start and abort events, seq -1, each once).
+  std::set<std::pair<int64_t, int>> seen;
   for (auto& e : events)
-    if (e.run_id == run.run_id) run.events.push_back(std::move(e));
-  int64_t want = 0;
-  for (auto& [seq, b] : blocks) {
-    if (seq != want)
-      throw InputError(path + ": run " + run.run_id + " lacks tape block seq " +
-                       std::to_string(want));
-    run.blocks.push_back(std::move(b));
-    ++want;
-  }
+    if (e.run_id == run.run_id && seen.insert({e.seq, e.seq < 0 ? int(e.state) : 0}).second)
+      run.events.push_back(std::move(e));
+  run.blocks = blocks_in_order(path, run.run_id, blocks, blocks.rbegin()->first + 1);
   return run;
 }
 

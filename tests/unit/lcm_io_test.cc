@@ -365,6 +365,15 @@ TEST(TapeFile, WrittenRunReadsBackWithItsBlocksAndEvents) {
   read_tape_file(path, [&](const TapeEvent& e) { order.push_back(e.channel); });
   EXPECT_THAT(order, testing::ElementsAre(kStatusChannel, kTapeChannel, kStatusChannel,
                                           kTapeChannel, kTapeChannel));
+  // Another run's event of the same seq, earlier on the tape, does not hide this run's.
+  StatusEvent other = integ;
+  other.run_id = "r0";
+  other.sample = 500;
+  other.frequency_hz = 9;
+  write_tape_file(path, blocks, {start, other, integ});
+  const TapeRun mixed = read_tape_run(path, "r1");
+  ASSERT_EQ(mixed.events.size(), 2u);
+  EXPECT_EQ(mixed.events[1].frequency_hz, 2.5);
   // A run with a block missing is refused, naming the seq.
   write_tape_file(path, {blocks[0], blocks[2]}, {start});
   EXPECT_THAT([&] { read_tape_run(path); },
