@@ -42,8 +42,7 @@ struct AcquisitionNode::TapeWatch {
   int64_t last_seq = -1;   // the furthest tape block seen
   int64_t final_seq = -1;  // the plant's final tape block, once seen
   std::set<int64_t> seen;  // tape seqs seen
-  std::vector<std::pair<int64_t, int64_t>> held;  // [first, last] samples held
-  int64_t held_samples = 0;
+  HeldSamples held;        // samples the plant held
   void on_tape(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     Block b;
     try {
@@ -56,25 +55,11 @@ struct AcquisitionNode::TapeWatch {
     played = std::max(played, b.start_sample + b.n_samples);
     last_seq = std::max(last_seq, b.seq);
     if (b.final_block) final_seq = b.seq;
-    const int c = b.channel_index(kUnderrunChannel);
-    for (int k = 0; c >= 0 && k < b.n_samples; ++k) {
-      if (b.at(c, k) == 0.0) continue;
-      const int64_t n = b.start_sample + k;
-      ++held_samples;
-      if (!held.empty() && held.back().second + 1 == n)
-        held.back().second = n;
-      else
-        held.push_back({n, n});
-    }
+    held.add(b);
   }
   /// The last tape block up to which every one was seen (none lost on the way here).
   int64_t contiguous() const { return contiguous_; }
   int64_t contiguous_ = -1;
-  bool held_in(int64_t a, int64_t b) const {  // any held sample in [a, b)
-    for (const auto& [f, l] : held)
-      if (f < b && l >= a) return true;
-    return false;
-  }
 };
 
 AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campaign& campaign,
@@ -200,7 +185,7 @@ Json AcquisitionNode::run() {
   next_block = o_.first_block;
   const bool free = tape_ != nullptr;
   // Free-running: the last event ("done") and the final block wait until every step is known to
-  // have been played without a held sample (run_free below).
+  // have been played without a held sample (the play-out after this loop).
   const size_t n_events = free ? events.size() - 1 : events.size();
   const int64_t lead_samples = int64_t(o.lead) * o.block;
   for (int64_t b = o_.first_block; b < nblocks; ++b) {
@@ -290,16 +275,16 @@ Json AcquisitionNode::run() {
       }
       std::vector<int> hit;
       for (const auto& [step, sp] : span)
-        if (tape_->held_in(sp.first, sp.second)) hit.push_back(step);
+        if (tape_->held.within(sp.first, sp.second)) hit.push_back(step);
       if (hit.empty()) break;
       if (round >= o.max_repeats)
         throw InputError(
             "the free-running plant's command buffer ran dry in " + std::to_string(hit.size()) +
             " steps again after " + std::to_string(round) +
-            " rounds of repeats (held samples: " + std::to_string(tape_->held_samples) +
+            " rounds of repeats (held samples: " + std::to_string(tape_->held.count()) +
             "): the commands do not reach the plant in time; lower --speed or raise --lead");
       for (int step : hit) {
-        const StatusEvent& e = integ[step];
+        const StatusEvent e = integ[step];  // a copy: integ[step] becomes the repeat's below
         int input = -1;
         for (size_t i = 0; i < e.amplitudes.size(); ++i)
           if (e.amplitudes[i] > 0 && input < 0) input = int(i);
@@ -361,7 +346,7 @@ Json AcquisitionNode::run() {
           {"items_retransmitted", flow.items_retransmitted()},
           {"plant_clock", free ? "free" : "lockstep"}};
   if (free) {
-    sj["held_samples"] = tape_->held_samples;
+    sj["held_samples"] = tape_->held.count();
     sj["repeated_steps"] = repeats;
     sj["engine_time_s"] = double(tape_->played) / o.sample_rate_hz;  // held and repeated included
     sj["speedup"] = sj["engine_time_s"].get<double>() / std::max(wall, 1e-9);

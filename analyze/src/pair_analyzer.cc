@@ -101,23 +101,16 @@ void PairAnalyzer::on_block(const Block& b) {
     ref_.resize(end - base_, NAN);
     have_.resize(end - base_, 0);
   }
-  const int cu = b.channel_index(kUnderrunChannel);  // a free-running plant's dry buffer
-  const int cr = b.channel_index("ref_phase");       // the generator's reference (sweeps use it)
+  const int cr = b.channel_index("ref_phase");  // the generator's reference (sweeps use it)
   for (int k = 0; k < b.n_samples; ++k) {
     const int64_t n = b.start_sample + k - base_;
     if (n < 0) continue;  // already discarded
     x1_[n] = b.at(c1, k);
     x2_[n] = b.at(c2, k);
     if (cr >= 0) ref_[n] = b.at(cr, k);
-    if (cu >= 0 && b.at(cu, k) != 0.0) {
-      const int64_t s = b.start_sample + k;
-      if (!held_.empty() && held_.back().second + 1 == s)
-        held_.back().second = s;
-      else
-        held_.push_back({s, s});
-    }
     have_[n] = 1;
   }
+  held_.add(b);  // a free-running plant's dry buffer
   max_seen_ = std::max(max_seen_, end);
   try_complete(false);
 }
@@ -192,19 +185,13 @@ void PairAnalyzer::try_complete(bool force) {
     }
     FrdPoint p;
     if (ready) {  // samples the plant held (its command buffer ran dry) are not the excitation
-      int64_t first = -1, last = -1;
-      for (const auto& [f, l] : held_)
-        if (f < b && l >= it->second.from) {
-          if (first < 0) first = std::max(f, it->second.from);
-          last = std::min(l, b - 1);
-        }
-      if (first >= 0) {
+      if (const auto held = held_.within(it->second.from, b)) {
         p.w = 2 * std::numbers::pi * st.frequency_hz;
         p.step = st.step;
         p.n_cycles = st.n_cycles;
         p.valid = false;
         p.note = "the plant's command buffer ran dry in the step (samples " +
-                 std::to_string(first) + "-" + std::to_string(last) +
+                 std::to_string(held->first) + "-" + std::to_string(held->second) +
                  " held): not the excitation; the step is repeated";
         p.input = first_excited(st).first;
         points_.push_back(p);

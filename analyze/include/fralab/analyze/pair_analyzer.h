@@ -90,9 +90,9 @@ class PairAnalyzer {
   int64_t base_ = 0;
   std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)
   std::vector<char> have_;
-  // Samples a free-running plant held (tape channel "underrun"), as [first, last] runs, and the
-  // last settle status (its step and start sample).
-  std::vector<std::pair<int64_t, int64_t>> held_;
+  // Samples a free-running plant held (tape channel "underrun"), and the last settle status (its
+  // step and start sample).
+  HeldSamples held_;
   int settle_step_ = -1;
   int64_t settle_from_ = 0;
   int64_t max_seen_ = -1;

@@ -5,10 +5,13 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "fralab/core/error.h"
+#include "fralab/core/text.h"
 
 namespace fralab {
 
@@ -28,6 +31,25 @@ RunState run_state_from_string(const std::string& word);
 /// because its command buffer ran dry (not the excitation), 0 elsewhere.
 inline constexpr const char* kUnderrunChannel = "underrun";
 
+struct Block;
+
+/// The samples a free-running plant held (its tape channel "underrun" nonzero), kept as runs
+/// [first, last] whatever order the blocks arrive in: what the analyser and the acquisition ask
+/// of a step.
+class HeldSamples {
+ public:
+  /// Records the block's held samples (none when it has no "underrun" channel); returns how many.
+  int64_t add(const Block& b);
+  /// The first and last held sample within [a, b); nullopt when none.
+  std::optional<std::pair<int64_t, int64_t>> within(int64_t a, int64_t b) const;
+  int64_t count() const { return count_; }
+
+ private:
+  void add_sample(int64_t n);
+  std::map<int64_t, int64_t> runs_;  // first -> last
+  int64_t count_ = 0;
+};
+
 /// samples are channel-major: samples[c * n_samples + k] is channel c at sample start_sample + k.
 struct Block {
   std::string run_id;
@@ -41,12 +63,7 @@ struct Block {
 
   double at(int channel, int k) const { return samples[size_t(channel) * n_samples + k]; }
   double& at(int channel, int k) { return samples[size_t(channel) * n_samples + k]; }
-  int channel_index(const std::string& name) const {
-    for (size_t i = 0; i < channels.size(); ++i) {
-      if (channels[i] == name) return static_cast<int>(i);
-    }
-    return -1;
-  }
+  int channel_index(const std::string& name) const { return index_of(channels, name); }
 };
 
 /// One state change of the test signal. From `sample` on (stepped sine), the reference phase is
