@@ -15,12 +15,6 @@
 
 namespace fralab {
 
-int TimeSeries::channel_index(const std::string& name) const {
-  for (size_t i = 0; i < channels.size(); ++i)
-    if (channels[i] == name) return int(i);
-  return -1;
-}
-
 void SeriesReadOptions::validate() const {
   if (time_column.empty()) throw InputError("--time: a column name is needed");
   if (!wav_scale.empty() && wav_scale.size() != wav_channels.size())

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "fralab/core/error.h"
+#include "fralab/core/text.h"
 
 namespace fralab {
 
@@ -47,11 +48,7 @@ std::optional<Block> CommandBuffer::next() {
   out.channels = channels_;
   out.channels.push_back(kUnderrunChannel);
   out.samples.assign(out.channels.size() * size_t(n), 0.0);
-  const int ref_freq = [&] {
-    for (size_t c = 0; c < channels_.size(); ++c)
-      if (channels_[c] == "ref_freq_hz") return int(c);
-    return -1;
-  }();
+  const int ref_freq = index_of(channels_, "ref_freq_hz");
   const int nc = int(channels_.size());
   for (int k = 0; k < n; ++k) {
     const int64_t s = clock_ + k;

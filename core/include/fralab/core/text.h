@@ -12,6 +12,13 @@ namespace fralab {
 /// Splits on `sep`, dropping empty items: "a,b,,c" -> {"a", "b", "c"}.
 std::vector<std::string> split_list(const std::string& text, char sep = ',');
 
+/// The index of `name` in `names` (a block's or series' channels), -1 when absent.
+inline int index_of(const std::vector<std::string>& names, const std::string& name) {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
 /// Enums inside, words at the edges: the word of `e` in a table {{value, "word"}, ...} ("?" when
 /// absent), and the value of a word (nullopt when absent).
 template <class E, size_t N>

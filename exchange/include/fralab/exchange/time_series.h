@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/text.h"
+
 namespace fralab {
 
 /// Largest departure of a time step from one sample period, in periods.
@@ -38,7 +40,7 @@ struct TimeSeries {
   std::string source;  // the file it came from, for messages
 
   double at(size_t c, int64_t k) const { return samples[c * size_t(n_samples) + size_t(k)]; }
-  int channel_index(const std::string& name) const;
+  int channel_index(const std::string& name) const { return index_of(channels, name); }
 };
 
 /// What a reader hands over before the clock is checked: columns by name and, except for WAV,
