@@ -17,7 +17,7 @@ declare -A allowed=(
   [analyze]="core analyze"
   [identify]="core analyze identify"
   [diagnose]="core plant analyze identify diagnose"
-  [exchange]="core analyze identify exchange"
+  [exchange]="core plant analyze identify exchange"
   [lab]="core lcm plant acquire analyze identify diagnose exchange lab"
 )
 

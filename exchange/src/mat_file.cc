@@ -75,6 +75,21 @@ struct Keep {
   std::deque<mat_complex_split_t> splits;
 };
 
+struct MatCloser {
+  void operator()(mat_t* m) const { Mat_Close(m); }
+};
+struct VarFreer {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+
+// A char row (0 x 0 when empty), its data left in `text`.
+matvar_t* char_var(const char* name, const std::string& text) {
+  size_t dims[2] = {text.empty() ? size_t(0) : size_t(1), text.size()};
+  return Mat_VarCreate(name, MAT_C_CHAR, MAT_T_UTF8, 2, dims,
+                       text.empty() ? nullptr : const_cast<char*>(text.data()),
+                       MAT_F_DONT_COPY_DATA);
+}
+
 matvar_t* make_var(const std::string& name, const MatValue& v, const std::string& where,
                    Keep* keep) {
   const char* n = name.empty() ? nullptr : name.c_str();
@@ -103,24 +118,14 @@ matvar_t* make_var(const std::string& name, const MatValue& v, const std::string
                           MAT_F_COMPLEX | MAT_F_DONT_COPY_DATA);
       break;
     }
-    case MatValue::Kind::kText: {
-      size_t dims[2] = {v.text.empty() ? size_t(0) : size_t(1), v.text.size()};
-      var = Mat_VarCreate(n, MAT_C_CHAR, MAT_T_UTF8, 2, dims,
-                          v.text.empty() ? nullptr : const_cast<char*>(v.text.data()),
-                          MAT_F_DONT_COPY_DATA);
+    case MatValue::Kind::kText:
+      var = char_var(n, v.text);
       break;
-    }
     case MatValue::Kind::kTextList: {
       size_t dims[2] = {1, v.texts.size()};
       var = Mat_VarCreate(n, MAT_C_CELL, MAT_T_CELL, 2, dims, nullptr, 0);
-      for (size_t i = 0; var && i < v.texts.size(); ++i) {
-        size_t d[2] = {v.texts[i].empty() ? size_t(0) : size_t(1), v.texts[i].size()};
-        Mat_VarSetCell(
-            var, int(i),
-            Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UTF8, 2, d,
-                          v.texts[i].empty() ? nullptr : const_cast<char*>(v.texts[i].data()),
-                          MAT_F_DONT_COPY_DATA));
-      }
+      for (size_t i = 0; var && i < v.texts.size(); ++i)
+        Mat_VarSetCell(var, int(i), char_var(nullptr, v.texts[i]));
       break;
     }
     case MatValue::Kind::kStruct: {
@@ -131,25 +136,20 @@ matvar_t* make_var(const std::string& name, const MatValue& v, const std::string
       }
       size_t dims[2] = {1, 1};
       names.push_back(nullptr);  // the list ends with a null
-      var = Mat_VarCreateStruct2(n, 2, dims, names.data());
-      for (size_t k = 0; k < v.field_names.size(); ++k) {
+      // Held while its fields are made: a field that fails frees the struct too.
+      std::unique_ptr<matvar_t, VarFreer> st(Mat_VarCreateStruct2(n, 2, dims, names.data()));
+      for (size_t k = 0; st && k < v.field_names.size(); ++k) {
         const std::string& f = v.field_names[k];
-        Mat_VarSetStructFieldByName(var, f.c_str(), 0,
+        Mat_VarSetStructFieldByName(st.get(), f.c_str(), 0,
                                     make_var(f, v.field_values[k], where + "." + f, keep));
       }
+      var = st.release();
       break;
     }
   }
   if (!var) throw InputError(where + ": matio could not create the variable");
   return var;
 }
-
-struct MatCloser {
-  void operator()(mat_t* m) const { Mat_Close(m); }
-};
-struct VarFreer {
-  void operator()(matvar_t* v) const { Mat_VarFree(v); }
-};
 
 }  // namespace
 

@@ -15,6 +15,7 @@
 #include "fralab/core/tf.h"
 #include "fralab/exchange/mat_file.h"
 #include "fralab/identify/transfer_matrix.h"
+#include "fralab/plant/model.h"
 
 namespace fs = std::filesystem;
 
@@ -43,18 +44,9 @@ struct Results {
 std::map<std::string, std::string> channel_units(const std::string& model_file) {
   std::map<std::string, std::string> units;
   if (!fs::exists(model_file)) return units;
-  const Json j = json_load_file(model_file);
-  for (const char* key : {"inputs", "outputs"}) {
-    if (!j.contains(key) || !j[key].is_array()) continue;
-    for (const auto& c : j[key]) {
-      if (!c.is_object() || !c.contains("name") || !c["name"].is_string() || !c.contains("units") ||
-          !c["units"].is_string())
-        continue;
-      const std::string name = c["name"];
-      units[name] = c["units"];
-      if (std::string(key) == "inputs") units["u_" + name] = c["units"];
-    }
-  }
+  const Model m = load_model(model_file);
+  for (const auto& in : m.inputs) units[in.name] = units["u_" + in.name] = in.units;
+  for (const auto& out : m.outputs) units[out.name] = out.units;
   return units;
 }
 

@@ -27,8 +27,8 @@
 
 namespace fralab {
 
-/// Each channel's engineering unit from a fralab-model/1 file (an input's unit also for its
-/// command u_<input>); {} when the file does not exist, entries without units skipped.
+/// Each channel's engineering unit from a fralab-model/1 file (load_model; an input's unit also
+/// for its command u_<input>); {} when the file does not exist, InputError when it does not read.
 std::map<std::string, std::string> channel_units(const std::string& model_file);
 
 struct ExportSummary {
