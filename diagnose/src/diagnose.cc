@@ -41,12 +41,6 @@ constexpr std::pair<Scope, const char*> kScopeNames[] = {{Scope::kPath, "path"},
 
 bool is_actuator_pair(const std::string& e1, const std::string& e2) { return e1 == "u_" + e2; }
 
-// A point says something about the model only when it is measured to better than max_rel_sigma
-// (an actuator inside its backlash, or a response down in the noise, is not).
-bool usable(const FrdPoint& p, const DiagnoseOptions& o) {
-  return p.valid && p.sigma > 0 && p.mag > 0 && p.sigma <= o.max_rel_sigma * p.mag;
-}
-
 // The error metric for one pair under a response function (no response: the point is skipped).
 double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
                   const std::function<std::optional<C>(double, size_t)>& model) {
@@ -282,13 +276,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       if (!usable(pt, opt)) continue;
       auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain);
       if (!s || std::abs(*s) == 0) continue;
-      p.w.push_back(pt.w);
-      p.meas.push_back(pt.value());
-      p.sim.push_back(*s);
-      p.amp.push_back(pt.amplitude);
-      p.h3.push_back(pt.h3_rel);
-      p.sig.push_back(std::hypot(pt.sigma, opt.sigma_floor * pt.mag));
-      p.factor.push_back(1.0);
+      add_point(p, pt, *s, opt);
     }
     if (p.w.size() >= 3) pairs.push_back(std::move(p));
   }
@@ -510,25 +498,26 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     std::vector<Finding> kept;
     for (size_t i = 0; i < findings.size(); ++i) {
       Finding& f = findings[i];
-      // chi2 over the finding's pairs of a model (the fitting data, sigma_eff as fitted).
-      auto chi2_of_model = [&](const Model& m) {
-        double c = 0;
-        for (const std::vector<PairFit>* set :
-             {&original, static_cast<const std::vector<PairFit>*>(&absent)})
-          for (const auto& p : *set) {
-            if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) == f.pairs.end()) continue;
-            for (size_t q = 0; q < p.w.size(); ++q) {
-              const C g = model_pair_response(m, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0);
-              c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
-            }
-          }
-        return c;
-      };
+      // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
+      std::vector<const PairFit*> mine;
       size_t n = 0;
       for (const std::vector<PairFit>* set :
            {&original, static_cast<const std::vector<PairFit>*>(&absent)})
         for (const auto& p : *set)
-          if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) n += p.w.size();
+          if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) {
+            mine.push_back(&p);
+            n += p.w.size();
+          }
+      auto chi2_of_model = [&](const Model& m) {
+        double c = 0;
+        for (const PairFit* p : mine)
+          for (size_t q = 0; q < p->w.size(); ++q) {
+            const C g =
+                model_pair_response(m, p->pair, p->w[q], p->amp[q], opt.chain).value_or(0.0);
+            c += std::norm(p->meas[q] - g) / (p->sig[q] * p->sig[q]);
+          }
+        return c;
+      };
       const double c_min = chi2_of_model(with(findings, findings.size()));
       const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
       const auto [key, sim_value] = primary_parameter(f, sim);

@@ -8,6 +8,20 @@
 
 namespace fralab::diag {
 
+bool usable(const FrdPoint& p, const DiagnoseOptions& o) {
+  return p.valid && p.sigma > 0 && p.mag > 0 && p.sigma <= o.max_rel_sigma * p.mag;
+}
+
+void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o) {
+  p.w.push_back(pt.w);
+  p.meas.push_back(pt.value());
+  p.sim.push_back(sim);
+  p.amp.push_back(pt.amplitude);
+  p.h3.push_back(pt.h3_rel);
+  p.sig.push_back(std::hypot(pt.sigma, o.sigma_floor * pt.mag));
+  p.factor.push_back(1.0);
+}
+
 double chi2(const PairFit& p, const std::vector<C>& F) {
   double c = 0;
   for (size_t i = 0; i < p.w.size(); ++i)

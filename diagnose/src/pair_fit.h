@@ -36,6 +36,14 @@ struct Cause {
   std::string detail;
 };
 
+/// A point says something about the model only when it is measured to better than max_rel_sigma
+/// (an actuator inside its backlash, or a response down in the noise, is not).
+bool usable(const FrdPoint& p, const DiagnoseOptions& o);
+
+/// Appends a usable measured point and the simulation's response `sim` there: sigma_eff =
+/// hypot(sigma, sigma_floor |G|), factor 1.
+void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o);
+
 /// sum_i |meas_i - sim_i factor_i F_i|^2 / sig_i^2.
 double chi2(const PairFit& p, const std::vector<C>& F);
 

@@ -13,17 +13,8 @@ PairFit absent_pair_points(const MeasuredPair& mp, const DiagnoseOptions& opt) {
   std::tie(p.e1, p.e2) = split_pair(mp.pair);
   p.input = p.e1;
   p.output = p.e2;
-  for (const auto& pt : mp.frd.points) {
-    if (!(pt.valid && pt.sigma > 0 && pt.mag > 0 && pt.sigma <= opt.max_rel_sigma * pt.mag))
-      continue;
-    p.w.push_back(pt.w);
-    p.meas.push_back(pt.value());
-    p.sim.push_back(0.0);
-    p.amp.push_back(pt.amplitude);
-    p.h3.push_back(pt.h3_rel);
-    p.sig.push_back(std::hypot(pt.sigma, opt.sigma_floor * pt.mag));
-    p.factor.push_back(1.0);
-  }
+  for (const auto& pt : mp.frd.points)
+    if (usable(pt, opt)) add_point(p, pt, 0.0, opt);  // no simulated path: 0
   return p;
 }
 
