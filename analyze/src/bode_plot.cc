@@ -147,4 +147,13 @@ bool render_bode_overview(const std::vector<std::vector<const BodePlot*>>& grid,
   return run_gnuplot(script);
 }
 
+std::string inline_svg(const std::string& svg_file) {
+  std::ifstream in(svg_file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string svg = text.str();
+  const size_t at = svg.find("<svg");
+  return at == std::string::npos ? std::string() : svg.substr(at);
+}
+
 }  // namespace fralab

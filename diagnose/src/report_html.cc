@@ -11,6 +11,7 @@
 #include <regex>
 #include <sstream>
 
+#include "fralab/analyze/bode_plot.h"
 #include "fralab/core/error.h"
 #include "fralab/diagnose/report.h"
 
@@ -41,12 +42,6 @@ std::string markdown_to_html(const std::string& md) {
   std::string out(html ? html : "");
   std::free(html);
   return out;
-}
-
-// An SVG file as an inline element: its XML prolog and doctype dropped.
-std::string inline_svg(const std::string& svg) {
-  const size_t at = svg.find("<svg");
-  return at == std::string::npos ? std::string() : svg.substr(at);
 }
 
 std::string escape(const std::string& s) {
@@ -82,7 +77,7 @@ void write_report_html(const std::string& dir, const std::string& title) {
     const auto& m = *it;
     out += body.substr(last, size_t(m.position()) - last);
     const fs::path svg = fs::path(dir) / (m[1].str() + ".svg");
-    const std::string fig = fs::exists(svg) ? inline_svg(slurp(svg)) : std::string();
+    const std::string fig = inline_svg(svg.string());
     if (fig.empty()) {
       out += m.str();  // no SVG: the PNG stays referenced
     } else {

@@ -76,16 +76,9 @@ bool write_monitor_page(
   std::string figure;
   bool drawn = false;
   if (!pts.empty()) {
-    drawn = render_bode_plots({plot}, dir.string(), "plot.gp", PlotFormat::kSvg);
-    if (drawn) {
-      std::ifstream in(dir / "pair.svg");
-      std::ostringstream svg;
-      svg << in.rdbuf();
-      const std::string text = svg.str();
-      const size_t at = text.find("<svg");
-      drawn = at != std::string::npos;
-      if (drawn) figure = text.substr(at);
-    }
+    if (render_bode_plots({plot}, dir.string(), "plot.gp", PlotFormat::kSvg))
+      figure = inline_svg((dir / "pair.svg").string());
+    drawn = !figure.empty();
   }
   if (!drawn)
     figure = pts.empty() ? "<p>No point yet.</p>" : "<p>No plot: gnuplot is missing or failed.</p>";

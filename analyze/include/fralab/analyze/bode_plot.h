@@ -40,6 +40,10 @@ bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& di
                        const std::string& script = "plots.gp",
                        PlotFormat format = PlotFormat::kPng);
 
+/// An SVG file a render wrote, from its <svg element on (its XML prolog and doctype dropped), to
+/// be written inline into an HTML page; "" when the file is missing or holds no <svg.
+std::string inline_svg(const std::string& svg_file);
+
 /// The overview of a transfer matrix as one picture (the report's Figures 1-3 drawn): a grid of
 /// small Bode plots, one column per input (`cols`), two rows per output (`rows`: gain in dB above,
 /// phase in degrees below, over frequency in Hz), the measured points in black and each model's
