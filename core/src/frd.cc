@@ -74,8 +74,14 @@ Frd frd_from_json(const Json& j, const std::string& source) {
     p.h2_rel = json_number_member(jp, w, "h2_rel", 0.0);
     p.h3_rel = json_number_member(jp, w, "h3_rel", 0.0);
     p.nl_rel = json_number_member(jp, w, "nl_rel", -1.0);
-    p.n_cycles = static_cast<int>(json_number_member(jp, w, "n_cycles", 0.0));
-    p.step = static_cast<int>(json_number_member(jp, w, "step", -1.0));
+    // Counts and step numbers: whole numbers an int holds (a converted 5e11 is undefined).
+    auto whole = [&](const char* key, double dflt) {
+      const double v = json_number_member(jp, w, key, dflt);
+      if (v != std::floor(v) || std::abs(v) > 1e9) json_fail(w / key, "a whole number is needed");
+      return static_cast<int>(v);
+    };
+    p.n_cycles = whole("n_cycles", 0.0);
+    p.step = whole("step", -1.0);
     p.amplitude = json_number_member(jp, w, "amplitude", 0.0);
     if (jp.contains("input") && jp["input"].is_string()) p.input = jp["input"];
     if (jp.contains("valid")) {

@@ -115,6 +115,11 @@ TEST(Frd, NumericNonsenseIsRefusedNamingThePoint) {
               HasSubstr("/points/1: coherence 2.000000 must lie in [0, 1]"));
   EXPECT_THAT(err(R"({"w":2,"mag":9e18,"phase_deg":0})"),
               HasSubstr("/points/1: mag 9000000000000000000.000000 is not an amplitude ratio"));
+  // A step or cycle count an int cannot hold (found by the fuzzer: undefined conversion).
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"step":-494309189535})"),
+              HasSubstr("m.json: /points/1/step: a whole number is needed"));
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"n_cycles":2.5})"),
+              HasSubstr("/points/1/n_cycles"));
   EXPECT_EQ(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma":0.01,"coherence":1.0})"), "no error");
   FrdPoint p;
   p.w = 1;
