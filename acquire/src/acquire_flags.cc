@@ -4,19 +4,38 @@
 
 namespace fralab {
 
-void add_acquire_flags(CLI::App* c, AcquireOptions& o) {
+void add_acquire_flags(CLI::App* c, AcquireOptions& o, bool* auto_campaign) {
   c->add_option("--input", o.inputs, "input(s) NAME[,NAME...] to excite (default: all)");
   c->add_option("--band", o.band, "LO_HZ:HI_HZ")->capture_default_str();
   c->add_option_function<std::string>(
        "--excitation",
-       [&o](const std::string& word) { o.excitation = excitation_from_string(word); },
-       "stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs at once, "
-       "orthogonal lines; --min-cycles = periods)")
-      ->check(CLI::IsMember({"stepped", "sweep", "multisine"}))
+       [&o, auto_campaign](const std::string& word) {
+         if (auto_campaign) *auto_campaign = word == "auto";
+         o.excitation = excitation_from_string(word == "auto" ? "multisine" : word);
+       },
+       std::string("stepped (stepped sine), sweep (continuous log sweep) or multisine (all inputs "
+                   "at once; --min-cycles = periods per experiment)") +
+           (auto_campaign ? "; auto: multisine, then sine for the actuators that distort at its "
+                            "level"
+                          : ""))
+      ->check(auto_campaign ? CLI::IsMember({"stepped", "sweep", "multisine", "auto"})
+                            : CLI::IsMember({"stepped", "sweep", "multisine"}))
       ->default_str("stepped");
-  c->add_option("--multisine-phases", o.multisine_phases, "schroeder or random")
+  c->add_option("--multisine-phases", o.multisine_phases,
+                "schroeder, random or low-crest (random, then envelope clipping)")
       ->capture_default_str();
   c->add_flag("--odd-lines", o.odd_lines, "multisine: odd harmonics only");
+  c->add_option_function<std::string>(
+       "--multisine-design",
+       [&o](const std::string& w) { o.multisine_design = multisine_design_from_string(w); },
+       "orthogonal (every input on every line, n_u experiments, DFT phase matrix) or zippered "
+       "(disjoint lines, one experiment)")
+      ->check(CLI::IsMember({"orthogonal", "zippered"}))
+      ->default_str("orthogonal");
+  c->add_option("--realisations", o.realisations,
+                "orthogonal multisine: random-phase realisations (> 1: with --multisine-phases "
+                "random; separates nonlinear distortion from noise)")
+      ->capture_default_str();
   c->add_option("--points-per-decade", o.points_per_decade)->capture_default_str();
   c->add_option("--amplitude-pct", o.amplitude_pct,
                 "% of full scale (default: the input's test_amplitude_pct, else 2)");
@@ -24,6 +43,9 @@ void add_acquire_flags(CLI::App* c, AcquireOptions& o) {
       ->capture_default_str();
   c->add_option("--min-cycles", o.min_cycles)->capture_default_str();
   c->add_option("--min-integrate-s", o.min_integrate_s)->capture_default_str();
+  c->add_option("--settle-cycles", o.settle_cycles,
+                "stepped sine: cycles of settle per step, at least (and >= 5 time constants)")
+      ->capture_default_str();
   c->add_option("--sample-rate", o.sample_rate_hz, "Hz")->capture_default_str();
   c->add_option("--speed", o.speed, "1 = real time, 100 = 100x, 0 = as fast as consumers keep up")
       ->capture_default_str();
@@ -49,6 +71,10 @@ std::vector<std::string> acquire_flags(const AcquireOptions& o) {
                                 to_string(o.excitation),
                                 "--multisine-phases",
                                 o.multisine_phases,
+                                "--multisine-design",
+                                to_string(o.multisine_design),
+                                "--realisations",
+                                std::to_string(o.realisations),
                                 "--points-per-decade",
                                 std::to_string(o.points_per_decade),
                                 "--amplitude-pct",
@@ -59,6 +85,8 @@ std::vector<std::string> acquire_flags(const AcquireOptions& o) {
                                 std::to_string(o.min_cycles),
                                 "--min-integrate-s",
                                 lossless(o.min_integrate_s),
+                                "--settle-cycles",
+                                lossless(o.settle_cycles),
                                 "--sample-rate",
                                 lossless(o.sample_rate_hz),
                                 "--speed",

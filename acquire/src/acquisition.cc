@@ -36,8 +36,10 @@ void AcquireOptions::validate() const {
   if (lead < 1) throw InputError("--lead must be >= 1");
   if (max_repeats < 0) throw InputError("--max-repeats must be >= 0");
   if (!(amplitude_scale > 0)) throw InputError("--amplitude-scale must be > 0");
-  if (multisine_phases != "schroeder" && multisine_phases != "random")
-    throw InputError("--multisine-phases \"" + multisine_phases + "\": schroeder or random");
+  if (multisine_phases != "schroeder" && multisine_phases != "random" &&
+      multisine_phases != "low-crest")
+    throw InputError("--multisine-phases \"" + multisine_phases +
+                     "\": schroeder, random or low-crest");
   parse_band(band);
 }
 
@@ -49,6 +51,7 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
   so.points_per_decade = o.points_per_decade;
   so.min_cycles = o.min_cycles;
   so.min_integrate_s = o.min_integrate_s;
+  so.settle_cycles = o.settle_cycles;
   so.sample_rate_hz = o.sample_rate_hz;
   so.slowest_time_constant_s =
       o.slowest_time_constant_s >= 0 ? o.slowest_time_constant_s : slowest_time_constant_s(model);
@@ -74,6 +77,8 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
       mo.sample_rate_hz = so.sample_rate_hz;
       mo.odd_lines = o.odd_lines;
       mo.phases = o.multisine_phases;
+      mo.design = o.multisine_design;
+      mo.realisations = o.realisations;
       return std::make_unique<MultisineCampaign>(cin, excite, mo, run_id);
     }
   }

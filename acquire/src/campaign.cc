@@ -1,7 +1,10 @@
 #include "fralab/acquire/campaign.h"
 
+#include <fftw3.h>
+
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <random>
 
@@ -218,8 +221,114 @@ void MultisineOptions::validate() const {
   if (points_per_decade < 1) throw InputError("points per decade must be >= 1");
   if (periods < 2)
     throw InputError("a multisine needs >= 2 measured periods (noise from their spread)");
-  if (phases != "schroeder" && phases != "random")
-    throw InputError("--multisine-phases must be schroeder or random");
+  if (phases != "schroeder" && phases != "random" && phases != "low-crest")
+    throw InputError("--multisine-phases must be schroeder, random or low-crest");
+  if (realisations < 1 || realisations > 1000) throw InputError("--realisations must be 1..1000");
+  if (realisations > 1 && design != Design::kOrthogonal)
+    throw InputError("--realisations > 1 needs the orthogonal multisine design");
+  if (realisations > 1 && phases == "schroeder")
+    throw InputError(
+        "--realisations > 1 needs random or low-crest phases (Schroeder phases are one "
+        "realisation)");
+  if (level != "peak" && level != "rms")
+    throw InputError("--multisine-level \"" + level + "\": peak or rms");
+  if (!(settle_time_constants >= 0) || !(slowest_time_constant_s >= 0))
+    throw InputError("multisine settling times must be >= 0");
+}
+
+const char* to_string(MultisineOptions::Design d) {
+  return d == MultisineOptions::Design::kOrthogonal ? "orthogonal" : "zippered";
+}
+
+MultisineOptions::Design multisine_design_from_string(const std::string& word) {
+  if (word == "orthogonal") return MultisineOptions::Design::kOrthogonal;
+  if (word == "zippered") return MultisineOptions::Design::kZippered;
+  throw InputError("--multisine-design \"" + word + "\": orthogonal or zippered");
+}
+
+std::vector<int> multisine_lines(const MultisineOptions& o, int P) {
+  const double df = o.sample_rate_hz / P;
+  std::vector<int> lines;
+  auto odd_up = [&](int k) { return o.odd_lines && k % 2 == 0 ? k + 1 : k; };
+  if (o.design == MultisineOptions::Design::kOrthogonal) {
+    const double r = std::pow(10.0, 1.0 / o.points_per_decade);
+    const int k_hi = int(std::floor(o.f_hi_hz / df * (1 + 1e-12)));
+    for (int k = odd_up(std::max(1, int(std::llround(o.f_lo_hz / df)))); k <= k_hi && k < P / 2;) {
+      lines.push_back(k);
+      k = odd_up(std::max(k + 1, int(std::floor(k * r))));
+    }
+    return lines;
+  }
+  const int n_targets =
+      int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
+  for (int j = 0; j < n_targets; ++j) {
+    int k =
+        odd_up(int(std::llround(o.f_lo_hz * std::pow(10.0, double(j) / o.points_per_decade) / df)));
+    if (k < 1 || k >= P / 2) continue;
+    if (lines.empty() || k > lines.back()) lines.push_back(k);
+  }
+  return lines;
+}
+
+namespace {
+
+// One period of sum_k sin(2 pi k n / P + phase[j]) over lines[j].
+std::vector<double> multisine_period(int P, const std::vector<int>& lines,
+                                     const std::vector<double>& phase) {
+  std::vector<double> x(P, 0.0);
+  for (size_t j = 0; j < lines.size(); ++j)
+    for (int n = 0; n < P; ++n)
+      x[n] += std::sin(2 * std::numbers::pi * double(int64_t(lines[j]) * n % P) / P + phase[j]);
+  return x;
+}
+
+// Phases of |K| lines: Schroeder's, or uniform random from `rng` (low-crest: then optimised).
+std::vector<double> line_phases(const std::string& kind, int P, const std::vector<int>& lines,
+                                std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> uni(0.0, 2 * std::numbers::pi);
+  std::vector<double> ph(lines.size());
+  const double nk = double(lines.size());
+  for (size_t j = 0; j < lines.size(); ++j)
+    ph[j] = kind == "schroeder" ? -std::numbers::pi * double(j) * double(j + 1) / nk : uni(rng);
+  return kind == "low-crest" ? low_crest_phases(P, lines, ph) : ph;
+}
+
+double peak_of(const std::vector<double>& x) {
+  double peak = 0;
+  for (double v : x) peak = std::max(peak, std::abs(v));
+  return peak;
+}
+
+}  // namespace
+
+std::vector<double> low_crest_phases(int P, const std::vector<int>& lines,
+                                     std::vector<double> phase, int iterations) {
+  if (lines.empty() || P < 2) return phase;
+  std::vector<std::complex<double>> spec(P), z(P);
+  auto* s = reinterpret_cast<fftw_complex*>(spec.data());
+  auto* t = reinterpret_cast<fftw_complex*>(z.data());
+  fftw_plan inv = fftw_plan_dft_1d(P, s, t, FFTW_BACKWARD, FFTW_ESTIMATE);
+  fftw_plan fwd = fftw_plan_dft_1d(P, t, s, FFTW_FORWARD, FFTW_ESTIMATE);
+  const double level = 1.2 * std::sqrt(double(lines.size()));
+  std::vector<double> best = phase;
+  double best_peak = INFINITY;
+  for (int it = 0; it <= iterations; ++it) {
+    std::fill(spec.begin(), spec.end(), 0.0);
+    for (size_t j = 0; j < lines.size(); ++j)
+      spec[size_t(lines[j]) % P] = std::polar(1.0, phase[j]);
+    fftw_execute(inv);  // z[n] = sum_j exp(j (2 pi k_j n / P + phi_j))
+    double peak = 0;
+    for (const auto& v : z) peak = std::max(peak, std::abs(v));
+    if (peak < best_peak) best_peak = peak, best = phase;
+    if (it == iterations) break;
+    for (auto& v : z)
+      if (std::abs(v) > level) v *= level / std::abs(v);
+    fftw_execute(fwd);
+    for (size_t j = 0; j < lines.size(); ++j) phase[j] = std::arg(spec[size_t(lines[j]) % P]);
+  }
+  fftw_destroy_plan(inv);
+  fftw_destroy_plan(fwd);
+  return best;
 }
 
 MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
@@ -227,79 +336,110 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
     : Campaign(std::move(inputs), o.sample_rate_hz) {
   o.validate();
   if (excite.empty()) throw InputError("campaign: no input to excite");
+  for (int i : excite)
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
   P_ = int(std::llround(fs_ / o.f_lo_hz));
   const double df = fs_ / P_;
-  // Lines near log-spaced targets, unique, optionally odd.
-  std::vector<int> lines;
-  const int n_targets =
-      int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
-  for (int j = 0; j < n_targets; ++j) {
-    int k = int(std::llround(o.f_lo_hz * std::pow(10.0, double(j) / o.points_per_decade) / df));
-    if (o.odd_lines && k % 2 == 0) ++k;
-    if (k < 1 || k >= P_ / 2) continue;
-    if (lines.empty() || k > lines.back()) lines.push_back(k);
-  }
+  const bool ortho = o.design == MultisineOptions::Design::kOrthogonal;
+  const std::vector<int> lines = multisine_lines(o, P_);
   const int ni = int(excite.size());
-  if (int(lines.size()) < ni)
+  if (lines.empty() || (!ortho && int(lines.size()) < ni))
     throw InputError("multisine: fewer lines than excited inputs; widen the band");
-  std::vector<int> line_input;
-  std::vector<std::vector<int>> per(inputs_.size());
-  for (size_t j = 0; j < lines.size(); ++j) {
-    const int i = excite[j % ni];
-    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
-    line_input.push_back(i);
-    per[i].push_back(lines[j]);
-  }
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> uni(0.0, 2 * std::numbers::pi);
-  period_.assign(inputs_.size(), {});
+  std::vector<int> ev_lines, line_input;
+  const int n_exp = ortho ? o.realisations * ni : 1;
+  period_.assign(n_exp, std::vector<std::vector<double>>(inputs_.size()));
   std::vector<double> amps(inputs_.size(), 0.0);
-  for (int i : excite) {
-    std::vector<double> x(P_, 0.0);
-    const double nk = double(per[i].size());
-    for (size_t j = 0; j < per[i].size(); ++j) {
-      const double ph =
-          o.phases == "schroeder" ? -std::numbers::pi * double(j) * double(j + 1) / nk : uni(rng);
-      for (int n = 0; n < P_; ++n)
-        x[n] += std::sin(2 * std::numbers::pi * double(per[i][j]) * n / P_ + ph);
+  if (ortho) {
+    for (int k : lines)
+      for (int i : excite) ev_lines.push_back(k), line_input.push_back(i);
+    for (int r = 0; r < o.realisations; ++r) {
+      std::mt19937_64 rr(o.seed + uint64_t(r));
+      for (int q = 0; q < ni; ++q) {
+        const std::vector<double> ph = line_phases(o.phases, P_, lines, rr);
+        for (int e = 0; e < ni; ++e) {
+          std::vector<double> pe = ph;
+          for (double& v : pe) v += 2 * std::numbers::pi * double(q * e % ni) / ni;
+          period_[size_t(r * ni + e)][excite[q]] = multisine_period(P_, lines, pe);
+        }
+      }
     }
-    double peak = 0;
-    for (double v : x) peak = std::max(peak, std::abs(v));
-    for (double& v : x) v *= inputs_[i].amplitude / peak;
-    period_[i] = std::move(x);
-    amps[i] = inputs_[i].amplitude;
+  } else {
+    std::vector<std::vector<int>> per(inputs_.size());
+    for (size_t j = 0; j < lines.size(); ++j) {
+      const int i = excite[j % ni];
+      ev_lines.push_back(lines[j]);
+      line_input.push_back(i);
+      per[i].push_back(lines[j]);
+    }
+    for (int i : excite)
+      period_[0][i] = multisine_period(P_, per[i], line_phases(o.phases, P_, per[i], rng));
   }
-  const int settle =
-      std::max(1, int(std::ceil(o.settle_time_constants * o.slowest_time_constant_s * df)));
+  // Each input scaled so that its largest peak over every experiment is its amplitude ("peak"),
+  // or its rms the sine's at that amplitude, the peak within half the full scale ("rms").
+  for (int i : excite) {
+    double peak = 0, ss = 0, n = 0;
+    for (const auto& x : period_) {
+      peak = std::max(peak, peak_of(x[i]));
+      for (double v : x[i]) ss += v * v, n += 1;
+    }
+    double g = inputs_[i].amplitude / peak;
+    if (o.level == "rms") {
+      g = inputs_[i].amplitude / std::sqrt(2.0) / std::sqrt(ss / n);
+      if (inputs_[i].full_scale > 0) g = std::min(g, 0.5 * inputs_[i].full_scale / peak);
+    }
+    for (auto& x : period_)
+      for (double& v : x[i]) v *= g;
+    amps[i] = g * peak;
+  }
+  const double tc_samples = o.settle_time_constants * o.slowest_time_constant_s * fs_;
+  if (ortho) {
+    settle_ = o.slowest_time_constant_s > 0
+                  ? std::max<int64_t>(int64_t(std::ceil(tc_samples)), int64_t(std::ceil(0.1 * P_)))
+                  : P_;
+  } else {
+    settle_ = int64_t(std::max(1, int(std::ceil(tc_samples / P_)))) * P_;
+  }
+  experiment_ = settle_ + int64_t(o.periods) * P_;
   StatusEvent e;
   e.run_id = run_id;
   e.sample_rate_hz = fs_;
   e.excitation = Excitation::kMultisine;
   for (const auto& in : inputs_) e.inputs.push_back(in.name);
   e.amplitudes = amps;
-  e.n_steps = 1;
+  e.n_steps = n_exp;
   e.frequency_hz = df;
   e.period_samples = P_;
-  e.lines = lines;
+  e.lines = ev_lines;
   e.line_input = line_input;
-  e.seq = 0;
-  e.state = RunState::kSettle;
-  e.sample = 0;
-  e.n_cycles = settle;
-  e.n_samples = int64_t(settle) * P_;
-  events_.push_back(e);
-  e.seq = 1;
-  e.state = RunState::kIntegrate;
-  e.sample = int64_t(settle) * P_;
-  e.n_cycles = o.periods;
-  e.n_samples = int64_t(o.periods) * P_;
-  events_.push_back(e);
-  total_ = int64_t(settle + o.periods) * P_;
-  e.seq = 2;
+  int64_t seq = 0;
+  for (int x = 0; x < n_exp; ++x) {
+    e.step = x;
+    if (ortho)
+      e.message = "orthogonal multisine: realisation " + std::to_string(x / ni + 1) + " of " +
+                  std::to_string(o.realisations) + ", experiment " + std::to_string(x % ni + 1) +
+                  " of " + std::to_string(ni) + " (DFT phase matrix, " + o.phases + " phases)";
+    e.seq = seq++;
+    e.state = RunState::kSettle;
+    e.sample = x * experiment_;
+    e.n_cycles = int(settle_ / P_);
+    e.n_samples = settle_;
+    events_.push_back(e);
+    e.seq = seq++;
+    e.state = RunState::kIntegrate;
+    e.sample = x * experiment_ + settle_;
+    e.n_cycles = o.periods;
+    e.n_samples = int64_t(o.periods) * P_;
+    events_.push_back(e);
+  }
+  total_ = n_exp * experiment_;
+  e.message.clear();
+  e.seq = seq;
   e.state = RunState::kDone;
   e.sample = total_;
   e.n_samples = 0;
-  e.step = 1;
+  e.step = n_exp;
   events_.push_back(e);
 }
 
@@ -309,17 +449,18 @@ void MultisineCampaign::fill(int64_t start, int n, std::vector<std::vector<doubl
   ref_phase.assign(n, 0.0);
   ref_freq.assign(n, 0.0);
   const double df = fs_ / P_;
-  for (size_t i = 0; i < inputs_.size(); ++i) {
-    for (int k = 0; k < n; ++k) {
-      const int64_t m = start + k;
-      cmd[i][k] =
-          inputs_[i].dc + (period_[i].empty() || m >= total_ ? 0.0 : period_[i][size_t(m % P_)]);
-    }
-  }
   for (int k = 0; k < n; ++k) {
     const int64_t m = start + k;
-    if (m >= total_) continue;
-    ref_phase[k] = std::fmod(2 * std::numbers::pi * double(m % P_) / P_, 2 * std::numbers::pi);
+    const bool on = m >= 0 && m < total_;
+    const size_t x = on ? size_t(m / experiment_) : 0;
+    // The sample's place in the period: the measured periods start at the settle's end.
+    const int64_t o = on ? ((m % experiment_ - settle_) % P_ + P_) % P_ : 0;
+    for (size_t i = 0; i < inputs_.size(); ++i) {
+      const auto& per = period_[x][i];
+      cmd[i][k] = inputs_[i].dc + (!on || per.empty() ? 0.0 : per[size_t(o)]);
+    }
+    if (!on) continue;
+    ref_phase[k] = 2 * std::numbers::pi * double(o) / P_;
     ref_freq[k] = df;
   }
 }

@@ -2,6 +2,7 @@
 
 #include <fftw3.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -41,6 +42,22 @@ bool PairAnalyzer::wants(const StatusEvent& st) const {
   return true;
 }
 
+// The inputs (indices into st.inputs, ascending) of an orthogonal multisine: those listed for a
+// line that more than one input excites; empty for any other status.
+static std::vector<int> orthogonal_inputs(const StatusEvent& st) {
+  std::map<int, std::set<int>> by_line;
+  bool shared = false;
+  for (size_t j = 0; j < st.lines.size() && j < st.line_input.size(); ++j) {
+    auto& s = by_line[st.lines[j]];
+    s.insert(st.line_input[j]);
+    shared = shared || s.size() > 1;
+  }
+  if (!shared) return {};
+  std::set<int> all;
+  for (int i : st.line_input) all.insert(i);
+  return {all.begin(), all.end()};
+}
+
 static std::pair<std::string, double> first_excited(const StatusEvent& st) {
   for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
     if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
@@ -55,6 +72,11 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
   }
   if (st.state == RunState::kIntegrate) {
     if (!wants(st)) return;
+    if (st.excitation == Excitation::kMultisine)
+      for (int i : orthogonal_inputs(st))
+        if (i < int(st.inputs.size()))
+          for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
+            extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
     // A window of more than 10^9 samples (11 days at 1 kHz) or before the run is no status the
     // acquisition makes: a corrupt record.
     if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
@@ -101,6 +123,8 @@ void PairAnalyzer::on_block(const Block& b) {
     ref_.resize(end - base_, NAN);
     have_.resize(end - base_, 0);
   }
+  for (auto& [name, v] : extra_)
+    if (v.size() < x1_.size()) v.resize(x1_.size(), NAN);
   const int cr = b.channel_index("ref_phase");  // the generator's reference (sweeps use it)
   for (int k = 0; k < b.n_samples; ++k) {
     const int64_t n = b.start_sample + k - base_;
@@ -109,6 +133,14 @@ void PairAnalyzer::on_block(const Block& b) {
     x2_[n] = b.at(c2, k);
     if (cr >= 0) ref_[n] = b.at(cr, k);
     have_[n] = 1;
+  }
+  for (size_t c = 0; c < b.channels.size(); ++c) {
+    auto it = extra_.find(b.channels[c]);
+    if (it == extra_.end()) continue;
+    for (int k = 0; k < b.n_samples; ++k) {
+      const int64_t n = b.start_sample + k - base_;
+      if (n >= 0) it->second[n] = b.at(int(c), k);
+    }
   }
   held_.add(b);  // a free-running plant's dry buffer
   max_seen_ = std::max(max_seen_, end);
@@ -200,6 +232,21 @@ void PairAnalyzer::try_complete(bool force) {
         continue;
       }
     }
+    if (st.excitation == Excitation::kMultisine && orthogonal_inputs(st).size() > 1) {
+      Experiment ex;
+      if (ready) {
+        ex = orthogonal_experiment(it->second);
+      } else {
+        ex.valid = false;
+        ex.note = "incomplete window: " + describe_gaps(a, b);
+      }
+      for (const FrdPoint& q : add_experiment(st, std::move(ex))) {
+        points_.push_back(q);
+        fresh_.push_back(q);
+      }
+      it = pending_.erase(it);
+      continue;
+    }
     if (ready && st.excitation == Excitation::kMultisine) {
       for (const FrdPoint& q : compute_multisine(it->second)) {
         points_.push_back(q);
@@ -225,7 +272,26 @@ void PairAnalyzer::try_complete(bool force) {
   trim();
 }
 
-void PairAnalyzer::flush() { try_complete(true); }
+void PairAnalyzer::flush() {
+  try_complete(true);
+  // Orthogonal multisine realisations whose experiments never all arrived (their status lost).
+  for (auto& [r, g] : groups_) {
+    const int nu = int(orthogonal_inputs(g.st).size());
+    std::string missing;
+    for (int e = 0; e < nu; ++e)
+      if (!g.experiments.count(e)) missing += (missing.empty() ? "" : ", ") + std::to_string(e + 1);
+    FrdPoint p;
+    p.step = r * nu;
+    p.valid = false;
+    p.input = first_excited(g.st).first;
+    p.note = "orthogonal multisine realisation " + std::to_string(r + 1) + ": experiment(s) " +
+             missing + " of " + std::to_string(nu) +
+             " never arrived (their status is not on the tape)";
+    points_.push_back(p);
+    fresh_.push_back(p);
+  }
+  groups_.clear();
+}
 
 void PairAnalyzer::trim() {
   // Keep samples from the earliest pending window (or the newest data if none is pending).
@@ -237,6 +303,8 @@ void PairAnalyzer::trim() {
     x1_.erase(x1_.begin(), x1_.begin() + drop);
     x2_.erase(x2_.begin(), x2_.begin() + drop);
     ref_.erase(ref_.begin(), ref_.begin() + drop);
+    for (auto& [name, v] : extra_)
+      v.erase(v.begin(), v.begin() + std::min<int64_t>(drop, v.size()));
     have_.erase(have_.begin(), have_.begin() + drop);
     base_ = keep;
   }
@@ -415,6 +483,237 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     }
     q.nl_rel = cnt ? lvl / cnt / std::max(std::abs(m2), 1e-300) : 0.0;
     out.push_back(q);
+  }
+  return out;
+}
+
+PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) {
+  const StatusEvent& st = win.st;
+  Experiment ex;
+  const int P = st.period_samples;
+  const int M = P > 0 ? int(st.n_samples / P) : 0;
+  const std::vector<int> ins = orthogonal_inputs(st);
+  if (P < 4 || M < 2 || st.lines.size() != st.line_input.size()) {
+    ex.valid = false;
+    ex.note = "multisine status without periods or lines";
+    return ex;
+  }
+  auto channel = [&](const std::string& ch) -> const double* {
+    auto it = extra_.find(ch);
+    if (it == extra_.end() || st.sample - base_ + st.n_samples > int64_t(it->second.size()))
+      return nullptr;
+    const double* c = it->second.data() + (st.sample - base_);
+    for (int64_t k = 0; k < st.n_samples; ++k)
+      if (std::isnan(c[k])) return nullptr;
+    return c;
+  };
+  std::vector<const double*> u, pos;
+  for (int i : ins) {
+    const std::string name = i < int(st.inputs.size()) ? st.inputs[i] : "?";
+    u.push_back(channel("u_" + name));
+    pos.push_back(channel(name));
+    if (!u.back() || !pos.back()) {
+      ex.valid = false;
+      ex.note = "orthogonal multisine: the tape has no channel " + (u.back() ? name : "u_" + name) +
+                " over the window (the analyser solves with every input's command and position)";
+      return ex;
+    }
+  }
+  std::set<int> uniq(st.lines.begin(), st.lines.end());
+  const std::vector<int> lines(uniq.begin(), uniq.end());
+  std::vector<bool> excited(P / 2 + 1, false);
+  for (int k : lines)
+    if (k >= 0 && k <= P / 2) excited[k] = true;
+  std::vector<double> buf(P);
+  std::vector<Complex> spec(P / 2 + 1);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()),
+                                        FFTW_ESTIMATE);
+  auto period_spectrum = [&](const double* x, int p) {
+    std::copy(x + size_t(p) * P, x + size_t(p + 1) * P, buf.begin());
+    fftw_execute(plan);
+    return spec;
+  };
+  const size_t L = lines.size();
+  ex.x1.assign(L, std::vector<Complex>(M));
+  ex.x2.assign(L, std::vector<Complex>(M));
+  // The nearest non-excited line each side of every line (pooled noise).
+  std::vector<std::vector<int>> nbk(L);
+  for (size_t j = 0; j < L; ++j)
+    for (int dir : {-1, 1})
+      for (int kk = lines[j] + dir; kk >= 1 && kk < P / 2; kk += dir)
+        if (!excited[kk]) {
+          nbk[j].push_back(kk);
+          break;
+        }
+  ex.nb1.assign(L, {});
+  ex.nb2.assign(L, {});
+  for (size_t j = 0; j < L; ++j) {
+    ex.nb1[j].assign(nbk[j].size(), std::vector<Complex>(M));
+    ex.nb2[j].assign(nbk[j].size(), std::vector<Complex>(M));
+  }
+  ex.u.assign(L, std::vector<Complex>(ins.size(), 0.0));
+  ex.pos.assign(L, std::vector<Complex>(ins.size(), 0.0));
+  ex.nl.assign(L, 0.0);
+  std::vector<Complex> x2_mean(P / 2 + 1, 0.0);
+  std::vector<std::vector<Complex>> pos_mean(ins.size(), std::vector<Complex>(P / 2 + 1, 0.0));
+  const double* a = x1_.data() + (st.sample - base_);
+  const double* b = x2_.data() + (st.sample - base_);
+  for (int p = 0; p < M; ++p) {
+    const auto s1 = period_spectrum(a, p);
+    const auto s2 = period_spectrum(b, p);
+    for (size_t j = 0; j < L; ++j) {
+      ex.x1[j][p] = s1[lines[j]];
+      ex.x2[j][p] = s2[lines[j]];
+      for (size_t n = 0; n < nbk[j].size(); ++n) {
+        ex.nb1[j][n][p] = s1[nbk[j][n]];
+        ex.nb2[j][n][p] = s2[nbk[j][n]];
+      }
+    }
+    for (size_t k = 0; k < x2_mean.size(); ++k) x2_mean[k] += s2[k] / double(M);
+    for (size_t q = 0; q < ins.size(); ++q) {
+      const auto su = period_spectrum(u[q], p);
+      for (size_t j = 0; j < L; ++j) ex.u[j][q] += su[lines[j]] / double(M);
+      const auto sp = period_spectrum(pos[q], p);
+      for (size_t k = 0; k < sp.size(); ++k) pos_mean[q][k] += sp[k] / double(M);
+    }
+  }
+  fftw_destroy_plan(plan);
+  // A channel's level on the nearest non-excited line each side of line k, relative to line k.
+  auto distortion = [&](const std::vector<Complex>& x, int k) {
+    double lvl = 0;
+    int cnt = 0;
+    for (int dir : {-1, 1}) {
+      for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir) {
+        if (excited[kk]) continue;
+        lvl += std::abs(x[kk]);
+        ++cnt;
+        break;
+      }
+    }
+    return cnt ? lvl / cnt / std::max(std::abs(x[k]), 1e-300) : 0.0;
+  };
+  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, lines[j]);
+  ex.pos_nl.assign(ins.size(), 0.0);
+  for (size_t q = 0; q < ins.size(); ++q) {
+    std::vector<double> d(L);
+    for (size_t j = 0; j < L; ++j) {
+      ex.pos[j][q] = pos_mean[q][lines[j]];
+      d[j] = distortion(pos_mean[q], lines[j]);
+    }
+    std::nth_element(d.begin(), d.begin() + L / 2, d.end());
+    ex.pos_nl[q] = L ? d[L / 2] : 0.0;
+  }
+  return ex;
+}
+
+std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experiment ex) {
+  const std::vector<int> ins = orthogonal_inputs(st);
+  const int nu = int(ins.size());
+  const int r = st.step / nu, e = st.step % nu;
+  Group& g = groups_[r];
+  if (g.experiments.empty()) g.st = st;
+  g.experiments[e] = std::move(ex);
+  if (int(g.experiments.size()) < nu) return {};
+  // The realisation is complete: solve per line.
+  Group grp = std::move(g);
+  groups_.erase(r);
+  std::set<int> uniq(grp.st.lines.begin(), grp.st.lines.end());
+  const std::vector<int> lines(uniq.begin(), uniq.end());
+  const double df = grp.st.sample_rate_hz / grp.st.period_samples;
+  // The pair's input(s): the one named by E1 or E2 (u_X or X); none: every input.
+  std::vector<int> want;
+  for (int q = 0; q < nu; ++q)
+    for (const std::string& ch : {e1_, e2_})
+      if ((ch == st.inputs[ins[q]] || ch == "u_" + st.inputs[ins[q]]) &&
+          std::find(want.begin(), want.end(), q) == want.end())
+        want.push_back(q);
+  if (want.empty())
+    for (int q = 0; q < nu; ++q) want.push_back(q);
+  std::string bad;
+  for (const auto& [ee, x] : grp.experiments)
+    if (!x.valid)
+      bad += (bad.empty() ? "" : "; ") + ("experiment " + std::to_string(ee + 1) + ": " + x.note);
+  // Regressors: every input's command, except that for a pair X:O an input whose position
+  // distorts enters by its measured position.
+  const bool position_pair = std::find(st.inputs.begin(), st.inputs.end(), e1_) != st.inputs.end();
+  std::vector<bool> by_position(nu, false);
+  if (position_pair && bad.empty()) {
+    for (int q = 0; q < nu; ++q) {
+      double d = 0;
+      for (const auto& [ee, x] : grp.experiments) d += x.pos_nl[q] / nu;
+      by_position[q] = d > opt_.distortion_threshold;
+    }
+  }
+  std::vector<FrdPoint> out;
+  for (size_t j = 0; j < lines.size(); ++j) {
+    for (int q : want) {
+      FrdPoint p;
+      p.w = 2 * std::numbers::pi * lines[j] * df;
+      p.step = r * nu;
+      p.input = st.inputs[ins[q]];
+      p.amplitude = size_t(ins[q]) < st.amplitudes.size() ? st.amplitudes[ins[q]] : 0.0;
+      if (!bad.empty()) {
+        p.valid = false;
+        p.note = "orthogonal multisine realisation " + std::to_string(r + 1) + ": " + bad;
+        out.push_back(p);
+        continue;
+      }
+      const int M = int(grp.experiments.begin()->second.x1[j].size());
+      p.n_cycles = M;
+      Eigen::MatrixXcd U(nu, nu);
+      Eigen::VectorXcd X1(nu), X2(nu);
+      for (int ee = 0; ee < nu; ++ee) {
+        const Experiment& x = grp.experiments.at(ee);
+        for (int qq = 0; qq < nu; ++qq) U(qq, ee) = by_position[qq] ? x.pos[j][qq] : x.u[j][qq];
+        Complex m1 = 0, m2 = 0;
+        for (int pp = 0; pp < M; ++pp) m1 += x.x1[j][pp], m2 += x.x2[j][pp];
+        X1(ee) = m1 / double(M);
+        X2(ee) = m2 / double(M);
+      }
+      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(U);
+      const auto sv = svd.singularValues();
+      if (!(sv(nu - 1) > 1e-9 * sv(0))) {
+        p.valid = false;
+        p.note = "orthogonal multisine: the commands do not span the " + std::to_string(nu) +
+                 " inputs at line " + std::to_string(lines[j]) + " (singular input matrix)";
+        out.push_back(p);
+        continue;
+      }
+      const Eigen::MatrixXcd Ui = U.inverse();  // h = X U^{-1}: h_q = sum_e X_e Ui(e, q)
+      const Complex h1 = X1.transpose() * Ui.col(q), h2 = X2.transpose() * Ui.col(q);
+      if (std::abs(h1) == 0.0 || !std::isfinite(std::abs(h1)) || !std::isfinite(std::abs(h2))) {
+        p.valid = false;
+        p.note = "channel " + e1_ + " has no response to input " + p.input + " at line " +
+                 std::to_string(lines[j]);
+        out.push_back(p);
+        continue;
+      }
+      const Complex R = h2 / h1;
+      p.mag = std::abs(R);
+      p.phase_deg = std::arg(R) * 180 / std::numbers::pi;
+      double var = 0, nl = 0;
+      for (int ee = 0; ee < nu; ++ee) {
+        const Experiment& x = grp.experiments.at(ee);
+        // The spread over periods of z = X2 - R X1 at the line and its unexcited neighbours.
+        auto spread = [&](const std::vector<Complex>& v1, const std::vector<Complex>& v2) {
+          Complex zm = 0;
+          for (int pp = 0; pp < M; ++pp) zm += v2[pp] - R * v1[pp];
+          zm /= double(M);
+          double sz = 0;
+          for (int pp = 0; pp < M; ++pp) sz += std::norm(v2[pp] - R * v1[pp] - zm);
+          return sz;
+        };
+        double sz = spread(x.x1[j], x.x2[j]);
+        for (size_t n = 0; n < x.nb1[j].size(); ++n) sz += spread(x.nb1[j][n], x.nb2[j][n]);
+        var += std::norm(Ui(ee, q)) * sz / (double(1 + x.nb1[j].size()) * double(M) * (M - 1));
+        nl += x.nl[j] / nu;
+      }
+      p.sigma = std::sqrt(var) / std::abs(h1);
+      if (!(p.sigma > 0)) p.sigma = 1e-300 + 1e-15 * p.mag;  // noise-free: a sigma must be > 0
+      p.coherence = std::norm(R) / (std::norm(R) + double(nu) * M * p.sigma * p.sigma);
+      p.nl_rel = nl;
+      out.push_back(p);
+    }
   }
   return out;
 }

@@ -8,7 +8,7 @@
 namespace fralab {
 
 void add_measure_flags(CLI::App* c, MeasureOptions& m) {
-  add_acquire_flags(c, m.acquire);
+  add_acquire_flags(c, m.acquire, &m.auto_campaign);
   c->add_option("--seed", m.seed, "plant noise seed")->capture_default_str();
   c->add_option("--lcm-url", m.lcm_url, "LCM URL (default: a private one per run)");
   c->add_flag("--no-noise", m.no_noise, "plant noise off");

@@ -15,6 +15,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/text.h"
 #include "fralab/identify/fit_io.h"
+#include "fralab/lab/auto_campaign.h"
 #include "fralab/lab/deputy.h"
 #include "fralab/lab/progress.h"
 #include "fralab/lab/resume.h"
@@ -164,6 +165,11 @@ MeasureOptions options_from_run(const std::string& dir, const Json& run) {
 
 MeasureResult run_measure(const MeasureOptions& given) {
   if (given.out.empty()) throw InputError("--out DIR is required");
+  if (given.auto_campaign) {
+    MeasureOptions o = given;
+    o.auto_campaign = false;  // its runs are plain ones
+    return run_auto_campaign(o).measure;
+  }
   Json run;
   MeasureOptions o = given;
   if (given.resume) {

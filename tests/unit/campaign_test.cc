@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <set>
 
 #include "fralab/acquire/model_info.h"
@@ -124,9 +125,11 @@ TEST(Sweep, PhaseAndFrequencyAreContinuousAndWindowsTileTheSweep) {
   }
 }
 
-TEST(Multisine, PeriodicOrthogonalAndScaledToTheAmplitude) {
+TEST(Multisine, ZipperedIsPeriodicDisjointAndScaledToTheAmplitude) {
   Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
   MultisineOptions o;
+  o.design = MultisineOptions::Design::kZippered;
+  o.level = "peak";
   o.f_lo_hz = 0.5;
   o.f_hi_hz = 50;
   o.points_per_decade = 8;
@@ -158,4 +161,127 @@ TEST(Multisine, PeriodicOrthogonalAndScaledToTheAmplitude) {
     EXPECT_NEAR(peak, ins[i].amplitude, 1e-9 * ins[i].amplitude);
   }
   EXPECT_DOUBLE_EQ(cmd[2][123], ins[2].dc);  // BLD not excited: held at its operating point
+}
+
+// Issue 13: the orthogonal design puts every input on every line of a quasi-logarithmic grid with
+// at least the requested lines per decade, in n_u experiments whose line phases differ by the DFT
+// phase matrix exp(j 2 pi q e / n_u); each experiment's commands are periodic from its settle on
+// and carry the sine test's power (rms = amplitude / sqrt 2), the peak the status states.
+TEST(Multisine, OrthogonalExcitesEveryInputOnEveryLineOfADenseGrid) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
+  MultisineOptions o;
+  o.f_lo_hz = 0.1;
+  o.f_hi_hz = 50;
+  o.points_per_decade = 10;
+  o.periods = 2;
+  o.phases = "random";
+  o.slowest_time_constant_s = 0.5;
+  auto ins = campaign_inputs(m, 2.0);
+  const std::vector<int> ex = select_inputs(m, "Wf,BLD,IGV");
+  MultisineCampaign c(ins, ex, o, "r");
+  const int P = c.period_samples();
+  ASSERT_EQ(P, 10000);
+  // Grid: neighbours within r = 10^(1/10), so each decade of the band holds >= 10 lines.
+  const std::vector<int> lines = multisine_lines(o, P);
+  ASSERT_GE(lines.size(), 25u);
+  EXPECT_EQ(lines.front(), 1);
+  EXPECT_LE(lines.back() * 0.1, 50.0);
+  for (size_t j = 1; j < lines.size(); ++j)
+    EXPECT_LE(double(lines[j]) / lines[j - 1],
+              std::max(std::pow(10.0, 0.1), 1.0 + 1.0 / lines[j - 1]) + 1e-12);
+  // 1-10 Hz: >= 10 lines; 0.1-1 Hz holds only 9 harmonics (k = 1..9): >= 8 of them.
+  for (double lo : {0.1, 1.0}) {
+    int n = 0;
+    for (int k : lines) n += k * 0.1 >= lo - 1e-9 && k * 0.1 < 10 * lo - 1e-9;
+    EXPECT_GE(n, lo < 1 ? 8 : 10) << lo;
+  }
+  // Events: per experiment a settle and an integrate of `periods` periods; step = experiment.
+  std::vector<StatusEvent> integ;
+  for (const auto& e : c.events())
+    if (e.state == RunState::kIntegrate) integ.push_back(e);
+  ASSERT_EQ(integ.size(), 3u);
+  for (int e = 0; e < 3; ++e) {
+    EXPECT_EQ(integ[e].step, e);
+    EXPECT_EQ(integ[e].n_steps, 3);
+    EXPECT_EQ(integ[e].n_samples, 2 * P);
+    EXPECT_EQ(integ[e].sample, int64_t(e) * (integ[0].sample + 2 * P) + integ[0].sample);
+    ASSERT_EQ(integ[e].lines.size(), 3 * lines.size());  // every line, once per input
+    for (size_t j = 0; j < integ[e].lines.size(); ++j) {
+      EXPECT_EQ(integ[e].lines[j], lines[j / 3]);
+      EXPECT_EQ(integ[e].line_input[j], ex[j % 3]);
+    }
+  }
+  EXPECT_EQ(integ[0].sample, 2500);  // settle: max(5 x 0.5 s, P / 10)
+  std::vector<std::vector<double>> cmd;
+  std::vector<double> ph, fr;
+  c.fill(0, int(c.total_samples()), cmd, ph, fr);
+  auto line_phasor = [&](int i, int64_t from, int k) {  // DFT of one period at line k
+    Complex s = 0;
+    for (int n = 0; n < P; ++n)
+      s += (cmd[i][from + n] - ins[i].dc) * std::polar(1.0, -2 * std::numbers::pi * k * n / P);
+    return s;
+  };
+  for (int q = 0; q < 3; ++q) {
+    const int i = ex[q];
+    double peak = 0;
+    for (int e = 0; e < 3; ++e) {
+      const int64_t a = integ[e].sample - integ[0].sample, b = integ[e].sample + 2 * P;
+      for (int64_t n = a; n + P < b; ++n) ASSERT_DOUBLE_EQ(cmd[i][n + P], cmd[i][n]);
+      double ss = 0;
+      for (int64_t n = a; n < b; ++n) peak = std::max(peak, std::abs(cmd[i][n] - ins[i].dc));
+      for (int64_t n = integ[e].sample; n < b; ++n) ss += std::pow(cmd[i][n] - ins[i].dc, 2);
+      EXPECT_NEAR(std::sqrt(ss / (2 * P)), ins[i].amplitude / std::sqrt(2.0),
+                  1e-9 * ins[i].amplitude);
+      for (int k : {lines[0], lines[7], lines.back()}) {
+        const Complex ratio =
+            line_phasor(i, integ[e].sample, k) / line_phasor(i, integ[0].sample, k);
+        EXPECT_NEAR(std::abs(ratio - std::polar(1.0, 2 * std::numbers::pi * q * e / 3)), 0, 1e-9)
+            << q << " " << e << " " << k;
+      }
+    }
+    EXPECT_NEAR(peak, integ[0].amplitudes[i], 1e-9 * peak);
+    EXPECT_GT(peak, 2 * ins[i].amplitude);  // crest factor > 2 sqrt 2
+    EXPECT_LE(peak, 0.5 * ins[i].full_scale);
+  }
+  EXPECT_DOUBLE_EQ(cmd[1][123], ins[1].dc);  // A8 not excited: held at its operating point
+  o.realisations = 2;
+  o.phases = "schroeder";
+  EXPECT_THROW(MultisineCampaign(ins, ex, o, "r"), InputError);
+}
+
+// Envelope clipping lowers the crest factor of every experiment of the orthogonal design: each is
+// Re(exp(j theta) z), so its peak is at most max |z| (a sine's crest factor is sqrt 2 = 1.41). On
+// the J85's quasi-logarithmic grid (34 lines over 3.4 decades, sparse at the top) it gains 15 %:
+// the worst crest over four experiment phases from 4.15 (random phases) to 3.50.
+TEST(Multisine, LowCrestPhasesBoundEveryExperimentsPeak) {
+  MultisineOptions o;  // the J85 band: 0.04-100 Hz at 10 lines per decade, P = 25000
+  const int P = 25000;
+  const std::vector<int> lines = multisine_lines(o, P);
+  ASSERT_EQ(lines.size(), 34u);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uni(0, 2 * std::numbers::pi);
+  std::vector<double> start(lines.size());
+  for (double& v : start) v = uni(rng);
+  // Crest factor (peak / rms) of sum_j sin(2 pi k_j n / P + phi_j + theta), worst over theta.
+  auto crest = [&](const std::vector<double>& ph) {
+    double worst = 0;
+    for (double theta : {0.0, 0.5 * std::numbers::pi, 0.25 * std::numbers::pi, 2.0}) {
+      double peak = 0, ss = 0;
+      for (int n = 0; n < P; ++n) {
+        double x = 0;
+        for (size_t j = 0; j < lines.size(); ++j)
+          x += std::sin(2 * std::numbers::pi * double(int64_t(lines[j]) * n % P) / P + ph[j] +
+                        theta);
+        peak = std::max(peak, std::abs(x));
+        ss += x * x;
+      }
+      worst = std::max(worst, peak / std::sqrt(ss / P));
+    }
+    return worst;
+  };
+  const double before = crest(start), after = crest(low_crest_phases(P, lines, start));
+  RecordProperty("crest_random", std::to_string(before));
+  RecordProperty("crest_low", std::to_string(after));
+  EXPECT_GT(before, 3.8);
+  EXPECT_LT(after, 0.9 * before);
 }

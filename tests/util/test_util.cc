@@ -57,7 +57,11 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
   AcquireOptions o;
   for (const auto& e : excite) o.inputs += (o.inputs.empty() ? "" : ",") + e;
   o.band = lossless(so.f_lo_hz) + ":" + lossless(so.f_hi_hz);
-  o.excitation = excitation_from_string(excitation);
+  // "multisine:zippered" / "multisine:orthogonal": the multisine design too.
+  const auto colon = excitation.find(':');
+  o.excitation = excitation_from_string(excitation.substr(0, colon));
+  if (colon != std::string::npos)
+    o.multisine_design = multisine_design_from_string(excitation.substr(colon + 1));
   o.points_per_decade = so.points_per_decade;
   o.amplitude_pct = amplitude_pct;
   o.min_cycles = so.min_cycles;

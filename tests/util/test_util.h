@@ -28,7 +28,8 @@ Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor 
 
 /// A lab run without LCM: the same library code as fralab-acquire (make_campaign, command_block)
 /// and fralab-plant (LockstepPlant), producing the tape's records in order. `so` gives the band,
-/// points per decade, cycles, integration time, sample rate and settling time constant.
+/// points per decade, cycles, integration time, sample rate and settling time constant;
+/// `excitation` "stepped", "sweep", "multisine" or "multisine:zippered" (the multisine's design).
 struct TapeRun {
   std::vector<StatusEvent> events;
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs

@@ -14,7 +14,9 @@ namespace fralab {
 /// Adds --input, --band, --excitation, --multisine-phases, --odd-lines, --points-per-decade,
 /// --amplitude-pct, --amplitude-scale, --min-cycles, --min-integrate-s, --sample-rate, --speed,
 /// --block, --window, --settle-time-constant-s, bound to `o`.
-void add_acquire_flags(CLI::App* app, AcquireOptions& o);
+/// With `auto_campaign`, --excitation also takes "auto" (the lab's campaign that decides itself,
+/// lab/auto_campaign.h), which sets *auto_campaign (and o.excitation to multisine).
+void add_acquire_flags(CLI::App* app, AcquireOptions& o, bool* auto_campaign = nullptr);
 
 /// The flags that make add_acquire_flags reproduce `o` exactly.
 std::vector<std::string> acquire_flags(const AcquireOptions& o);

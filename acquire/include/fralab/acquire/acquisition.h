@@ -27,13 +27,18 @@ struct AcquireOptions {
   std::string inputs;             // "NAME[,NAME...]" to excite; "" = every input
   std::string band = "0.04:100";  // LO_HZ:HI_HZ
   Excitation excitation = Excitation::kStepped;
-  std::string multisine_phases = "schroeder";  // or "random"
+  std::string multisine_phases = "low-crest";  // "schroeder", "random" or "low-crest"
   bool odd_lines = false;                      // multisine: odd harmonics only
+  // multisine: every input on every line in n_u experiments (orthogonal) or disjoint lines in one
+  // (zippered); realisations: independent random-phase realisations of the orthogonal design.
+  MultisineOptions::Design multisine_design = MultisineOptions::Design::kOrthogonal;
+  int realisations = 1;
   int points_per_decade = 10;
   double amplitude_pct = -1;     // < 0: each input's test_amplitude_pct, else 2
   double amplitude_scale = 1.0;  // multiplies every input's amplitude
   int min_cycles = 8;            // stepped/sweep: cycles per point; multisine: periods (>= 2)
   double min_integrate_s = 4.0;
+  double settle_cycles = 1.0;  // stepped sine: settle at least this many cycles per step
   double sample_rate_hz = 1000.0;
   double slowest_time_constant_s = -1;  // settling; < 0: the model's slowest (largest 1/|pole|)
   int block = 100;                      // samples per command block

@@ -50,7 +50,8 @@ std::vector<SineStep> plan_stepped_sine(const SteppedSineOptions& opt);
 struct CampaignInput {
   std::string name;
   double dc = 0.0;
-  double amplitude = 0.0;  // peak, input units, when excited
+  double amplitude = 0.0;   // peak, input units, when excited
+  double full_scale = 0.0;  // input units (0: unknown)
 };
 
 /// What the oscillator does over a whole run, sample-exact: commands, reference, status events.
@@ -127,25 +128,76 @@ class SweepCampaign : public SegmentCampaign {
 struct MultisineOptions {
   double f_lo_hz = 0.04;  // the frequency resolution: period = round(fs / f_lo) samples
   double f_hi_hz = 100.0;
-  int points_per_decade = 10;  // line density: log-spaced targets rounded to harmonics
-  int periods = 8;             // measured periods (>= 2: the noise comes from their spread)
+  int points_per_decade = 10;  // line density (see the designs below)
+  int periods = 8;             // measured periods per experiment (>= 2: noise from their spread)
   double settle_time_constants = 5.0;
   double slowest_time_constant_s = 0.0;
   bool odd_lines = false;  // only odd harmonics: even lines then reveal even nonlinearities
-  std::string phases = "schroeder";  // or "random"
-  uint64_t seed = 1;                 // random phases
+  // "schroeder", "random", or "low-crest": random phases then envelope clipping
+  // (low_crest_phases), the orthogonal design's default.
+  std::string phases = "low-crest";
+  uint64_t seed = 1;  // random and low-crest phases (realisation r uses seed + r)
   double sample_rate_hz = 1000.0;
+  /// kOrthogonal (Pintelon and Schoukens' orthogonal multisines): every excited input on every
+  /// line, n_u experiments whose phase matrix is the n_u x n_u DFT matrix, so the whole FRF matrix
+  /// is solved per line. kZippered: each input on its own (disjoint) lines, one experiment.
+  enum class Design { kOrthogonal, kZippered } design = Design::kOrthogonal;
+  /// kOrthogonal: independent phase realisations, each n_u experiments (> 1 needs random phases:
+  /// their spread is what separates nonlinear distortion from noise).
+  int realisations = 1;
+  /// "peak": each input's largest peak is its amplitude (the sine test's peak); "rms": its rms is
+  /// the sine test's, amplitude / sqrt 2 (the same power as the report's sine, spread over the
+  /// lines), the peak then crest / sqrt 2 times the amplitude, capped at half the full scale.
+  std::string level = "rms";
   void validate() const;
 };
 
-/// Periodic multisine, all selected inputs at once with orthogonal (disjoint) line sets, so one run
-/// measures the whole transfer matrix: lines k of df = fs / P near log-spaced targets (unique,
-/// optionally odd), dealt to the excited inputs in turn; each input's signal
-/// x_i[n] = a_i sum_{k in K_i} sin(2 pi k n / P + phi_k), phases Schroeder
-/// (phi_k = -pi j (j - 1) / |K_i| for its j-th line) or random, a_i scaling the period's peak to
-/// the input's amplitude. Settle periods (>= 1, >= the slowest time constants) then `periods`
-/// measured periods in one "integrate" status (excitation "multisine", with period_samples and the
-/// lines).
+/// "orthogonal" / "zippered" (command line) and back; InputError naming the word otherwise.
+const char* to_string(MultisineOptions::Design d);
+MultisineOptions::Design multisine_design_from_string(const std::string& word);
+
+/// The lines of a multisine of period P samples over [f_lo, f_hi] (harmonics k of fs / P).
+/// kOrthogonal: a quasi-logarithmic grid, k_{j+1} = max(k_j + 1, floor(k_j r)),
+/// r = 10^(1 / points_per_decade), from round(f_lo P / fs) (>= 1) while k f_s / P <= f_hi: every
+/// ratio between neighbours is <= r, so every decade holds >= points_per_decade lines (all
+/// harmonics where they are sparser than that). kZippered: the harmonics nearest log-spaced
+/// targets, unique. Odd lines: only odd harmonics (k rounded up to odd).
+std::vector<int> multisine_lines(const MultisineOptions& o, int P);
+
+/// Crest-factor optimisation by envelope clipping (Van der Ouderaa, Schoukens and Renneboog's
+/// clipping algorithm, 1988, applied to the analytic signal): from `phase` (radians, one per line
+/// k of a period of P samples), `iterations` times: z[n] = sum_j exp(j (2 pi k_j n / P + phi_j)),
+/// |z| clipped to 1.2 sqrt(|K|) (1.2 times its rms), transformed back, and phi_j the phase of line
+/// k_j. Returns the phases of the lowest peak |z| met. Since every experiment of the orthogonal
+/// design is Re(exp(j theta) z) for some theta, max |z| bounds the peak of all of them; a sine has
+/// crest sqrt 2 and max |z| >= sqrt(2) rms.
+std::vector<double> low_crest_phases(int P, const std::vector<int>& lines,
+                                     std::vector<double> phase, int iterations = 200);
+
+/// Periodic multisine campaign, sample-exact.
+///
+/// kZippered: all selected inputs at once with orthogonal (disjoint) line sets, so one run measures
+/// the whole transfer matrix with few lines per input: the lines dealt to the excited inputs in
+/// turn; each input's signal x_i[n] = a_i sum_{k in K_i} sin(2 pi k n / P + phi_k), phases
+/// Schroeder (phi_k = -pi j (j - 1) / |K_i| for its j-th line) or random, a_i scaling the
+/// period's peak to the input's amplitude. Settle periods (>= 1, >= the slowest time constants)
+/// then `periods` measured periods in one "integrate" status (excitation "multisine", with
+/// period_samples and the lines).
+///
+/// kOrthogonal: for realisation r and experiment e (0 <= e < n_u), excited input number q (its
+/// position among the excited inputs) carries
+///   x[n] = a_i sum_k sin(2 pi k n / P + phi_{r,q,k} + 2 pi q e / n_u)
+/// on every line k (phi Schroeder over the lines, or random per realisation, input and line, or
+/// those made low-crest (low_crest_phases); the
+/// last term is the DFT phase matrix T_{qe} = exp(j 2 pi q e / n_u), unitary up to sqrt(n_u), so
+/// the per-line input matrix U(k) = diag(.) T is as well conditioned as it can be); a_i scales
+/// the largest peak over every experiment to the input's amplitude. Each experiment is a settle of
+/// max(settle_time_constants * slowest time constant, 0.1 P) samples (one period when the time
+/// constant is unknown) playing the periodic signal, then `periods` measured periods: a "settle"
+/// and an "integrate" status with step = r n_u + e, n_steps = realisations n_u, the lines listed
+/// once per excited input (lines[j] excited by inputs[line_input[j]]: a line listed for several
+/// inputs marks the orthogonal design) and the realisation and experiment in the message. The
+/// commands (tape channels u_<input>) are the references the analyser solves with.
 class MultisineCampaign : public Campaign {
  public:
   MultisineCampaign(std::vector<CampaignInput> inputs, std::vector<int> excite,
@@ -155,8 +207,11 @@ class MultisineCampaign : public Campaign {
   int period_samples() const { return P_; }
 
  private:
-  std::vector<std::vector<double>> period_;  // per input, one period of its deviation (empty: idle)
+  // period_[x][i]: experiment x's (r n_u + e) period of input i's deviation (empty: idle).
+  std::vector<std::vector<std::vector<double>>> period_;
   int P_ = 0;
+  int64_t settle_ = 0;      // samples before each experiment's measured periods
+  int64_t experiment_ = 0;  // samples per experiment (settle + periods)
 };
 
 /// Engine time of a plan for one input, seconds.

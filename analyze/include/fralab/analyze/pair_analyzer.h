@@ -15,6 +15,29 @@
 // transformed (FFTW), R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma and coherence from the spread
 // over periods (as over blocks above), and nl_rel = the mean level of E2 on the nearest lines no
 // input excites, relative to |X2(k)| (the best linear approximation's nonlinear-distortion sign).
+// Orthogonal multisines (a line listed for several inputs: every excited input on every line, n_u
+// experiments with step = r n_u + e, acquire/campaign.h): each experiment's window is transformed
+// per period as above, together with the commands of the n_u inputs (tape channels u_<input>, the
+// references); once the n_u experiments of realisation r are in, per line k with the input matrix
+// U (U_qe = mean-period spectrum of input q's command in experiment e) and the channels' mean
+// spectra X_e, the responses to each reference are h = X U^{-1} (a row per channel), and
+//   R = h2_q / h1_q (q the pair's input: exactly what a stepped sine of input q alone measures,
+//       P3-coupled fuel measurement and all). For a pair X:O (E1 an input's position), an input
+//       whose position distorts (AnalyzerOptions::distortion_threshold: a backlash at the
+//       multisine's level) enters U by its measured position instead of its command: its
+//       distortion is not a linear function of the references and would otherwise leak into every
+//       other input's estimate; the paths after the position are linear, so its own X:O is then
+//       exact (O's coefficient on X's position);
+//   sigma^2 = sum_e |U^{-1}_eq|^2 var(mean_p z_ep) / |h1_q|^2, z_ep = X2_ep - R X1_ep per period
+//       (the linearised error of h2_q - R h1_q, with the channels' covariance), the variance of
+//       the period mean pooled over line k and the nearest non-excited line each side (the same
+//       z there: noise only, a periodic distortion cancels in the spread), three times the
+//       degrees of freedom of a few periods;
+//   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
+//       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
+//       the nearest non-excited lines relative to |X2(k)|.
+// Points carry step = r n_u. An experiment that is invalid (gaps, held samples, no command
+// channel) makes its realisation's points invalid with its note.
 // Arithmetic depends only on the samples and the status, never on arrival order or timing, so
 // live, replayed and offline analyses give identical numbers. A window with a missing sample
 // (lost or never-arrived block) yields a point with valid = false and a note naming the gap; so
@@ -23,6 +46,7 @@
 // acquisition then repeating the step.
 #pragma once
 
+#include <complex>
 #include <map>
 #include <optional>
 #include <set>
@@ -39,6 +63,11 @@ struct AnalyzerOptions {
   /// A window still missing samples when data this many samples beyond its end has arrived is
   /// declared invalid (allows reordering up to that distance).
   int64_t reorder_slack_samples = 5000;
+  /// Orthogonal multisines: an input whose position distorts beyond this (the median over lines of
+  /// its level on the nearest non-excited lines relative to the line) is, for pairs X:O, a
+  /// regressor by its measured position instead of its command (its distortion otherwise leaks
+  /// into every other input's estimate).
+  double distortion_threshold = 0.01;
   /// Only analyse steps exciting this input. "" (default): a step is analysed unless E1 or E2 is
   /// an input channel (or its command u_<input>) that the step does not excite; a pair of two
   /// outputs is analysed at every step. Status events list every plant input, amplitude 0 when
@@ -77,6 +106,23 @@ class PairAnalyzer {
   void try_complete(bool force);
   FrdPoint compute(const Window& w);
   std::vector<FrdPoint> compute_multisine(const Window& w);
+  // Orthogonal multisines: one experiment's spectra at the lines, kept until its realisation is
+  // complete; returns that realisation's points then (else nothing).
+  struct Experiment {
+    bool valid = true;
+    std::string note;
+    std::vector<std::vector<std::complex<double>>> x1, x2;  // [line][period]
+    // [line][period]: the same at the nearest non-excited line each side (noise pooled from them)
+    std::vector<std::vector<std::vector<std::complex<double>>>> nb1, nb2;
+    std::vector<std::vector<std::complex<double>>>
+        u;  // [line][input q]: period-mean command spectrum
+    std::vector<std::vector<std::complex<double>>>
+        pos;                     // [line][input q]: the same of its position
+    std::vector<double> pos_nl;  // [input q]: median over lines of its position's distortion
+    std::vector<double> nl;      // [line]: E2 on the nearest unexcited lines / |X2|
+  };
+  std::vector<FrdPoint> add_experiment(const StatusEvent& st, Experiment ex);
+  Experiment orthogonal_experiment(const Window& w);
   bool covers(int64_t a, int64_t b) const;
   std::string describe_gaps(int64_t a, int64_t b) const;
   bool wants(const StatusEvent& st) const;
@@ -89,6 +135,14 @@ class PairAnalyzer {
   // sample store from base_
   int64_t base_ = 0;
   std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)
+  // Channels an orthogonal multisine needs besides E1 and E2 (the commands u_X and positions X of
+  // its inputs), registered by its status; kept as x1_ (NaN: absent).
+  std::map<std::string, std::vector<double>> extra_;
+  struct Group {
+    StatusEvent st;                         // its first experiment's status (lines, inputs)
+    std::map<int, Experiment> experiments;  // by experiment e
+  };
+  std::map<int, Group> groups_;  // by realisation
   std::vector<char> have_;
   // Samples a free-running plant held (tape channel "underrun"), and the last settle status (its
   // step and start sample).

@@ -39,6 +39,9 @@ struct MeasureOptions {
   std::map<std::string, std::string> hosts;
   std::string deputy_url;  // "" = kDefaultDeputyUrl
   bool progress = true;    // the progress line on stderr when it is a terminal (lab/progress.h)
+  /// `--excitation auto`: the campaign that decides itself (lab/auto_campaign.h), an orthogonal
+  /// multisine and a sine for the inputs that distort at its level.
+  bool auto_campaign = false;
 };
 
 struct MeasureResult {

@@ -1,0 +1,151 @@
+#include "fralab/lab/auto_campaign.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "fralab/acquire/model_info.h"
+#include "fralab/core/frd.h"
+#include "fralab/identify/fit_io.h"
+#include "fralab/plant/embedded_models.h"
+
+namespace fralab {
+
+namespace fs = std::filesystem;
+
+void AutoCampaignOptions::validate() const {
+  if (!(nl_threshold > 0)) throw InputError("auto campaign: nl_threshold must be > 0");
+  if (!(max_rel_sigma > 0)) throw InputError("auto campaign: max_rel_sigma must be > 0");
+  if (sine_points_per_decade < 1)
+    throw InputError("auto campaign: sine_points_per_decade must be >= 1");
+  if (sine_min_cycles < 2) throw InputError("auto campaign: sine_min_cycles must be >= 2");
+  if (!(sine_settle_cycles >= 0))
+    throw InputError("auto campaign: sine_settle_cycles must be >= 0");
+}
+
+double actuator_distortion(const Frd& f, double max_rel_sigma) {
+  std::vector<double> nl;
+  for (const FrdPoint& p : f.points)
+    if (p.valid && p.nl_rel >= 0 && p.sigma > 0 && p.mag > 0 && p.sigma < max_rel_sigma * p.mag)
+      nl.push_back(p.nl_rel);
+  if (nl.empty()) return -1;
+  std::sort(nl.begin(), nl.end());
+  const size_t n = nl.size();
+  return n % 2 ? nl[n / 2] : 0.5 * (nl[n / 2 - 1] + nl[n / 2]);
+}
+
+AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampaignOptions& a) {
+  a.validate();
+  if (opt.out.empty()) throw InputError("--out DIR is required");
+  if (opt.resume)
+    throw InputError(
+        "--resume: an auto campaign resumes its runs one by one: `fralab measure "
+        "--resume " +
+        opt.out + "/multisine` (or /sine)");
+  const Model model = load_model_or_embedded(opt.engine);
+  const std::vector<int> excite = select_inputs(model, opt.acquire.inputs);
+  AutoCampaignResult res;
+  fs::create_directories(opt.out);
+  // 1. The orthogonal multisine over every selected input.
+  MeasureOptions m = opt;
+  m.acquire.excitation = Excitation::kMultisine;
+  m.acquire.multisine_design = MultisineOptions::Design::kOrthogonal;
+  m.out = opt.out + "/multisine";
+  const MeasureResult mr = run_measure(m);
+  res.multisine_engine_s = mr.engine_time_s;
+  const Json mrun = json_load_file(m.out + "/run.json");
+  // 2. Which actuators distort at the multisine's level.
+  std::string sine_inputs;
+  double act_tc = 0;
+  for (int i : excite) {
+    const std::string x = model.inputs[i].name;
+    const std::string file = m.out + "/frd/" + pair_file_stem("u_" + x + ":" + x) + ".json";
+    const double nl = fs::exists(file) ? actuator_distortion(load_frd(file), a.max_rel_sigma) : -1;
+    res.nl[x] = nl;
+    if (nl > a.nl_threshold) {
+      res.sine_inputs.push_back(x);
+      sine_inputs += (sine_inputs.empty() ? "" : ",") + x;
+      if (model.inputs[i].actuator)
+        for (const Root& p : model.inputs[i].actuator->poles)
+          act_tc = std::max(act_tc, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
+    }
+  }
+  // 3. A stepped sine for those, at their test amplitude.
+  std::vector<Frd> curves;
+  for (const auto& e : fs::directory_iterator(m.out + "/frd")) curves.push_back(load_frd(e.path()));
+  std::sort(curves.begin(), curves.end(),
+            [](const Frd& x, const Frd& y) { return x.pair < y.pair; });
+  auto input_of_command_pair = [](const std::string& pair) {  // "u_X:..." -> X
+    return pair.rfind("u_", 0) == 0 ? pair.substr(2, pair.find(':') - 2) : std::string();
+  };
+  Json sine_run;
+  if (!res.sine_inputs.empty()) {
+    MeasureOptions s = opt;
+    s.acquire.excitation = Excitation::kStepped;
+    s.acquire.inputs = sine_inputs;
+    s.acquire.points_per_decade = a.sine_points_per_decade;
+    s.acquire.min_cycles = a.sine_min_cycles;
+    s.acquire.min_integrate_s = 0;
+    s.acquire.settle_cycles = a.sine_settle_cycles;
+    s.acquire.slowest_time_constant_s = act_tc;
+    s.seed = opt.seed + 1000;  // its own noise
+    s.out = opt.out + "/sine";
+    const MeasureResult sr = run_measure(s);
+    res.sine_engine_s = sr.engine_time_s;
+    sine_run = json_load_file(s.out + "/run.json");
+    // 4. Merge: the sine's actuator curve replaces the multisine's; the multisine's u_X:O go.
+    std::vector<Frd> merged;
+    for (const Frd& f : curves) {
+      const std::string x = input_of_command_pair(f.pair);
+      if (std::find(res.sine_inputs.begin(), res.sine_inputs.end(), x) == res.sine_inputs.end())
+        merged.push_back(f);
+    }
+    for (const std::string& x : res.sine_inputs) {
+      merged.push_back(load_frd(s.out + "/frd/" + pair_file_stem("u_" + x + ":" + x) + ".json"));
+    }
+    std::sort(merged.begin(), merged.end(),
+              [](const Frd& x, const Frd& y) { return x.pair < y.pair; });
+    curves = std::move(merged);
+  }
+  fs::create_directories(opt.out + "/frd");
+  for (const auto& e : fs::directory_iterator(opt.out + "/frd")) fs::remove(e.path());
+  for (const Frd& f : curves) save_frd(opt.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+  FitOptions fo;
+  parse_delay_option(opt.fit_delay, &fo);
+  fit_and_write(curves, fo, opt.out, model.name + ": measured transfer matrix (auto campaign)");
+  save_model(opt.out + "/engine.json", model);
+  res.measure = mr;
+  res.measure.pairs.clear();
+  for (const Frd& f : curves) res.measure.pairs.push_back(f.pair);
+  res.measure.engine_time_s = res.multisine_engine_s + res.sine_engine_s;
+  res.measure.wall_time_s =
+      mr.wall_time_s + (sine_run.is_null() ? 0.0 : sine_run.value("wall_time_s", 0.0));
+  res.measure.tape_blocks =
+      mr.tape_blocks + (sine_run.is_null() ? 0 : sine_run.value("tape_blocks", int64_t(0)));
+  Json run = Json::object();
+  run["state"] = "complete";
+  run["excitation"] = "auto";
+  run["engine"] = model.name;
+  run["seed"] = opt.seed;
+  run["engine_time_s"] = res.measure.engine_time_s;
+  run["wall_time_s"] = res.measure.wall_time_s;
+  run["speedup"] = res.measure.engine_time_s / std::max(res.measure.wall_time_s, 1e-9);
+  run["multisine"] = {{"dir", m.out}, {"engine_time_s", res.multisine_engine_s}};
+  run["sine"] = {{"dir", opt.out + "/sine"},
+                 {"engine_time_s", res.sine_engine_s},
+                 {"inputs", res.sine_inputs}};
+  Json nl = Json::object();
+  for (const auto& [x, v] : res.nl)
+    nl[x] = {{"nl_rel_median", v},
+             {"measured_by",
+              std::find(res.sine_inputs.begin(), res.sine_inputs.end(), x) != res.sine_inputs.end()
+                  ? "sine"
+                  : "multisine"}};
+  run["inputs"] = nl;
+  run["nl_threshold"] = a.nl_threshold;
+  if (mrun.contains("measurement_chain")) run["measurement_chain"] = mrun["measurement_chain"];
+  run["pairs"] = res.measure.pairs;
+  json_save_file(opt.out + "/run.json", run);
+  return res;
+}
+
+}  // namespace fralab
