@@ -20,7 +20,7 @@ void add_acquire_flags(CLI::App* c, AcquireOptions& o, bool* auto_campaign) {
                           : ""))
       ->check(auto_campaign ? CLI::IsMember({"stepped", "sweep", "multisine", "auto"})
                             : CLI::IsMember({"stepped", "sweep", "multisine"}))
-      ->default_str("stepped");
+      ->default_str(auto_campaign && *auto_campaign ? "auto" : to_string(o.excitation));
   c->add_option("--multisine-phases", o.multisine_phases,
                 "schroeder, random or low-crest (random, then envelope clipping)")
       ->capture_default_str();

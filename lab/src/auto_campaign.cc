@@ -13,6 +13,7 @@ namespace fralab {
 namespace fs = std::filesystem;
 
 void AutoCampaignOptions::validate() const {
+  if (multisine_periods < 2) throw InputError("auto campaign: multisine_periods must be >= 2");
   if (!(nl_threshold > 0)) throw InputError("auto campaign: nl_threshold must be > 0");
   if (!(max_rel_sigma > 0)) throw InputError("auto campaign: max_rel_sigma must be > 0");
   if (sine_points_per_decade < 1)
@@ -49,6 +50,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   MeasureOptions m = opt;
   m.acquire.excitation = Excitation::kMultisine;
   m.acquire.multisine_design = MultisineOptions::Design::kOrthogonal;
+  m.acquire.min_cycles = a.multisine_periods;
   m.out = opt.out + "/multisine";
   const MeasureResult mr = run_measure(m);
   res.multisine_engine_s = mr.engine_time_s;

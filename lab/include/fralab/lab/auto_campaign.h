@@ -1,7 +1,8 @@
 // The campaign that decides itself (issue 13, `--excitation auto`): multisine for what is linear,
 // sine for what is not.
 //   1. An orthogonal multisine (acquire/campaign.h: every selected input on every line, n_u
-//      experiments) over the band: a whole measurement in DIR/multisine/.
+//      experiments of multisine_periods measured periods, at the sine test's power) over the
+//      band: a whole measurement in DIR/multisine/.
 //   2. Per input X, its actuator pair u_X:X from that run: the median nl_rel (the level of X's
 //      position on the non-excited lines relative to the line, pair_analyzer.h) over the lines
 //      measured to better than max_rel_sigma (sigma / |G|). X is nonlinear (a backlash, a deadband
@@ -32,6 +33,7 @@
 namespace fralab {
 
 struct AutoCampaignOptions {
+  int multisine_periods = 2;    // measured periods per experiment (--min-cycles does not apply)
   double nl_threshold = 0.01;   // median nl_rel of u_X:X above which X is measured by sine
   double max_rel_sigma = 0.01;  // lines used for that median: sigma / |G| below this
   int sine_points_per_decade = 10;
