@@ -36,9 +36,9 @@ struct AutoCampaignOptions {
   int multisine_periods = 2;    // measured periods per experiment (--min-cycles does not apply)
   double nl_threshold = 0.01;   // median nl_rel of u_X:X above which X is measured by sine
   double max_rel_sigma = 0.01;  // lines used for that median: sigma / |G| below this
-  int sine_points_per_decade = 10;
+  int sine_points_per_decade = 5;
   int sine_min_cycles = 2;  // cycles per sine point
-  double sine_settle_cycles = 0.25;
+  double sine_settle_cycles = 0.5;
   /// InputError naming the bad option.
   void validate() const;
 };
