@@ -612,6 +612,15 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
   const int r = st.step / nu, e = st.step % nu;
   Group& g = groups_[r];
   if (g.experiments.empty()) g.st = st;
+  // Every experiment of a realisation must state the same design (a corrupt status may not).
+  if (st.lines != g.st.lines || st.line_input != g.st.line_input || st.inputs != g.st.inputs ||
+      st.period_samples != g.st.period_samples || ins.back() >= int(st.inputs.size())) {
+    ex.valid = false;
+    ex.note = "its status states another design than experiment 1's (lines, inputs or period)";
+    if (ins.back() >= int(st.inputs.size()))
+      ex.note = "its status names input " + std::to_string(ins.back()) + " of " +
+                std::to_string(st.inputs.size());
+  }
   g.experiments[e] = std::move(ex);
   if (int(g.experiments.size()) < nu) return {};
   // The realisation is complete: solve per line.
@@ -620,11 +629,14 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
   std::set<int> uniq(grp.st.lines.begin(), grp.st.lines.end());
   const std::vector<int> lines(uniq.begin(), uniq.end());
   const double df = grp.st.sample_rate_hz / grp.st.period_samples;
+  auto name = [&](int q) {
+    return ins[q] < int(grp.st.inputs.size()) ? grp.st.inputs[ins[q]] : std::string("?");
+  };
   // The pair's input(s): the one named by E1 or E2 (u_X or X); none: every input.
   std::vector<int> want;
   for (int q = 0; q < nu; ++q)
     for (const std::string& ch : {e1_, e2_})
-      if ((ch == st.inputs[ins[q]] || ch == "u_" + st.inputs[ins[q]]) &&
+      if ((ch == name(q) || ch == "u_" + name(q)) &&
           std::find(want.begin(), want.end(), q) == want.end())
         want.push_back(q);
   if (want.empty())
@@ -650,21 +662,21 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
       FrdPoint p;
       p.w = 2 * std::numbers::pi * lines[j] * df;
       p.step = r * nu;
-      p.input = st.inputs[ins[q]];
-      p.amplitude = size_t(ins[q]) < st.amplitudes.size() ? st.amplitudes[ins[q]] : 0.0;
+      p.input = name(q);
+      p.amplitude = size_t(ins[q]) < grp.st.amplitudes.size() ? grp.st.amplitudes[ins[q]] : 0.0;
       if (!bad.empty()) {
         p.valid = false;
         p.note = "orthogonal multisine realisation " + std::to_string(r + 1) + ": " + bad;
         out.push_back(p);
         continue;
       }
-      const int M = int(grp.experiments.begin()->second.x1[j].size());
-      p.n_cycles = M;
+      p.n_cycles = int(grp.experiments.begin()->second.x1[j].size());
       Eigen::MatrixXcd U(nu, nu);
       Eigen::VectorXcd X1(nu), X2(nu);
       for (int ee = 0; ee < nu; ++ee) {
         const Experiment& x = grp.experiments.at(ee);
         for (int qq = 0; qq < nu; ++qq) U(qq, ee) = by_position[qq] ? x.pos[j][qq] : x.u[j][qq];
+        const int M = int(x.x1[j].size());
         Complex m1 = 0, m2 = 0;
         for (int pp = 0; pp < M; ++pp) m1 += x.x1[j][pp], m2 += x.x2[j][pp];
         X1(ee) = m1 / double(M);
@@ -694,6 +706,7 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
       double var = 0, nl = 0;
       for (int ee = 0; ee < nu; ++ee) {
         const Experiment& x = grp.experiments.at(ee);
+        const int M = int(x.x1[j].size());
         // The spread over periods of z = X2 - R X1 at the line and its unexcited neighbours.
         auto spread = [&](const std::vector<Complex>& v1, const std::vector<Complex>& v2) {
           Complex zm = 0;
@@ -710,7 +723,7 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
       }
       p.sigma = std::sqrt(var) / std::abs(h1);
       if (!(p.sigma > 0)) p.sigma = 1e-300 + 1e-15 * p.mag;  // noise-free: a sigma must be > 0
-      p.coherence = std::norm(R) / (std::norm(R) + double(nu) * M * p.sigma * p.sigma);
+      p.coherence = std::norm(R) / (std::norm(R) + double(nu) * p.n_cycles * p.sigma * p.sigma);
       p.nl_rel = nl;
       out.push_back(p);
     }

@@ -427,3 +427,28 @@ TEST(PairAnalyzer, OrthogonalMultisineSolvesADistortingInputByItsPosition) {
   for (const auto& p : analyse(run, "u_b:b")) worst = std::max(worst, p.nl_rel);
   EXPECT_GT(worst, 0.05);
 }
+
+// A corrupt tape: experiment 2's status states other lines (or an input the run does not have).
+// The realisation's points are invalid and say why; nothing is read out of range.
+TEST(PairAnalyzer, OrthogonalMultisineRefusesExperimentsThatDisagree) {
+  Model m = two_by_two();
+  SteppedSineOptions o = band(0.1, 20, 6);
+  o.min_cycles = 2;
+  auto run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");
+  int seen = 0;
+  for (auto& e : run.events)
+    if (e.state == RunState::kIntegrate && seen++ == 1) {
+      e.lines.pop_back();
+      e.line_input.pop_back();
+    }
+  auto pts = analyse(run, "a:y");
+  ASSERT_FALSE(pts.empty());
+  for (const auto& p : pts) {
+    EXPECT_FALSE(p.valid);
+    EXPECT_THAT(p.note, ::testing::HasSubstr("experiment 2: its status states another design"));
+  }
+  run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");
+  for (auto& e : run.events)
+    if (e.state == RunState::kIntegrate) e.line_input.back() = 7;  // no input 7
+  for (const auto& p : analyse(run, "a:y")) EXPECT_FALSE(p.valid);
+}
