@@ -58,6 +58,68 @@ int main(int argc, char** argv) {
     e.sample = 120;
     put(kStatusChannel, to_status_msg(e));
   }
+  {  // An orthogonal multisine tape (issue 13): inputs Wf and A8 on lines 1-3 of a 20-sample
+     // period, two experiments (DFT phases 0 and pi for A8) of two periods, then done.
+    lcm::LogFile log(d + "/tape/seed_orthogonal.tape", "w");
+    int64_t num = 0;
+    auto put = [&](const char* ch, const auto& msg) {
+      std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
+      msg.encode(buf.data(), 0, int(buf.size()));
+      lcm::LogEvent ev{num++, 0, ch, int32_t(buf.size()), buf.data()};
+      log.writeEvent(&ev);
+    };
+    const int P = 20;
+    StatusEvent e;
+    e.run_id = "seed";
+    e.sample_rate_hz = 1000;
+    e.excitation = Excitation::kMultisine;
+    e.inputs = {"Wf", "A8"};
+    e.amplitudes = {1.0, 1.0};
+    e.frequency_hz = 1000.0 / P;
+    e.period_samples = P;
+    e.lines = {1, 1, 2, 2, 3, 3};
+    e.line_input = {0, 1, 0, 1, 0, 1};
+    e.n_steps = 2;
+    int64_t seq = 0;
+    for (int x = 0; x < 2; ++x) {
+      e.step = x;
+      e.state = RunState::kIntegrate;
+      e.seq = seq++;
+      e.sample = 2 * P * x;
+      e.n_samples = 2 * P;
+      e.n_cycles = 2;
+      put(kStatusChannel, to_status_msg(e));
+    }
+    for (int b = 0; b < 2; ++b) {
+      Block blk;
+      blk.run_id = "seed";
+      blk.seq = b;
+      blk.start_sample = 2 * P * b;
+      blk.sample_rate_hz = 1000;
+      blk.channels = {"u_Wf", "u_A8", "Wf", "A8", "P3"};
+      blk.n_samples = 2 * P;
+      std::vector<std::vector<double>> v(5, std::vector<double>(2 * P, 0.0));
+      for (int n = 0; n < 2 * P; ++n)
+        for (int k = 1; k <= 3; ++k) {
+          const double ph = 2 * std::numbers::pi * k * n / P;
+          v[0][n] += std::sin(ph + k);
+          v[1][n] += std::sin(ph + k * k + std::numbers::pi * b);
+        }
+      for (int n = 0; n < 2 * P; ++n) {
+        v[2][n] = 0.9 * v[0][n];
+        v[3][n] = 0.8 * v[1][n];
+        v[4][n] = 0.5 * v[2][n] - 0.25 * v[3][n];
+      }
+      for (const auto& c : v) blk.samples.insert(blk.samples.end(), c.begin(), c.end());
+      blk.final_block = b == 1;
+      put(kTapeChannel, to_tape_msg(blk));
+    }
+    e.state = RunState::kDone;
+    e.seq = seq;
+    e.sample = 4 * P;
+    e.n_samples = 0;
+    put(kStatusChannel, to_status_msg(e));
+  }
   // A model: the smallest embedded-style plant, one input and one output.
   std::ofstream(d + "/model/seed.json") << R"({"format": "fralab-model/1", "name": "seed",
   "inputs": [{"name": "Wf", "units": "lb/hr", "full_scale": 3000,
