@@ -198,6 +198,7 @@ Scope scope_from_string(const std::string& s) {
 
 void DiagnoseOptions::validate() const {
   if (!(sigma_floor >= 0)) throw InputError("diagnose: sigma_floor must be >= 0");
+  if (!(aliasing_floor >= 0)) throw InputError("diagnose: aliasing_floor must be >= 0");
   if (!(min_improvement > 0 && min_improvement < 1))
     throw InputError("diagnose: min_improvement must be in (0, 1)");
   if (max_causes_per_path < 1) throw InputError("diagnose: max_causes_per_path must be >= 1");

@@ -41,7 +41,7 @@ struct Cause {
 bool usable(const FrdPoint& p, const DiagnoseOptions& o);
 
 /// Appends a usable measured point and the simulation's response `sim` there: sigma_eff =
-/// hypot(sigma, sigma_floor |G|), factor 1.
+/// hypot(sigma, (sigma_floor + aliasing_floor (w h)^2) |G|), factor 1.
 void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o);
 
 /// sum_i |meas_i - sim_i factor_i F_i|^2 / sig_i^2.

@@ -383,6 +383,21 @@ TEST(Lab, AutoCampaignMeasuresByMultisineAndTheBacklashBySine) {
   }
   EXPECT_GT(checked, 80);
   EXPECT_TRUE(fs::exists(d + "/transfer_matrix.md"));
+  // Live = replay: the multisine's tape analysed offline gives the live analysers' files exactly.
+  Cmd a = sh(kBin + "/fralab analyze --log " + d + "/multisine/tape.lcmlog --pair A8:P3 --pair " +
+             "u_Wf:Wf --pair IGV:N --out " + d + "/offline");
+  ASSERT_EQ(a.status, 0) << a.output;
+  for (const std::string stem : {"A8_P3", "u_Wf_Wf", "IGV_N"}) {
+    const Frd live = load_frd(d + "/multisine/frd/" + stem + ".json"),
+              off = load_frd(d + "/offline/frd/" + stem + ".json");
+    ASSERT_EQ(live.points.size(), off.points.size()) << stem;
+    ASSERT_GE(live.points.size(), 34u) << stem;
+    for (size_t i = 0; i < live.points.size(); ++i) {
+      EXPECT_EQ(live.points[i].mag, off.points[i].mag) << stem << " " << i;
+      EXPECT_EQ(live.points[i].phase_deg, off.points[i].phase_deg) << stem << " " << i;
+      EXPECT_EQ(live.points[i].sigma, off.points[i].sigma) << stem << " " << i;
+    }
+  }
 }
 
 // Issue 15, import/export: a measured tape written out as a time series and its schedule (CSV and

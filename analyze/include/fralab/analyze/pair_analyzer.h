@@ -36,8 +36,10 @@
 //   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
 //       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
 //       the nearest non-excited lines relative to |X2(k)|.
-// Points carry step = r n_u. An experiment that is invalid (gaps, held samples, no command
-// channel) makes its realisation's points invalid with its note.
+// Points carry step = r n_u. The commands and positions are kept from the design's first status
+// on (blocks before it keep E1 and E2 only). An experiment that is invalid (gaps, no command or
+// position channel, a status stating another design) makes its realisation's points invalid with
+// its note; a realisation whose experiments never all arrive gives one invalid point at flush().
 // Arithmetic depends only on the samples and the status, never on arrival order or timing, so
 // live, replayed and offline analyses give identical numbers. A window with a missing sample
 // (lost or never-arrived block) yields a point with valid = false and a note naming the gap; so

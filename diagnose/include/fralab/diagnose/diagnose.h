@@ -4,7 +4,7 @@
 // left out of fitting and of the error metric. For every measured pair the residual is R(w) =
 // G_meas(jw) / G_sim(jw) (ratio in dB and phase in degrees), with the measurement's uncertainty
 // sigma_R = sigma_eff / |G_sim|, where sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the
-// analyser/plant accuracy, 2e-3). A pair is beyond its uncertainty when chi2 = sum |G_meas -
+// analyser/plant accuracy, 2e-3, plus aliasing_floor (w h)^2 for a chain sampled at 1/h). A pair is beyond its uncertainty when chi2 = sum |G_meas -
 // G_sim|^2 / sigma_eff^2 exceeds N + 4 sqrt(N) (N points; each complex point contributes 1 on
 // average when the model is right).
 //
@@ -96,6 +96,10 @@ Scope scope_from_string(const std::string& s);
 
 struct DiagnoseOptions {
   double sigma_floor = 2e-3;      // relative accuracy floor of measurement and simulation
+  // ... plus this times (w h)^2, h = 1 / chain.sample_rate_hz: the chain's first-order model
+  // leaves out the hold's aliased images, whose share grows as (w h)^2 (the J85 emulator: 3-4 % in
+  // IGV:P3 at w h = 0.6, stepped sine and multisine alike).
+  double aliasing_floor = 0.1;
   double min_improvement = 0.25;  // a cause must remove at least this fraction of chi2
   int max_causes_per_path = 2;
   double max_rel_sigma = 0.3;  // points measured worse than this (sigma / |G|) are not used
