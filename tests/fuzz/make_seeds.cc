@@ -11,18 +11,29 @@
 
 using namespace fralab;
 
+namespace {
+
+// Writes LCM messages to a log file in order, as the recorder does.
+struct TapeWriter {
+  explicit TapeWriter(const std::string& path) : log(path, "w") {}
+  template <class Msg>
+  void operator()(const char* channel, const Msg& msg) {
+    std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
+    msg.encode(buf.data(), 0, int(buf.size()));
+    lcm::LogEvent ev{num++, 0, channel, int32_t(buf.size()), buf.data()};
+    log.writeEvent(&ev);
+  }
+  lcm::LogFile log;
+  int64_t num = 0;
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc != 2) return 2;
   const std::string d = argv[1];
   {  // A tape: start, integrate and done status, three tape blocks of 40 samples (a 25 Hz sine).
-    lcm::LogFile log(d + "/tape/seed.tape", "w");
-    int64_t num = 0;
-    auto put = [&](const char* ch, const auto& msg) {
-      std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
-      msg.encode(buf.data(), 0, int(buf.size()));
-      lcm::LogEvent ev{num++, 0, ch, int32_t(buf.size()), buf.data()};
-      log.writeEvent(&ev);
-    };
+    TapeWriter put(d + "/tape/seed.tape");
     StatusEvent e;
     e.run_id = "seed";
     e.sample_rate_hz = 1000;
@@ -60,14 +71,7 @@ int main(int argc, char** argv) {
   }
   {  // An orthogonal multisine tape (issue 13): inputs Wf and A8 on lines 1-3 of a 20-sample
      // period, two experiments (DFT phases 0 and pi for A8) of two periods, then done.
-    lcm::LogFile log(d + "/tape/seed_orthogonal.tape", "w");
-    int64_t num = 0;
-    auto put = [&](const char* ch, const auto& msg) {
-      std::vector<uint8_t> buf(size_t(msg.getEncodedSize()));
-      msg.encode(buf.data(), 0, int(buf.size()));
-      lcm::LogEvent ev{num++, 0, ch, int32_t(buf.size()), buf.data()};
-      log.writeEvent(&ev);
-    };
+    TapeWriter put(d + "/tape/seed_orthogonal.tape");
     const int P = 20;
     StatusEvent e;
     e.run_id = "seed";
