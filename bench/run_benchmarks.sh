@@ -26,3 +26,5 @@ $B/fralab analyze --log "$out/j85/tape.lcmlog" "${pairs[@]}" --out "$out/offline
 $B/fralab diagnose --simulation j85_95_sim --measured "$out/offline" --out "$out/diag"
 end=$(date +%s%N)
 echo "diagnosis from tape: $(( (end - start) / 1000000 )) ms wall"
+echo "== the auto campaign against the stepped sine, J85 at 70/85/95 % (issue 13; about 15 min)"
+bash bench/campaign_compare.sh
