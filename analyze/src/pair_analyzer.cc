@@ -58,6 +58,14 @@ static std::vector<int> orthogonal_inputs(const StatusEvent& st) {
   return {all.begin(), all.end()};
 }
 
+// An orthogonal multisine's lines: unique, ascending, within 1..P/2-1 (what a period resolves).
+static std::vector<int> orthogonal_lines(const StatusEvent& st) {
+  std::set<int> uniq;
+  for (int k : st.lines)
+    if (k >= 1 && k < st.period_samples / 2) uniq.insert(k);
+  return {uniq.begin(), uniq.end()};
+}
+
 static std::pair<std::string, double> first_excited(const StatusEvent& st) {
   for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
     if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
@@ -72,24 +80,29 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
   }
   if (st.state == RunState::kIntegrate) {
     if (!wants(st)) return;
-    if (st.excitation == Excitation::kMultisine)
-      for (int i : orthogonal_inputs(st))
-        if (i < int(st.inputs.size()))
-          for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
-            extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
-    // A window of more than 10^9 samples (11 days at 1 kHz) or before the run is no status the
-    // acquisition makes: a corrupt record.
+    // A window of more than 10^9 samples (11 days at 1 kHz) or before the run, or a multisine
+    // line of an input the status does not list, is no status the acquisition makes: a corrupt
+    // record.
+    bool lines_ok = st.lines.size() == st.line_input.size();
+    for (int i : st.line_input) lines_ok = lines_ok && i >= 0 && i < int(st.inputs.size());
     if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
         !(st.sample_rate_hz > 0) || st.n_samples > 1000000000 || st.sample < 0 ||
-        !std::isfinite(st.frequency_hz) || !std::isfinite(st.sample_rate_hz)) {
+        !std::isfinite(st.frequency_hz) || !std::isfinite(st.sample_rate_hz) ||
+        (st.excitation == Excitation::kMultisine && !lines_ok)) {
       FrdPoint p;
       p.step = st.step;
       p.valid = false;
-      p.note = "integrate status with no window (n_samples " + std::to_string(st.n_samples) + ")";
+      p.note = lines_ok ? "integrate status with no window (n_samples " +
+                              std::to_string(st.n_samples) + ")"
+                        : "multisine status with a line of no listed input (line_input)";
       fresh_.push_back(p);
       points_.push_back(p);
       return;
     }
+    if (st.excitation == Excitation::kMultisine)
+      for (int i : orthogonal_inputs(st))
+        for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
+          extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
     pending_[st.sample] =
         Window{st, settle_step_ == st.step && settle_from_ <= st.sample ? settle_from_ : st.sample};
   } else if (st.state == RunState::kDone || st.state == RunState::kAbort) {
@@ -106,16 +119,22 @@ void PairAnalyzer::on_block(const Block& b) {
                      (c1 < 0 ? e1_ : e2_) + " (pair " + pair_ + ")");
   }
   if (seqs_.count(b.seq)) return;  // duplicate delivery: the first copy counts
-  // Samples are kept contiguously from base_: a block 10^8 samples (28 h at 1 kHz) beyond what is
-  // kept, or before it by as much, is no block of this run's stream (a corrupt record).
+  // Samples are kept contiguously from base_: a block 10^7 samples (2.8 h at 1 kHz) beyond what is
+  // kept (a gap no retransmitting run leaves, and 250 MB to hold), or 10^8 before it, is no block
+  // of this run's stream (a corrupt record).
   const int64_t kept_end = base_ + int64_t(have_.size());
-  if (b.start_sample > kept_end + 100000000 || b.start_sample + b.n_samples < base_ - 100000000)
+  if (b.start_sample > kept_end + 10000000 || b.start_sample + b.n_samples < base_ - 100000000)
     throw InputError("tape block seq " + std::to_string(b.seq) + " starts at sample " +
                      std::to_string(b.start_sample) + ", far from the samples so far (" +
                      std::to_string(base_) + "-" + std::to_string(kept_end) + "): corrupt");
   ++blocks_seen_;
   seqs_[b.seq] = {b.start_sample, b.start_sample + b.n_samples};
-  if (x1_.empty() && have_.empty()) base_ = std::min<int64_t>(b.start_sample, 0);
+  // The first block: kept from the run's start, or from reorder slack before it when it is late
+  // (an analyser started mid-run does not hold the hours before it joined).
+  if (x1_.empty() && have_.empty())
+    base_ = b.start_sample > 2 * opt_.reorder_slack_samples
+                ? b.start_sample - opt_.reorder_slack_samples
+                : std::min<int64_t>(b.start_sample, 0);
   const int64_t end = b.start_sample + b.n_samples;
   if (end - base_ > int64_t(x1_.size())) {
     x1_.resize(end - base_, 0.0);
@@ -519,8 +538,7 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
       return ex;
     }
   }
-  std::set<int> uniq(st.lines.begin(), st.lines.end());
-  const std::vector<int> lines(uniq.begin(), uniq.end());
+  const std::vector<int> lines = orthogonal_lines(st);
   std::vector<bool> excited(P / 2 + 1, false);
   for (int k : lines)
     if (k >= 0 && k <= P / 2) excited[k] = true;
@@ -626,8 +644,7 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
   // The realisation is complete: solve per line.
   Group grp = std::move(g);
   groups_.erase(r);
-  std::set<int> uniq(grp.st.lines.begin(), grp.st.lines.end());
-  const std::vector<int> lines(uniq.begin(), uniq.end());
+  const std::vector<int> lines = orthogonal_lines(grp.st);
   const double df = grp.st.sample_rate_hz / grp.st.period_samples;
   auto name = [&](int q) {
     return ins[q] < int(grp.st.inputs.size()) ? grp.st.inputs[ins[q]] : std::string("?");

@@ -447,8 +447,15 @@ TEST(PairAnalyzer, OrthogonalMultisineRefusesExperimentsThatDisagree) {
     EXPECT_FALSE(p.valid);
     EXPECT_THAT(p.note, ::testing::HasSubstr("experiment 2: its status states another design"));
   }
-  run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");
-  for (auto& e : run.events)
-    if (e.state == RunState::kIntegrate) e.line_input.back() = 7;  // no input 7
-  for (const auto& p : analyse(run, "a:y")) EXPECT_FALSE(p.valid);
+  for (int bad : {7, -1}) {  // no such input (the fuzzer's -1 once indexed before the list)
+    run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");
+    for (auto& e : run.events)
+      if (e.state == RunState::kIntegrate) e.line_input.back() = bad;
+    pts = analyse(run, "a:y");
+    ASSERT_EQ(pts.size(), 2u);  // one per integrate status
+    for (const auto& p : pts) {
+      EXPECT_FALSE(p.valid);
+      EXPECT_THAT(p.note, ::testing::HasSubstr("a line of no listed input"));
+    }
+  }
 }
