@@ -389,6 +389,13 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
       g = inputs_[i].amplitude / std::sqrt(2.0) / std::sqrt(ss / n);
       if (inputs_[i].full_scale > 0) g = std::min(g, 0.5 * inputs_[i].full_scale / peak);
     }
+    if (inputs_[i].max_rate > 0) {  // the slew, the period wrapping round, within the rate limit
+      double slew = 0;
+      for (const auto& x : period_)
+        for (size_t n = 0; n < x[i].size(); ++n)
+          slew = std::max(slew, std::abs(x[i][(n + 1) % x[i].size()] - x[i][n]) * fs_);
+      if (g * slew > inputs_[i].max_rate) g = inputs_[i].max_rate / slew;
+    }
     for (auto& x : period_)
       for (double& v : x[i]) v *= g;
     amps[i] = g * peak;

@@ -285,3 +285,38 @@ TEST(Multisine, LowCrestPhasesBoundEveryExperimentsPeak) {
   EXPECT_GT(before, 3.8);
   EXPECT_LT(after, 0.9 * before);
 }
+
+// A rate-limited actuator (Wf at 2000 lb/hr per second here) gets a multisine whose slew stays
+// within the limit, the level lowered for it (so it moves linearly), the others untouched.
+TEST(Multisine, SlewRespectsTheActuatorsRateLimit) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95.json"));
+  MultisineOptions o;
+  o.f_lo_hz = 0.5;
+  o.f_hi_hz = 100;
+  o.periods = 2;
+  o.slowest_time_constant_s = 0.5;
+  auto free = campaign_inputs(m, 2.0);
+  m.inputs[0].nonlinearity.push_back({"rate_limit", 0, 2000.0});
+  auto ins = campaign_inputs(m, 2.0);
+  ASSERT_EQ(ins[0].max_rate, 2000.0);
+  const auto ex = select_inputs(m, "Wf,BLD");
+  MultisineCampaign limited(ins, ex, o, "r"), unlimited(free, ex, o, "r");
+  std::vector<std::vector<double>> a, b;
+  std::vector<double> ph, fr;
+  limited.fill(0, int(limited.total_samples()), a, ph, fr);
+  unlimited.fill(0, int(unlimited.total_samples()), b, ph, fr);
+  // Over every measured window (a change of experiment jumps, inside the next one's settle).
+  auto slew = [&](const std::vector<double>& x) {
+    double s = 0;
+    for (const auto& e : limited.events())
+      if (e.state == RunState::kIntegrate)
+        for (int64_t n = e.sample + 1; n < e.sample + e.n_samples; ++n)
+          s = std::max(s, std::abs(x[size_t(n)] - x[size_t(n - 1)]));
+    return s * 1000.0;
+  };
+  EXPECT_GT(slew(b[0]), 2000.0);  // without the limit it would be exceeded
+  EXPECT_LE(slew(a[0]), 2000.0 * (1 + 1e-9));
+  EXPECT_GT(slew(a[0]), 0.9 * 2000.0);  // and the level is lowered no more than needed
+  EXPECT_LT(limited.events()[1].amplitudes[0], unlimited.events()[1].amplitudes[0]);
+  EXPECT_EQ(limited.events()[1].amplitudes[2], unlimited.events()[1].amplitudes[2]);  // BLD
+}

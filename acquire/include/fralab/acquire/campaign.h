@@ -52,6 +52,7 @@ struct CampaignInput {
   double dc = 0.0;
   double amplitude = 0.0;   // peak, input units, when excited
   double full_scale = 0.0;  // input units (0: unknown)
+  double max_rate = 0.0;    // the actuator's rate limit, input units per second (0: none)
 };
 
 /// What the oscillator does over a whole run, sample-exact: commands, reference, status events.
@@ -148,6 +149,9 @@ struct MultisineOptions {
   /// "peak": each input's largest peak is its amplitude (the sine test's peak); "rms": its rms is
   /// the sine test's, amplitude / sqrt 2 (the same power as the report's sine, spread over the
   /// lines), the peak then crest / sqrt 2 times the amplitude, capped at half the full scale.
+  /// Either way a multisine's slew, max |x[n+1] - x[n]| fs over every experiment, is held to the
+  /// input's rate limit (CampaignInput::max_rate), the level lowered if need be: a rate-limited
+  /// actuator then moves linearly.
   std::string level = "rms";
   void validate() const;
 };
