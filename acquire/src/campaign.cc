@@ -231,7 +231,7 @@ void MultisineOptions::validate() const {
         "--realisations > 1 needs random or low-crest phases (Schroeder phases are one "
         "realisation)");
   if (level != "peak" && level != "rms")
-    throw InputError("--multisine-level \"" + level + "\": peak or rms");
+    throw InputError("multisine level \"" + level + "\": peak or rms");
   if (!(settle_time_constants >= 0) || !(slowest_time_constant_s >= 0))
     throw InputError("multisine settling times must be >= 0");
 }
@@ -346,7 +346,6 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   if (lines.empty() || (!ortho && int(lines.size()) < ni))
     throw InputError("multisine: fewer lines than excited inputs; widen the band");
   std::mt19937_64 rng(o.seed);
-  std::uniform_real_distribution<double> uni(0.0, 2 * std::numbers::pi);
   std::vector<int> ev_lines, line_input;
   const int n_exp = ortho ? o.realisations * ni : 1;
   period_.assign(n_exp, std::vector<std::vector<double>>(inputs_.size()));

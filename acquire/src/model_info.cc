@@ -20,12 +20,16 @@ std::pair<double, double> parse_band(const std::string& band) {
   }
 }
 
+double slowest_time_constant_s(const Tf& tf) {
+  double t = 0.0;
+  for (const Root& p : tf.poles)
+    t = std::max(t, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
+  return t;
+}
+
 double slowest_time_constant_s(const Model& m) {
   double t = 0.0;
-  auto scan = [&](const Tf& tf) {
-    for (const Root& p : tf.poles)
-      t = std::max(t, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
-  };
+  auto scan = [&](const Tf& tf) { t = std::max(t, slowest_time_constant_s(tf)); };
   for (const auto& in : m.inputs)
     if (in.actuator) scan(*in.actuator);
   for (const auto& out : m.outputs)

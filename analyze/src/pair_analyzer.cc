@@ -66,6 +66,18 @@ static std::vector<int> orthogonal_lines(const StatusEvent& st) {
   return {uniq.begin(), uniq.end()};
 }
 
+// The nearest line no input excites on each side of line k (at most two), within 1..P/2-1.
+static std::vector<int> unexcited_neighbours(const std::vector<bool>& excited, int k, int P) {
+  std::vector<int> out;
+  for (int dir : {-1, 1})
+    for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir)
+      if (!excited[kk]) {
+        out.push_back(kk);
+        break;
+      }
+  return out;
+}
+
 static std::pair<std::string, double> first_excited(const StatusEvent& st) {
   for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
     if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
@@ -99,12 +111,12 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
       points_.push_back(p);
       return;
     }
-    if (st.excitation == Excitation::kMultisine)
-      for (int i : orthogonal_inputs(st))
-        for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
-          extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
-    pending_[st.sample] =
-        Window{st, settle_step_ == st.step && settle_from_ <= st.sample ? settle_from_ : st.sample};
+    Window w{st, settle_step_ == st.step && settle_from_ <= st.sample ? settle_from_ : st.sample,
+             st.excitation == Excitation::kMultisine ? orthogonal_inputs(st) : std::vector<int>{}};
+    for (int i : w.ins)
+      for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
+        extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
+    pending_[st.sample] = std::move(w);
   } else if (st.state == RunState::kDone || st.state == RunState::kAbort) {
     done_seen_ = true;
     done_sample_ = st.sample;
@@ -251,7 +263,7 @@ void PairAnalyzer::try_complete(bool force) {
         continue;
       }
     }
-    if (st.excitation == Excitation::kMultisine && orthogonal_inputs(st).size() > 1) {
+    if (!it->second.ins.empty()) {
       Experiment ex;
       if (ready) {
         ex = orthogonal_experiment(it->second);
@@ -259,7 +271,7 @@ void PairAnalyzer::try_complete(bool force) {
         ex.valid = false;
         ex.note = "incomplete window: " + describe_gaps(a, b);
       }
-      for (const FrdPoint& q : add_experiment(st, std::move(ex))) {
+      for (const FrdPoint& q : add_experiment(it->second, std::move(ex))) {
         points_.push_back(q);
         fresh_.push_back(q);
       }
@@ -295,7 +307,7 @@ void PairAnalyzer::flush() {
   try_complete(true);
   // Orthogonal multisine realisations whose experiments never all arrived (their status lost).
   for (auto& [r, g] : groups_) {
-    const int nu = int(orthogonal_inputs(g.st).size());
+    const int nu = int(g.ins.size());
     std::string missing;
     for (int e = 0; e < nu; ++e)
       if (!g.experiments.count(e)) missing += (missing.empty() ? "" : ", ") + std::to_string(e + 1);
@@ -489,18 +501,13 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     q.coherence = std::norm(s12) / (s11 * s22);
     // Non-excited neighbours: the nearest unexcited line on each side.
     double lvl = 0;
-    int cnt = 0;
-    for (int dir : {-1, 1}) {
-      for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir) {
-        if (excited[kk]) continue;
-        std::complex<double> v = 0;
-        for (int p = 0; p < M; ++p) v += X2[p][kk];
-        lvl += std::abs(v / double(M));
-        ++cnt;
-        break;
-      }
+    const std::vector<int> nb = unexcited_neighbours(excited, k, P);
+    for (int kk : nb) {
+      std::complex<double> v = 0;
+      for (int p = 0; p < M; ++p) v += X2[p][kk];
+      lvl += std::abs(v / double(M));
     }
-    q.nl_rel = cnt ? lvl / cnt / std::max(std::abs(m2), 1e-300) : 0.0;
+    q.nl_rel = nb.empty() ? 0.0 : lvl / double(nb.size()) / std::max(std::abs(m2), 1e-300);
     out.push_back(q);
   }
   return out;
@@ -511,8 +518,8 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   Experiment ex;
   const int P = st.period_samples;
   const int M = P > 0 ? int(st.n_samples / P) : 0;
-  const std::vector<int> ins = orthogonal_inputs(st);
-  if (P < 4 || M < 2 || st.lines.size() != st.line_input.size()) {
+  const std::vector<int>& ins = win.ins;
+  if (P < 4 || M < 2) {
     ex.valid = false;
     ex.note = "multisine status without periods or lines";
     return ex;
@@ -528,7 +535,7 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   };
   std::vector<const double*> u, pos;
   for (int i : ins) {
-    const std::string name = i < int(st.inputs.size()) ? st.inputs[i] : "?";
+    const std::string& name = st.inputs[i];
     u.push_back(channel("u_" + name));
     pos.push_back(channel(name));
     if (!u.back() || !pos.back()) {
@@ -556,13 +563,7 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   ex.x2.assign(L, std::vector<Complex>(M));
   // The nearest non-excited line each side of every line (pooled noise).
   std::vector<std::vector<int>> nbk(L);
-  for (size_t j = 0; j < L; ++j)
-    for (int dir : {-1, 1})
-      for (int kk = lines[j] + dir; kk >= 1 && kk < P / 2; kk += dir)
-        if (!excited[kk]) {
-          nbk[j].push_back(kk);
-          break;
-        }
+  for (size_t j = 0; j < L; ++j) nbk[j] = unexcited_neighbours(excited, lines[j], P);
   ex.nb1.assign(L, {});
   ex.nb2.assign(L, {});
   for (size_t j = 0; j < L; ++j) {
@@ -596,27 +597,20 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
     }
   }
   fftw_destroy_plan(plan);
-  // A channel's level on the nearest non-excited line each side of line k, relative to line k.
-  auto distortion = [&](const std::vector<Complex>& x, int k) {
+  // A channel's mean level on line j's unexcited neighbours, relative to line j.
+  auto distortion = [&](const std::vector<Complex>& x, size_t j) {
     double lvl = 0;
-    int cnt = 0;
-    for (int dir : {-1, 1}) {
-      for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir) {
-        if (excited[kk]) continue;
-        lvl += std::abs(x[kk]);
-        ++cnt;
-        break;
-      }
-    }
-    return cnt ? lvl / cnt / std::max(std::abs(x[k]), 1e-300) : 0.0;
+    for (int kk : nbk[j]) lvl += std::abs(x[kk]);
+    return nbk[j].empty() ? 0.0
+                          : lvl / double(nbk[j].size()) / std::max(std::abs(x[lines[j]]), 1e-300);
   };
-  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, lines[j]);
+  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, j);
   ex.pos_nl.assign(ins.size(), 0.0);
   for (size_t q = 0; q < ins.size(); ++q) {
     std::vector<double> d(L);
     for (size_t j = 0; j < L; ++j) {
       ex.pos[j][q] = pos_mean[q][lines[j]];
-      d[j] = distortion(pos_mean[q], lines[j]);
+      d[j] = distortion(pos_mean[q], j);
     }
     std::nth_element(d.begin(), d.begin() + L / 2, d.end());
     ex.pos_nl[q] = L ? d[L / 2] : 0.0;
@@ -624,31 +618,31 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   return ex;
 }
 
-std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experiment ex) {
-  const std::vector<int> ins = orthogonal_inputs(st);
-  const int nu = int(ins.size());
-  const int r = st.step / nu, e = st.step % nu;
+std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment ex) {
+  const StatusEvent& st = win.st;
+  const int r = st.step / int(win.ins.size()), e = st.step % int(win.ins.size());
   Group& g = groups_[r];
-  if (g.experiments.empty()) g.st = st;
+  if (g.experiments.empty()) g.st = st, g.ins = win.ins;
   // Every experiment of a realisation must state the same design (a corrupt status may not).
-  if (st.lines != g.st.lines || st.line_input != g.st.line_input || st.inputs != g.st.inputs ||
-      st.period_samples != g.st.period_samples || ins.back() >= int(st.inputs.size())) {
+  if (st.step < 0 || st.lines != g.st.lines || st.line_input != g.st.line_input ||
+      st.inputs != g.st.inputs || st.period_samples != g.st.period_samples) {
     ex.valid = false;
-    ex.note = "its status states another design than experiment 1's (lines, inputs or period)";
-    if (ins.back() >= int(st.inputs.size()))
-      ex.note = "its status names input " + std::to_string(ins.back()) + " of " +
-                std::to_string(st.inputs.size());
+    ex.note =
+        "its status states another design than experiment 1's (step, lines, inputs or "
+        "period)";
   }
   g.experiments[e] = std::move(ex);
-  if (int(g.experiments.size()) < nu) return {};
-  // The realisation is complete: solve per line.
+  for (int k = 0; k < int(g.ins.size()); ++k)
+    if (!g.experiments.count(k)) return {};
+  // The realisation is complete (experiments 0..n_u-1 of its first status's design): solve per
+  // line.
   Group grp = std::move(g);
   groups_.erase(r);
+  const std::vector<int>& ins = grp.ins;
+  const int nu = int(ins.size());
   const std::vector<int> lines = orthogonal_lines(grp.st);
   const double df = grp.st.sample_rate_hz / grp.st.period_samples;
-  auto name = [&](int q) {
-    return ins[q] < int(grp.st.inputs.size()) ? grp.st.inputs[ins[q]] : std::string("?");
-  };
+  auto name = [&](int q) { return grp.st.inputs[ins[q]]; };
   // The pair's input(s): the one named by E1 or E2 (u_X or X); none: every input.
   std::vector<int> want;
   for (int q = 0; q < nu; ++q)
@@ -664,7 +658,8 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const StatusEvent& st, Experi
       bad += (bad.empty() ? "" : "; ") + ("experiment " + std::to_string(ee + 1) + ": " + x.note);
   // Regressors: every input's command, except that for a pair X:O an input whose position
   // distorts enters by its measured position.
-  const bool position_pair = std::find(st.inputs.begin(), st.inputs.end(), e1_) != st.inputs.end();
+  const auto& gin = grp.st.inputs;
+  const bool position_pair = std::find(gin.begin(), gin.end(), e1_) != gin.end();
   std::vector<bool> by_position(nu, false);
   if (position_pair && bad.empty()) {
     for (int q = 0; q < nu; ++q) {

@@ -5,7 +5,7 @@
 
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
-#include "fralab/identify/fit_io.h"
+#include "fralab/diagnose/report.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -67,15 +67,12 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
       res.sine_inputs.push_back(x);
       sine_inputs += (sine_inputs.empty() ? "" : ",") + x;
       if (model.inputs[i].actuator)
-        for (const Root& p : model.inputs[i].actuator->poles)
-          act_tc = std::max(act_tc, p.pair ? 1.0 / (p.zeta * p.wn) : 1.0 / std::abs(p.real));
+        act_tc = std::max(act_tc, slowest_time_constant_s(*model.inputs[i].actuator));
     }
   }
   // 3. A stepped sine for those, at their test amplitude.
   std::vector<Frd> curves;
-  for (const auto& e : fs::directory_iterator(m.out + "/frd")) curves.push_back(load_frd(e.path()));
-  std::sort(curves.begin(), curves.end(),
-            [](const Frd& x, const Frd& y) { return x.pair < y.pair; });
+  for (const MeasuredPair& p : read_measured_dir(m.out)) curves.push_back(p.frd);
   auto input_of_command_pair = [](const std::string& pair) {  // "u_X:..." -> X
     return pair.rfind("u_", 0) == 0 ? pair.substr(2, pair.find(':') - 2) : std::string();
   };
@@ -101,19 +98,16 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
       if (std::find(res.sine_inputs.begin(), res.sine_inputs.end(), x) == res.sine_inputs.end())
         merged.push_back(f);
     }
-    for (const std::string& x : res.sine_inputs) {
+    for (const std::string& x : res.sine_inputs)
       merged.push_back(load_frd(s.out + "/frd/" + pair_file_stem("u_" + x + ":" + x) + ".json"));
-    }
-    std::sort(merged.begin(), merged.end(),
-              [](const Frd& x, const Frd& y) { return x.pair < y.pair; });
     curves = std::move(merged);
   }
-  fs::create_directories(opt.out + "/frd");
-  for (const auto& e : fs::directory_iterator(opt.out + "/frd")) fs::remove(e.path());
-  for (const Frd& f : curves) save_frd(opt.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
-  FitOptions fo;
-  parse_delay_option(opt.fit_delay, &fo);
-  fit_and_write(curves, fo, opt.out, model.name + ": measured transfer matrix (auto campaign)");
+  // DIR/frd holds exactly the merged curves: an earlier run's frd files there go (its tapes stay).
+  if (fs::exists(opt.out + "/frd"))
+    for (const auto& e : fs::directory_iterator(opt.out + "/frd"))
+      if (e.path().extension() == ".json") fs::remove(e.path());
+  save_curves_and_fit(curves, opt.out, opt.fit_delay,
+                      model.name + ": measured transfer matrix (auto campaign)");
   save_model(opt.out + "/engine.json", model);
   res.measure = mr;
   res.measure.pairs.clear();

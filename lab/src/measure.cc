@@ -163,6 +163,17 @@ MeasureOptions options_from_run(const std::string& dir, const Json& run) {
 
 }  // namespace
 
+void save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
+                         const std::string& fit_delay, const std::string& title) {
+  std::sort(curves.begin(), curves.end(),
+            [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
+  fs::create_directories(dir + "/frd");
+  for (const Frd& f : curves) save_frd(dir + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+  FitOptions fo;
+  parse_delay_option(fit_delay, &fo);
+  fit_and_write(curves, fo, dir, title);
+}
+
 MeasureResult run_measure(const MeasureOptions& given) {
   if (given.out.empty()) throw InputError("--out DIR is required");
   if (given.auto_campaign) {
@@ -445,12 +456,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
       // The whole tape, analysed as the live analysers would (tape = live), then fitted as the
       // live identifier would (the curves in pair order).
       std::vector<Frd> curves = analyze_tape_file(tape, r.pairs, {});
-      std::sort(curves.begin(), curves.end(),
-                [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
-      for (const Frd& f : curves) save_frd(o.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
-      FitOptions fo;
-      parse_delay_option(o.fit_delay, &fo);
-      fit_and_write(curves, fo, o.out, model.name + ": measured transfer matrix");
+      save_curves_and_fit(curves, o.out, o.fit_delay, model.name + ": measured transfer matrix");
     }
     r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
   } catch (const Interrupted& e) {

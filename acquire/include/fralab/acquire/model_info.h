@@ -14,8 +14,11 @@ namespace fralab {
 /// "LO:HI" in Hz -> (LO, HI); InputError naming the text otherwise.
 std::pair<double, double> parse_band(const std::string& band);
 
-/// Largest time constant of any tf in the model, seconds: 1/|r| for a real pole r, 1/(zeta wn)
-/// for a pair (its envelope).
+/// Largest time constant of a tf's poles, seconds: 1/|r| for a real pole r, 1/(zeta wn) for a
+/// pair (its envelope); 0 without poles.
+double slowest_time_constant_s(const Tf& tf);
+
+/// The same over every tf in the model (actuators, sensors, paths).
 double slowest_time_constant_s(const Model& m);
 
 /// Indices of the inputs named in a comma-separated list ("" = every input, in model order).

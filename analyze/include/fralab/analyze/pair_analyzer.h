@@ -103,7 +103,8 @@ class PairAnalyzer {
  private:
   struct Window {
     StatusEvent st;
-    int64_t from = 0;  // the step's settle start (held samples there disturb the window too)
+    int64_t from = 0;      // the step's settle start (held samples there disturb the window too)
+    std::vector<int> ins;  // an orthogonal multisine's inputs (indices into st.inputs); else empty
   };
   void try_complete(bool force);
   FrdPoint compute(const Window& w);
@@ -123,7 +124,7 @@ class PairAnalyzer {
     std::vector<double> pos_nl;  // [input q]: median over lines of its position's distortion
     std::vector<double> nl;      // [line]: E2 on the nearest unexcited lines / |X2|
   };
-  std::vector<FrdPoint> add_experiment(const StatusEvent& st, Experiment ex);
+  std::vector<FrdPoint> add_experiment(const Window& w, Experiment ex);
   Experiment orthogonal_experiment(const Window& w);
   bool covers(int64_t a, int64_t b) const;
   std::string describe_gaps(int64_t a, int64_t b) const;
@@ -142,6 +143,7 @@ class PairAnalyzer {
   std::map<std::string, std::vector<double>> extra_;
   struct Group {
     StatusEvent st;                         // its first experiment's status (lines, inputs)
+    std::vector<int> ins;                   // its inputs
     std::map<int, Experiment> experiments;  // by experiment e
   };
   std::map<int, Group> groups_;  // by realisation

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "fralab/acquire/acquisition.h"
+#include "fralab/core/frd.h"
 #include "fralab/core/measurement_chain.h"
 #include "fralab/plant/model.h"
 
@@ -64,5 +65,11 @@ std::vector<std::string> pairs_for_input(const std::string& input,
 MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
 
 MeasureResult run_measure(const MeasureOptions& opt);
+
+/// A measurement's results from its curves, as the live analysers and identifier leave them:
+/// the curves in pair order (sorted in place), each to DIR/frd/<stem>.json, fitted (`fit_delay`:
+/// the identifier's --delay) into DIR/tf and DIR/transfer_matrix.{json,md} under `title`.
+void save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
+                         const std::string& fit_delay, const std::string& title);
 
 }  // namespace fralab
