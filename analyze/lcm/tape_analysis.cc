@@ -28,7 +28,13 @@ TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, i
     if (b.run_id != run_id_) return fed;
     fed.kind = Kind::kTape;
     const int64_t seq = b.seq;
-    fed.duplicate = tape_.offer(seq, std::move(b)) == InOrder<Block>::Offer::kDuplicate;
+    const auto offered = tape_.offer(seq, std::move(b));
+    if (offered == InOrder<Block>::Offer::kRefused) {  // a seq no stream reaches: corrupt
+      corrupt_.insert(seq);
+      for (auto& a : an_) a->note_corrupt(seq);
+      return fed;
+    }
+    fed.duplicate = offered == InOrder<Block>::Offer::kDuplicate;
   } else if (channel == kStatusChannel) {
     StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, channel));
     if (run_id_.empty()) run_id_ = e.run_id;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,20 @@ TEST(InOrder, HoldingIsBounded) {
   EXPECT_EQ(q.held(), 5u);
   EXPECT_EQ(q.skipped(), 1);
   EXPECT_EQ(drain(q), (std::vector<int>{1, 2, 3, 4, 5}));
+}
+
+// A corrupt message's seq of the largest int64_t has no successor: refused, the stream unchanged
+// (delivering it overflowed next(); found by the tape fuzzer).
+TEST(InOrder, TheLargestSeqIsRefusedAndTheStreamGoesOn) {
+  InOrder<int> q(0);
+  const int64_t top = std::numeric_limits<int64_t>::max();
+  EXPECT_EQ(q.offer(top, 1), InOrder<int>::Offer::kRefused);
+  EXPECT_EQ(q.held(), 0u);
+  EXPECT_EQ(q.skip_gap(), 0);
+  EXPECT_EQ(q.offer(top - 1, 2), InOrder<int>::Offer::kNew);  // the one before is a seq like any
+  EXPECT_EQ(q.offer(0, 3), InOrder<int>::Offer::kNew);
+  EXPECT_EQ(drain(q), (std::vector<int>{3}));
+  EXPECT_EQ(q.next(), 1);
 }
 
 }  // namespace

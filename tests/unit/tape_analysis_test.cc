@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "test_util.h"
 
 namespace fralab {
@@ -140,6 +142,38 @@ TEST(TapeAnalysis, ReorderedAndDuplicatedRecordsGiveTheInOrderNumbers) {
     EXPECT_THAT(p.note, HasSubstr("tape block seq 40 failed its checksum"));
   }
   EXPECT_EQ(invalid, 1);
+}
+
+// A block whose seq is the largest int64_t (only corruption writes it; it overflowed the in-order
+// stream, found by the tape fuzzer) is refused as corrupt; the curve is the one without it.
+TEST(TapeAnalysis, ABlockAtTheLargestSeqIsCorruptAndChangesNothing) {
+  const auto r = run();
+  TapeFeeder clean({"u:y"}, {}), fed({"u:y"}, {});
+  for (auto* f : {&clean, &fed}) {
+    for (const auto& e : r.events) {
+      const auto b = encode(to_status_msg(e));
+      f->feed(kStatusChannel, b.data(), int(b.size()));
+    }
+    if (f == &fed) {
+      Block bad = r.blocks[3];
+      bad.seq = std::numeric_limits<int64_t>::max();
+      const auto b = encode(to_tape_msg(bad));
+      EXPECT_EQ(f->feed(kTapeChannel, b.data(), int(b.size())).kind, TapeFeeder::Kind::kTape);
+    }
+    for (const auto& blk : r.blocks) {
+      const auto b = encode(to_tape_msg(blk));
+      f->feed(kTapeChannel, b.data(), int(b.size()));
+    }
+    f->flush();
+  }
+  EXPECT_THAT(fed.corrupt(), ::testing::ElementsAre(std::numeric_limits<int64_t>::max()));
+  EXPECT_TRUE(clean.corrupt().empty());
+  const Frd a = clean.analyzers()[0]->frd(), f = fed.analyzers()[0]->frd();
+  ASSERT_EQ(a.points.size(), f.points.size());
+  for (size_t i = 0; i < a.points.size(); ++i) {
+    EXPECT_TRUE(f.points[i].valid) << i;
+    EXPECT_EQ(a.points[i].mag, f.points[i].mag);
+  }
 }
 
 TEST(TapeAnalysis, AnotherRunIsIgnoredAndAWrongTypeIsNamed) {

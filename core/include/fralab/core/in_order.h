@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <utility>
@@ -19,10 +20,12 @@ class InOrder {
   /// for a gap to be filled; beyond that the gap is given up (skip_gap) so memory stays bounded.
   explicit InOrder(int64_t first = 0, size_t max_held = 4096) : next_(first), max_held_(max_held) {}
 
-  enum class Offer { kNew, kDuplicate };
+  enum class Offer { kNew, kDuplicate, kRefused };
   /// Takes item `seq`. A seq already delivered or already held is a duplicate (the first copy
-  /// counts) and is dropped.
+  /// counts) and is dropped. The largest int64_t has no successor to advance to: such a seq (only
+  /// a corrupt message carries it) is refused and dropped, the stream unchanged.
   Offer offer(int64_t seq, T item) {
+    if (seq == std::numeric_limits<int64_t>::max()) return Offer::kRefused;
     if (seq < next_ || held_.count(seq)) return Offer::kDuplicate;
     held_.emplace(seq, std::move(item));
     if (held_.size() > max_held_) skip_gap();
