@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "fralab/analyze/bla.h"
 #include "fralab/analyze/fourier_filter.h"
 
 namespace fralab {
@@ -272,7 +273,7 @@ void PairAnalyzer::try_complete(bool force) {
         ex.note = "incomplete window: " + describe_gaps(a, b);
       }
       for (const FrdPoint& q : add_experiment(it->second, std::move(ex))) {
-        points_.push_back(q);
+        realisation_points_.push_back(q);
         fresh_.push_back(q);
       }
       it = pending_.erase(it);
@@ -280,7 +281,7 @@ void PairAnalyzer::try_complete(bool force) {
     }
     if (ready && st.excitation == Excitation::kMultisine) {
       for (const FrdPoint& q : compute_multisine(it->second)) {
-        points_.push_back(q);
+        realisation_points_.push_back(q);
         fresh_.push_back(q);
       }
       it = pending_.erase(it);
@@ -753,6 +754,7 @@ Frd PairAnalyzer::frd() const {
   Frd f;
   f.pair = pair_;
   f.points = points_;
+  for (const FrdPoint& p : best_linear_approximation(realisation_points_)) f.points.push_back(p);
   std::stable_sort(f.points.begin(), f.points.end(),
                    [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });
   return f;

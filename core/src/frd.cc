@@ -37,6 +37,9 @@ Json frd_to_json(const Frd& frd) {
     jp["h2_rel"] = p.h2_rel;
     jp["h3_rel"] = p.h3_rel;
     if (p.nl_rel >= 0) jp["nl_rel"] = p.nl_rel;
+    if (p.sigma_noise >= 0) jp["sigma_noise"] = p.sigma_noise;
+    if (p.sigma_nl >= 0) jp["sigma_nl"] = p.sigma_nl;
+    if (p.realisations > 0) jp["realisations"] = p.realisations;
     jp["n_cycles"] = p.n_cycles;
     jp["step"] = p.step;
     if (!p.input.empty()) jp["input"] = p.input;
@@ -74,6 +77,8 @@ Frd frd_from_json(const Json& j, const std::string& source) {
     p.h2_rel = json_number_member(jp, w, "h2_rel", 0.0);
     p.h3_rel = json_number_member(jp, w, "h3_rel", 0.0);
     p.nl_rel = json_number_member(jp, w, "nl_rel", -1.0);
+    p.sigma_noise = json_number_member(jp, w, "sigma_noise", -1.0);
+    p.sigma_nl = json_number_member(jp, w, "sigma_nl", -1.0);
     // Counts and step numbers: whole numbers an int holds (a converted 5e11 is undefined).
     auto whole = [&](const char* key, double dflt) {
       const double v = json_number_member(jp, w, key, dflt);
@@ -82,6 +87,11 @@ Frd frd_from_json(const Json& j, const std::string& source) {
     };
     p.n_cycles = whole("n_cycles", 0.0);
     p.step = whole("step", -1.0);
+    p.realisations = whole("realisations", 0.0);
+    if (jp.contains("sigma_noise") && p.sigma_noise < 0)
+      json_fail(w / "sigma_noise", "sigma_noise must be >= 0 (omit it when unknown)");
+    if (jp.contains("sigma_nl") && p.sigma_nl < 0)
+      json_fail(w / "sigma_nl", "sigma_nl must be >= 0 (omit it when unknown)");
     p.amplitude = json_number_member(jp, w, "amplitude", 0.0);
     if (jp.contains("input") && jp["input"].is_string()) p.input = jp["input"];
     if (jp.contains("valid")) {
@@ -113,6 +123,9 @@ std::string frd_point_problem(const FrdPoint& p) {
   if (!std::isfinite(p.sigma)) return "sigma is not finite";
   if (!std::isfinite(p.coherence) || p.coherence > 1 + 1e-9)
     return "coherence " + num(p.coherence) + " must lie in [0, 1]";
+  if (!std::isfinite(p.sigma_noise) || !std::isfinite(p.sigma_nl))
+    return "sigma_noise or sigma_nl is not finite";
+  if (p.realisations < 0) return "realisations " + std::to_string(p.realisations) + " is < 0";
   return "";
 }
 

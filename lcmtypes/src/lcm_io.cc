@@ -446,6 +446,9 @@ static void copy_point(const From& a, To& b) {
   b.h2_rel = a.h2_rel;
   b.h3_rel = a.h3_rel;
   b.nl_rel = a.nl_rel;
+  b.sigma_noise = a.sigma_noise;
+  b.sigma_nl = a.sigma_nl;
+  b.realisations = a.realisations;
   b.n_cycles = a.n_cycles;
   b.input = a.input;
   b.amplitude = a.amplitude;

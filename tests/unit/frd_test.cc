@@ -22,6 +22,9 @@ FrdPoint point(double w) {
   p.h2_rel = 0.002;
   p.h3_rel = 0.003;
   p.nl_rel = 1e-4;
+  p.sigma_noise = 0.006;
+  p.sigma_nl = 0.008;
+  p.realisations = 4;
   p.n_cycles = 8;
   p.step = 3;
   p.input = "Wf";
@@ -51,6 +54,9 @@ TEST(Frd, EveryFieldRoundTripsThroughAFile) {
     EXPECT_DOUBLE_EQ(got.h2_rel, want.h2_rel);
     EXPECT_DOUBLE_EQ(got.h3_rel, want.h3_rel);
     EXPECT_DOUBLE_EQ(got.nl_rel, want.nl_rel);
+    EXPECT_DOUBLE_EQ(got.sigma_noise, want.sigma_noise);
+    EXPECT_DOUBLE_EQ(got.sigma_nl, want.sigma_nl);
+    EXPECT_EQ(got.realisations, want.realisations);
     EXPECT_EQ(got.n_cycles, want.n_cycles);
     EXPECT_EQ(got.step, want.step);
     EXPECT_EQ(got.input, want.input);
@@ -69,6 +75,9 @@ TEST(Frd, UnknownValuesAreOptional) {
   ASSERT_EQ(f.points.size(), 1u);
   EXPECT_LT(f.points[0].sigma, 0);
   EXPECT_LT(f.points[0].coherence, 0);
+  EXPECT_LT(f.points[0].sigma_noise, 0);
+  EXPECT_LT(f.points[0].sigma_nl, 0);
+  EXPECT_EQ(f.points[0].realisations, 0);
   EXPECT_TRUE(f.points[0].valid);
 }
 
@@ -121,6 +130,10 @@ TEST(Frd, NumericNonsenseIsRefusedNamingThePoint) {
   EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"n_cycles":2.5})"),
               HasSubstr("/points/1/n_cycles"));
   EXPECT_EQ(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma":0.01,"coherence":1.0})"), "no error");
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"sigma_nl":-1})"),
+              HasSubstr("/points/1/sigma_nl: sigma_nl must be >= 0"));
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"realisations":-2})"),
+              HasSubstr("/points/1: realisations -2 is < 0"));
   FrdPoint p;
   p.w = 1;
   p.mag = std::nan("");

@@ -140,6 +140,9 @@ TEST(LcmIo, FrdMessagesCarryEveryField) {
   p.h2_rel = 0.01;
   p.h3_rel = 0.02;
   p.nl_rel = 0.003;
+  p.sigma_noise = 0.004;
+  p.sigma_nl = 0.005;
+  p.realisations = 6;
   p.n_cycles = 9;
   p.step = 4;
   p.input = "Wf";
@@ -156,6 +159,9 @@ TEST(LcmIo, FrdMessagesCarryEveryField) {
   EXPECT_EQ(q.input, "Wf");
   EXPECT_EQ(q.amplitude, 60);
   EXPECT_EQ(q.nl_rel, 0.003);
+  EXPECT_EQ(q.sigma_noise, 0.004);
+  EXPECT_EQ(q.sigma_nl, 0.005);
+  EXPECT_EQ(q.realisations, 6);
   EXPECT_EQ(q.h3_rel, 0.02);
   EXPECT_EQ(q.step, 4);
   EXPECT_FALSE(q.valid);

@@ -9,6 +9,7 @@
 #include <random>
 #include <set>
 
+#include "fralab/acquire/acquisition.h"
 #include "fralab/plant/lti.h"
 #include "test_util.h"
 
@@ -458,4 +459,98 @@ TEST(PairAnalyzer, OrthogonalMultisineRefusesExperimentsThatDisagree) {
       EXPECT_THAT(p.note, ::testing::HasSubstr("a line of no listed input"));
     }
   }
+}
+
+// The best linear approximation over realisations (analyze/bla.h), on a known answer. A static
+// y = a + c a^3 + 0.5 b (a, b the commands) under R = 8 random-phase realisations of the orthogonal
+// design: for a multisine of N lines of equal amplitude A and variance s^2 = N A^2 / 2 with
+// independent uniform phases, the part of a^3 coherent with line k is (3 s^2 - 3 A^2 / 4) a_k, so
+// the BLA of u_a:y is 1 + c s^2 (3 - 1.5 / N); what is left of a^3 at line k (products of three
+// other lines) changes with the phases: the stochastic nonlinear distortion. Noise-free, the
+// periods repeat exactly: sigma_noise ~ 0 and the whole spread is sigma_nl; the BLA covers the
+// answer as its sigma claims. The distortion depends on a alone, the same in both experiments of
+// a realisation: u_b:y is 0.5 with no nonlinear part. With c = 0 and noise on y instead, the
+// spread is noise: sigma_nl is below sigma_noise on most lines.
+TEST(PairAnalyzer, RealisationsGiveTheBestLinearApproximationWithTheNonlinearPartSeparated) {
+  const Model m = two_by_two();
+  AcquireOptions o;
+  o.band = "0.1:20";
+  o.excitation = Excitation::kMultisine;
+  o.points_per_decade = 6;
+  o.amplitude_pct = 10;  // rms 0.0707 of a full scale of 1: peaks well inside it
+  o.min_cycles = 2;
+  o.slowest_time_constant_s = 0.1;
+  o.realisations = 8;
+  o.multisine_phases = "random";
+  const auto camp = make_campaign(m, o, "test");
+  auto tape = [&](double c, double noise) {
+    std::mt19937_64 g(5);
+    std::normal_distribution<double> n(0.0, noise);
+    std::vector<Block> out;
+    for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq) {
+      Block b = command_block(*camp, seq, o.block, o.sample_rate_hz, "test");
+      const size_t L = size_t(b.n_samples);
+      std::vector<double> a(b.samples.begin(), b.samples.begin() + L),
+          bb(b.samples.begin() + L, b.samples.begin() + 2 * L), y(L);
+      for (size_t k = 0; k < L; ++k)
+        y[k] = a[k] + c * a[k] * a[k] * a[k] + 0.5 * bb[k] + (noise > 0 ? n(g) : 0.0);
+      b.channels = {"u_a", "u_b", "a", "b", "y"};
+      b.samples.clear();
+      for (const auto* v : {&a, &bb, &a, &bb, &y})
+        b.samples.insert(b.samples.end(), v->begin(), v->end());
+      out.push_back(std::move(b));
+    }
+    return out;
+  };
+  auto analyse_blocks = [&](const std::vector<Block>& blocks, const std::string& pair) {
+    PairAnalyzer an(pair);
+    for (const auto& e : camp->events()) an.on_status(e);
+    for (const auto& b : blocks) an.on_block(b);
+    an.flush();
+    return an.frd().points;
+  };
+  // s^2 and N from the commands: a's variance over the first measured period.
+  const StatusEvent* first = nullptr;
+  for (const auto& e : camp->events())
+    if (e.state == RunState::kIntegrate && !first) first = &e;
+  ASSERT_NE(first, nullptr);
+  int N = 0;
+  for (int i : first->line_input) N += i == 0;
+  const double c = 20;
+  const auto blocks = tape(c, 0);
+  double s2 = 0;
+  for (int64_t k = first->sample; k < first->sample + first->period_samples; ++k) {
+    const Block& b = blocks[size_t(k / o.block)];
+    const double a = b.samples[size_t(k % o.block)];
+    s2 += a * a / first->period_samples;
+  }
+  const double bla = 1 + c * s2 * (3 - 1.5 / N);
+  ASSERT_GT(c * s2, 0.05);  // a distortion well beyond rounding
+  const auto pts = analyse_blocks(blocks, "u_a:y");
+  ASSERT_EQ(pts.size(), size_t(N));
+  int within = 0;
+  for (const auto& p : pts) {
+    ASSERT_TRUE(p.valid) << p.note;
+    EXPECT_EQ(p.realisations, 8);
+    EXPECT_GT(p.sigma_nl, 1e6 * p.sigma_noise) << p.w;
+    EXPECT_NEAR(p.sigma * p.sigma, p.sigma_noise * p.sigma_noise + p.sigma_nl * p.sigma_nl,
+                1e-12 * p.sigma * p.sigma);
+    EXPECT_LT(std::abs(pt(p) - bla), 0.1 * bla) << p.w;  // and the single realisations' a^3 ...
+    within += std::abs(pt(p) - bla) < 3 * p.sigma;
+  }
+  EXPECT_GE(double(within) / N, 0.9) << "BLA " << bla << " over " << N << " lines";
+  for (const auto& p : analyse_blocks(blocks, "u_b:y")) {
+    ASSERT_TRUE(p.valid) << p.note;
+    EXPECT_NEAR(std::abs(pt(p) - 0.5), 0.0, 1e-9) << p.w;
+    EXPECT_LT(p.sigma_nl, 1e-9) << p.w;
+  }
+  // Linear with noise: the spread is the noise's.
+  int below = 0;
+  const auto lin = analyse_blocks(tape(0, 1e-3), "u_a:y");
+  for (const auto& p : lin) {
+    ASSERT_TRUE(p.valid) << p.note;
+    below += p.sigma_nl < p.sigma_noise;
+    EXPECT_LT(std::abs(pt(p) - 1.0), 4 * p.sigma) << p.w;
+  }
+  EXPECT_GT(double(below) / double(lin.size()), 0.75);
 }

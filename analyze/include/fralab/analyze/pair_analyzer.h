@@ -36,7 +36,11 @@
 //   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
 //       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
 //       the nearest non-excited lines relative to |X2(k)|.
-// Points carry step = r n_u. The commands and positions are kept from the design's first status
+// Points carry step = r n_u. Several random-phase realisations of the same multisine (either
+// design) are combined in frd() into the best linear approximation per line, sigma split into its
+// noise and stochastic nonlinear parts (analyze/bla.h); one realisation's points are returned as
+// they are.
+// The commands and positions are kept from the design's first status
 // on (blocks before it keep E1 and E2 only). An experiment that is invalid (gaps, no command or
 // position channel, a status stating another design) makes its realisation's points invalid with
 // its note; a realisation whose experiments never all arrive gives one invalid point at flush().
@@ -135,6 +139,7 @@ class PairAnalyzer {
   AnalyzerOptions opt_;
   std::map<int64_t, Window> pending_;  // by start sample
   std::vector<FrdPoint> points_, fresh_;
+  std::vector<FrdPoint> realisation_points_;  // a multisine's, each realisation's (frd(): BLA)
   // sample store from base_
   int64_t base_ = 0;
   std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)

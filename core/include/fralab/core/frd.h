@@ -24,6 +24,13 @@ struct FrdPoint {
   double h2_rel = 0.0;
   double h3_rel = 0.0;
   double nl_rel = -1.0;  // multisine: level on non-excited lines relative to the line (< 0: n/a)
+  // A best linear approximation over random-phase realisations (analyze/bla.h): sigma is then the
+  // total standard deviation of the mean, sigma^2 = sigma_noise^2 + sigma_nl^2, split into its
+  // measurement-noise and stochastic-nonlinear parts (< 0: not separated, one realisation);
+  // realisations: how many were averaged (0: a single measurement).
+  double sigma_noise = -1.0;
+  double sigma_nl = -1.0;
+  int realisations = 0;
   int n_cycles = 0;
   int step = -1;
   std::string input;       // the excited input
@@ -45,7 +52,8 @@ inline constexpr double kMaxFrdMagnitude = 1e12;
 
 /// What is numerically wrong with a point, "" when nothing: w not finite or <= 0; mag not finite,
 /// < 0 or > kMaxFrdMagnitude; phase not finite; a sigma given (>= 0) that is not finite or is 0;
-/// a coherence given (>= 0) that is not finite or exceeds 1 (+1e-9 for rounding).
+/// a coherence given (>= 0) that is not finite or exceeds 1 (+1e-9 for rounding); a sigma_noise
+/// or sigma_nl given (>= 0) that is not finite; realisations < 0.
 std::string frd_point_problem(const FrdPoint& p);
 
 /// Splits "E1:E2"; InputError naming the text otherwise.
