@@ -499,6 +499,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
       s12 += std::conj(X1[p][k]) * X2[p][k];
     }
     q.sigma = std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1);
+    if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
     q.coherence = std::norm(s12) / (s11 * s22);
     // Non-excited neighbours: the nearest unexcited line on each side.
     double lvl = 0;
@@ -738,6 +739,10 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment
       if (!(p.sigma > 0)) p.sigma = 1e-300 + 1e-15 * p.mag;  // noise-free: a sigma must be > 0
       p.coherence = std::norm(R) / (std::norm(R) + double(nu) * p.n_cycles * p.sigma * p.sigma);
       p.nl_rel = nl;
+      double ua = 0;
+      for (int ee = 0; ee < nu; ++ee)
+        ua += 2 * std::abs(grp.experiments.at(ee).u[j][q]) / grp.st.period_samples / nu;
+      p.line_amplitude = ua;
       out.push_back(p);
     }
   }

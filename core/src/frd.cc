@@ -40,6 +40,7 @@ Json frd_to_json(const Frd& frd) {
     if (p.sigma_noise >= 0) jp["sigma_noise"] = p.sigma_noise;
     if (p.sigma_nl >= 0) jp["sigma_nl"] = p.sigma_nl;
     if (p.realisations > 0) jp["realisations"] = p.realisations;
+    if (p.line_amplitude > 0) jp["line_amplitude"] = p.line_amplitude;
     jp["n_cycles"] = p.n_cycles;
     jp["step"] = p.step;
     if (!p.input.empty()) jp["input"] = p.input;
@@ -79,6 +80,7 @@ Frd frd_from_json(const Json& j, const std::string& source) {
     p.nl_rel = json_number_member(jp, w, "nl_rel", -1.0);
     p.sigma_noise = json_number_member(jp, w, "sigma_noise", -1.0);
     p.sigma_nl = json_number_member(jp, w, "sigma_nl", -1.0);
+    p.line_amplitude = json_number_member(jp, w, "line_amplitude", 0.0);
     // Counts and step numbers: whole numbers an int holds (a converted 5e11 is undefined).
     auto whole = [&](const char* key, double dflt) {
       const double v = json_number_member(jp, w, key, dflt);
@@ -125,6 +127,8 @@ std::string frd_point_problem(const FrdPoint& p) {
     return "coherence " + num(p.coherence) + " must lie in [0, 1]";
   if (!std::isfinite(p.sigma_noise) || !std::isfinite(p.sigma_nl))
     return "sigma_noise or sigma_nl is not finite";
+  if (!std::isfinite(p.line_amplitude) || p.line_amplitude < 0)
+    return "line_amplitude " + num(p.line_amplitude) + " must be a finite >= 0";
   if (p.realisations < 0) return "realisations " + std::to_string(p.realisations) + " is < 0";
   return "";
 }

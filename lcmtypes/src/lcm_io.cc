@@ -449,6 +449,7 @@ static void copy_point(const From& a, To& b) {
   b.sigma_noise = a.sigma_noise;
   b.sigma_nl = a.sigma_nl;
   b.realisations = a.realisations;
+  b.line_amplitude = a.line_amplitude;
   b.n_cycles = a.n_cycles;
   b.input = a.input;
   b.amplitude = a.amplitude;

@@ -25,6 +25,7 @@ FrdPoint point(double w) {
   p.sigma_noise = 0.006;
   p.sigma_nl = 0.008;
   p.realisations = 4;
+  p.line_amplitude = 0.7;
   p.n_cycles = 8;
   p.step = 3;
   p.input = "Wf";
@@ -57,6 +58,7 @@ TEST(Frd, EveryFieldRoundTripsThroughAFile) {
     EXPECT_DOUBLE_EQ(got.sigma_noise, want.sigma_noise);
     EXPECT_DOUBLE_EQ(got.sigma_nl, want.sigma_nl);
     EXPECT_EQ(got.realisations, want.realisations);
+    EXPECT_DOUBLE_EQ(got.line_amplitude, want.line_amplitude);
     EXPECT_EQ(got.n_cycles, want.n_cycles);
     EXPECT_EQ(got.step, want.step);
     EXPECT_EQ(got.input, want.input);
@@ -134,6 +136,8 @@ TEST(Frd, NumericNonsenseIsRefusedNamingThePoint) {
               HasSubstr("/points/1/sigma_nl: sigma_nl must be >= 0"));
   EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"realisations":-2})"),
               HasSubstr("/points/1: realisations -2 is < 0"));
+  EXPECT_THAT(err(R"({"w":2,"mag":1,"phase_deg":0,"line_amplitude":-1})"),
+              HasSubstr("/points/1: line_amplitude -1.000000 must be a finite >= 0"));
   FrdPoint p;
   p.w = 1;
   p.mag = std::nan("");

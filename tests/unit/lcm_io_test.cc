@@ -143,6 +143,7 @@ TEST(LcmIo, FrdMessagesCarryEveryField) {
   p.sigma_noise = 0.004;
   p.sigma_nl = 0.005;
   p.realisations = 6;
+  p.line_amplitude = 0.25;
   p.n_cycles = 9;
   p.step = 4;
   p.input = "Wf";
@@ -162,6 +163,7 @@ TEST(LcmIo, FrdMessagesCarryEveryField) {
   EXPECT_EQ(q.sigma_noise, 0.004);
   EXPECT_EQ(q.sigma_nl, 0.005);
   EXPECT_EQ(q.realisations, 6);
+  EXPECT_EQ(q.line_amplitude, 0.25);
   EXPECT_EQ(q.h3_rel, 0.02);
   EXPECT_EQ(q.step, 4);
   EXPECT_FALSE(q.valid);

@@ -36,7 +36,8 @@
 //   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
 //       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
 //       the nearest non-excited lines relative to |X2(k)|.
-// Points carry step = r n_u. Several random-phase realisations of the same multisine (either
+// Points carry step = r n_u and line_amplitude, the input's command amplitude on the line (the
+// mean over experiments of 2 |U_qe| / P; a zippered or one-input multisine: for pairs u_X:E2). Several random-phase realisations of the same multisine (either
 // design) are combined in frd() into the best linear approximation per line, sigma split into its
 // noise and stochastic nonlinear parts (analyze/bla.h); one realisation's points are returned as
 // they are.

@@ -31,6 +31,9 @@ struct FrdPoint {
   double sigma_noise = -1.0;
   double sigma_nl = -1.0;
   int realisations = 0;
+  // A multisine's point: the excited input's command amplitude on this line (peak, input units;
+  // 0: not a multisine or unknown). What a nonlinearity's best linear approximation depends on.
+  double line_amplitude = 0.0;
   int n_cycles = 0;
   int step = -1;
   std::string input;       // the excited input
@@ -53,7 +56,8 @@ inline constexpr double kMaxFrdMagnitude = 1e12;
 /// What is numerically wrong with a point, "" when nothing: w not finite or <= 0; mag not finite,
 /// < 0 or > kMaxFrdMagnitude; phase not finite; a sigma given (>= 0) that is not finite or is 0;
 /// a coherence given (>= 0) that is not finite or exceeds 1 (+1e-9 for rounding); a sigma_noise
-/// or sigma_nl given (>= 0) that is not finite; realisations < 0.
+/// or sigma_nl given (>= 0) that is not finite; realisations < 0; a line_amplitude < 0 or not
+/// finite.
 std::string frd_point_problem(const FrdPoint& p);
 
 /// Splits "E1:E2"; InputError naming the text otherwise.
