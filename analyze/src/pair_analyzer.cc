@@ -499,6 +499,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
       s12 += std::conj(X1[p][k]) * X2[p][k];
     }
     q.sigma = std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1);
+    if (!(q.sigma > 0)) q.sigma = 1e-300 + 1e-15 * q.mag;  // noise-free: a sigma must be > 0
     if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
     q.coherence = std::norm(s12) / (s11 * s22);
     // Non-excited neighbours: the nearest unexcited line on each side.

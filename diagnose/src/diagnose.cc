@@ -4,6 +4,7 @@
 #include <boost/math/tools/roots.hpp>
 #include <cmath>
 #include <functional>
+#include <numeric>
 
 #include "causes/cause.h"
 #include "causes/measurement_coupling.h"
@@ -215,8 +216,39 @@ void DiagnoseOptions::validate() const {
   if (!(min_odd_harmonic >= 0)) throw InputError("diagnose: min_odd_harmonic must be >= 0");
 }
 
+const MultisineBla& MultisineExcitation::bla(const NonlinearitySpec& spec,
+                                             const std::vector<double>& gain) const {
+  std::vector<double> a(amplitude.size());
+  for (size_t j = 0; j < a.size(); ++j) a[j] = amplitude[j] * (j < gain.size() ? gain[j] : 1.0);
+  auto key = std::make_tuple(spec.type, spec.width, a);
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, multisine_bla(spec, k, a, realisations)).first;
+  return it->second;
+}
+
+std::optional<MultisineExcitation> multisine_excitation(const Frd& curve) {
+  std::map<double, double> lines;  // w -> amplitude, ascending, one per line
+  for (const FrdPoint& p : curve.points)
+    if (p.valid && p.line_amplitude > 0) lines.emplace(p.w, p.line_amplitude);
+  if (lines.size() < 2) return std::nullopt;
+  MultisineExcitation ms;
+  for (const auto& [w, a] : lines) ms.w.push_back(w), ms.amplitude.push_back(a);
+  const double w0 = ms.w.front();
+  for (int m = 1; m <= 1000; ++m) {
+    const double base = w0 / m;
+    bool whole = true;
+    for (double x : ms.w)
+      whole = whole && std::abs(x / base - std::round(x / base)) < 1e-6 * x / base;
+    if (!whole) continue;
+    for (double x : ms.w) ms.k.push_back(int(std::lround(x / base)));
+    return ms;
+  }
+  return std::nullopt;
+}
+
 std::optional<C> model_pair_response(const Model& m, const std::string& pair, double w,
-                                     double amplitude, const MeasurementChain& chain) {
+                                     double amplitude, const MeasurementChain& chain,
+                                     const MultisineExcitation* ms) {
   auto [e1, e2] = split_pair(pair);
   const bool cmd = e1.rfind("u_", 0) == 0;
   const std::string x = cmd ? e1.substr(2) : e1;
@@ -227,10 +259,26 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   C coupling = 1.0;
   for (const auto& c : in.measurement_coupling)
     coupling += c.gain * m.position_to_output(m.output_index(c.output), i, w);
-  // The actuator's describing function at the command amplitude (linear part first).
+  // The actuator's describing function at the command amplitude (linear part first), or its best
+  // linear approximation under the multisine.
   C act = m.actuator_response(i, w);
+  size_t line = 0;
+  if (ms && cmd && !in.nonlinearity.empty()) {
+    line = size_t(
+        std::min_element(ms->w.begin(), ms->w.end(),
+                         [&](double a, double b) { return std::abs(a - w) < std::abs(b - w); }) -
+        ms->w.begin());
+    std::vector<double> gain;
+    for (double x : ms->w) gain.push_back(std::abs(m.actuator_response(i, x)));
+    for (const auto& nl : in.nonlinearity)
+      if (nl.type == "hysteresis" || nl.type == "deadband") {
+        const MultisineBla& b = ms->bla(nl, gain);
+        act *= b.g[line];
+        for (size_t j = 0; j < gain.size(); ++j) gain[j] *= std::abs(b.g[j]);
+      }
+  }
   for (const auto& nl : in.nonlinearity) {
-    if (amplitude <= 0) break;
+    if (amplitude <= 0 || (ms && cmd)) break;
     if (nl.type == "hysteresis")
       act *= backlash_describing_function(amplitude * std::abs(act), nl.width);
     if (nl.type == "deadband")
@@ -251,6 +299,29 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   Diagnosis d;
   d.chain = opt.chain;
   d.extended = sim;
+  // Inputs excited by a multisine, from their actuator curve (else another curve of theirs): the
+  // fitting data's and the validation's (another amplitude).
+  std::map<std::string, MultisineExcitation> ms_fit, ms_val;
+  for (bool actuator : {true, false})
+    for (const auto& mp : data) {
+      auto [e1, e2] = split_pair(mp.pair);
+      if (is_actuator_pair(e1, e2) != actuator) continue;
+      const std::string in = actuator ? e2 : (e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1);
+      if (!ms_fit.count(in))
+        if (auto ms = multisine_excitation(mp.frd)) ms_fit.emplace(in, std::move(*ms));
+      if (!ms_val.count(in))
+        if (auto ms = multisine_excitation(mp.validation)) ms_val.emplace(in, std::move(*ms));
+    }
+  // The multisine a point of `pair` was measured by (nullptr: a sine).
+  auto ms_of = [&](const std::string& pair, double line_amplitude,
+                   bool validation) -> const MultisineExcitation* {
+    if (!(line_amplitude > 0)) return nullptr;
+    auto [e1, e2] = split_pair(pair);
+    const std::string in = e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
+    auto& set = validation ? ms_val : ms_fit;
+    auto it = set.find(in);
+    return it == set.end() ? nullptr : &it->second;
+  };
   // Prepare the pairs the simulation can speak to (and those it has no path for).
   std::vector<PairFit> pairs, absent;
   for (const auto& mp : data) {
@@ -275,13 +346,15 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     }
     for (const auto& pt : mp.frd.points) {
       if (!usable(pt, opt)) continue;
-      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain);
+      const MultisineExcitation* ms = ms_of(mp.pair, pt.line_amplitude, false);
+      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain, ms);
       if (!s || std::abs(*s) == 0) continue;
       add_point(p, pt, *s, opt);
+      if (ms) p.ms = ms;
     }
     if (p.w.size() >= 3) pairs.push_back(std::move(p));
   }
-  const std::vector<PairFit> original = pairs;
+  std::vector<PairFit> original = pairs;  // before the findings (sigma_eff: see step 2's end)
 
   struct Raw {
     size_t pair;
@@ -348,15 +421,93 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       }
       std::vector<size_t> low;
       double h3 = 0;
+      const bool by_multisine = fits_by_multisine(p);
       for (size_t q = 0; q < N; ++q) {
         if (p.w[q] < opt.low_corner_fraction * corner) {
           low.push_back(q);
           h3 += p.h3[q];
         }
       }
+      // A multisine's trigger: the median level on the non-excited lines (nl_rel); its width is
+      // fitted on every line (its BLA depends on all of them).
+      std::vector<size_t> all(N);
+      std::iota(all.begin(), all.end(), size_t(0));
+      std::vector<double> nl_rel = p.nl;
+      std::nth_element(nl_rel.begin(), nl_rel.begin() + N / 2, nl_rel.end());
+      if (by_multisine && nl_rel[N / 2] > opt.min_odd_harmonic && p.amp[0] > 0) {
+        // A multisine: the element's BLA depends on every line through the actuator, which the
+        // simulation may have wrong (the J85's A8: ten times too slow), and a width fitted on the
+        // low lines alone is not resolved (they pass whole). The width by its profile: at each
+        // candidate, the BLA with the element's input through the actuator as last estimated
+        // (`seed`: the linear causes of the previous pass; none at first), then the linear causes
+        // refitted on top. Passes repeat with the new estimate until the width settles (< 0.5 %).
+        struct Fit {
+          double chi2 = INFINITY;
+          Cause nl;
+          std::vector<Cause> lin;
+          std::vector<C> L;
+        };
+        std::vector<C> seed(N, 1.0);
+        auto at = [&](CauseKind kind, double width) {
+          Fit f;
+          f.nl = Cause{kind, {{"width", width}}, nonlinear_factor(p, kind, width, seed), 0, 1, ""};
+          for (size_t q = 0; q < N; ++q) p.factor[q] = base[q] * f.nl.F[q];
+          f.lin = linear_causes();
+          f.L.assign(N, 1.0);
+          for (const Cause& c : f.lin)
+            for (size_t q = 0; q < N; ++q) f.L[q] *= c.F[q];
+          f.chi2 = f.nl.chi2 = chi2(p, std::vector<C>(N, 1.0));
+          return f;
+        };
+        // One realisation's distortion is not noise its periods show: once a width is found, its
+        // predicted scatter joins sigma_eff on this curve (the linear causes otherwise chase it).
+        const std::vector<double> sig0 = p.sig;
+        double c_lin = 0;
+        Fit best;
+        for (int pass = 0; pass < 3 * kNlRounds; ++pass) {
+          if (pass > 0) {
+            seed = best.L;
+            std::vector<double> var_nl;
+            nonlinear_factor(p, best.nl.cause, best.nl.params["width"], seed, &var_nl);
+            for (size_t q = 0; q < N; ++q)
+              if (p.realisations[q] <= 1)
+                p.sig[q] = std::hypot(sig0[q], std::abs(p.sim[q] * seed[q]) * std::sqrt(var_nl[q]));
+          }
+          p.factor = base;
+          linear_causes();
+          c_lin = chi2(p, std::vector<C>(N, 1.0));  // the linear causes alone
+          const double before = pass > 0 ? best.nl.params["width"] : 0.0;
+          const CauseKind kept = best.nl.cause;
+          best = Fit{};
+          // The first pass searches both elements over the whole range; later ones the element
+          // found, near its width (it rises pass by pass as the actuator estimate speeds up).
+          for (CauseKind kind : {CauseKind::kHysteresis, CauseKind::kDeadband}) {
+            if (pass > 0 && kind != kept) continue;
+            const double a = p.amp[0];
+            const double lo = pass > 0 ? 0.8 * before : 1e-3 * a;
+            const double hi = pass > 0 ? std::min(1.9 * a, 3 * before) : 1.9 * a;
+            const double width =
+                minimise_1d([&](double x) { return at(kind, x).chi2; }, lo, hi, pass > 0 ? 12 : 24);
+            Fit f = at(kind, width);
+            if (f.chi2 < best.chi2) best = f;
+          }
+          if (pass > 0 && std::abs(best.nl.params["width"] / before - 1) < 5e-3) break;
+        }
+        if (c_lin - best.chi2 > opt.min_improvement * c_lin) {
+          best = at(best.nl.cause, best.nl.params["width"]);  // p.factor as this fit left it
+          raw.push_back({k, best.nl});
+          raw.back().c.detail =
+              explain_nonlinearity(p, best.nl, all, nl_rel[N / 2], corner, opt.low_corner_fraction);
+          for (const Cause& c : best.lin) raw.push_back({k, c});
+          continue;
+        }
+        p.factor = base;
+        p.sig = sig0;
+      }
       double c0 = 0;
       Cause nl;
-      if (low.size() >= 2 && h3 / low.size() > opt.min_odd_harmonic && p.amp[low[0]] > 0)
+      if (!by_multisine && low.size() >= 2 && h3 / low.size() > opt.min_odd_harmonic &&
+          p.amp[low[0]] > 0)
         nl = fit_nonlinearity(p, low, base, std::vector<C>(N, 1.0), &c0);
       if (std::isfinite(nl.chi2) && c0 - nl.chi2 > opt.min_improvement * c0) {
         // The simulation's own actuator, still wrong, lags at 0.3 of its corner and biases a width
@@ -392,6 +543,10 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     }
     for (const Cause& c : linear_causes()) raw.push_back({k, c});
   }
+
+  // A multisine actuator curve's sigma_eff now holds its element's predicted scatter: every later
+  // chi2 (intervals, resolution, the report) weighs it so.
+  for (size_t k = 0; k < pairs.size(); ++k) original[k].sig = pairs[k].sig;
 
   // 3. Scope: group consistent findings of the same cause.
   std::vector<bool> used(raw.size(), false);
@@ -468,17 +623,20 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       std::vector<double> w;
       std::vector<C> meas;
       std::vector<double> amp;
+      std::vector<const MultisineExcitation*> ms;
       for (const auto& pt : f.points) {
         if (!usable(pt, opt)) continue;
         w.push_back(pt.w);
         meas.push_back(pt.value());
         amp.push_back(pt.amplitude);
+        ms.push_back(ms_of(mp.pair, pt.line_amplitude, validation));
       }
       if (w.empty()) continue;
       // A model with no response on the pair (a path it lacks) errs by 1 there (100 %).
-      const bool responds = model_pair_response(m, mp.pair, w[0], amp[0], opt.chain).has_value();
+      const bool responds =
+          model_pair_response(m, mp.pair, w[0], amp[0], opt.chain, ms[0]).has_value();
       double e = !responds ? 1.0 : pair_error(w, meas, [&](double x, size_t i) {
-        return model_pair_response(m, mp.pair, x, amp[i], opt.chain);
+        return model_pair_response(m, mp.pair, x, amp[i], opt.chain, ms[i]);
       });
       s += e * e * w.size();
       n += int(w.size());
@@ -502,8 +660,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
       // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
       std::vector<const PairFit*> mine;
       size_t n = 0;
-      for (const std::vector<PairFit>* set :
-           {&original, static_cast<const std::vector<PairFit>*>(&absent)})
+      for (const std::vector<PairFit>* set : {static_cast<const std::vector<PairFit>*>(&original),
+                                              static_cast<const std::vector<PairFit>*>(&absent)})
         for (const auto& p : *set)
           if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) {
             mine.push_back(&p);
@@ -514,7 +672,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
         for (const PairFit* p : mine)
           for (size_t q = 0; q < p->w.size(); ++q) {
             const C g =
-                model_pair_response(m, p->pair, p->w[q], p->amp[q], opt.chain).value_or(0.0);
+                model_pair_response(m, p->pair, p->w[q], p->amp[q], opt.chain, p->ms).value_or(0.0);
             c += std::norm(p->meas[q] - g) / (p->sig[q] * p->sig[q]);
           }
         return c;
@@ -604,7 +762,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
     r.meas = p.meas;
     r.sim = p.sim;
     for (size_t q = 0; q < p.w.size(); ++q) {
-      r.ext.push_back(model_pair_response(ext, p.pair, p.w[q], p.amp[q], opt.chain).value_or(0.0));
+      r.ext.push_back(
+          model_pair_response(ext, p.pair, p.w[q], p.amp[q], opt.chain, p.ms).value_or(0.0));
       r.sigma.push_back(p.sig[q]);
       r.chi2_sim += std::norm(p.meas[q] - p.sim[q]) / (p.sig[q] * p.sig[q]);
       r.chi2_ext += std::norm(p.meas[q] - r.ext.back()) / (p.sig[q] * p.sig[q]);

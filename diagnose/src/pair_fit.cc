@@ -18,6 +18,9 @@ void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o) 
   p.sim.push_back(sim);
   p.amp.push_back(pt.amplitude);
   p.h3.push_back(pt.h3_rel);
+  p.line_amp.push_back(pt.line_amplitude);
+  p.nl.push_back(pt.nl_rel);
+  p.realisations.push_back(pt.realisations);
   const double wh = o.chain.sample_rate_hz > 0 ? pt.w / o.chain.sample_rate_hz : 0.0;
   p.sig.push_back(std::hypot(pt.sigma, (o.sigma_floor + o.aliasing_floor * wh * wh) * pt.mag));
   p.factor.push_back(1.0);

@@ -19,6 +19,9 @@ using C = std::complex<double>;
 struct PairFit {
   std::string pair, e1, e2, input, output;  // output "" for actuator pairs u_X:X
   std::vector<double> w, amp, h3;           // rad/s; excitation amplitude; 3rd harmonic of E2
+  std::vector<double> line_amp, nl;         // a multisine's: the line's command amplitude; nl_rel
+  std::vector<int> realisations;            // a multisine's realisations averaged (0: one)
+  const MultisineExcitation* ms = nullptr;  // the input's multisine, when this pair is one's
   std::vector<C> meas, sim;                 // sim: the simulation (unchanged by findings)
   std::vector<double> sig;                  // sigma_eff
   std::vector<C> factor;                    // product of accepted cause factors so far

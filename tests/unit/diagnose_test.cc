@@ -9,6 +9,9 @@
 
 #include <cmath>
 
+#include "fralab/acquire/acquisition.h"
+#include "fralab/analyze/pair_analyzer.h"
+#include "fralab/plant/lockstep.h"
 #include "fralab/plant/lti.h"
 
 namespace fralab {
@@ -257,6 +260,67 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   EXPECT_NEAR(f.parameters.at("width"), 0.012, 0.05 * 0.012);
   EXPECT_THAT(f.explanation, HasSubstr("describing function of a hysteresis"));
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
+}
+
+// Issue 13: a backlash measured by a multisine is fitted with its best linear approximation under
+// that multisine, and comes out as it does from a sine. The truth: the simulation's actuator three
+// times faster (60 rad/s instead of 20) with a backlash of width 0.03 at a command rms of 0.028
+// (the J85's A8 ratio); measured through the lab's own code (make_campaign's multisine, 4
+// random-phase realisations of 2 periods, the plant with its noise, the pair analyser), validation
+// on another seed. The diagnosis names the hysteresis within 5 % and the actuator's pole within
+// 2 % (the issue's tolerances for the J85), and the extended model is better than the simulation
+// (by less than the exact-data tests above: what remains is the distortion's scatter, no model
+// error).
+TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
+  Model truth = simulation();
+  truth.inputs[0].actuator = tf(1.0, {Root::Real(-60)});
+  truth.inputs[0].nonlinearity.push_back({"hysteresis", 0.03});
+  for (auto& o : truth.outputs) o.noise_rms = 1e-4;
+  AcquireOptions o;
+  o.band = "0.1:30";
+  o.excitation = Excitation::kMultisine;
+  o.points_per_decade = 8;
+  o.amplitude_pct = 4;
+  o.min_cycles = 2;
+  o.realisations = 4;
+  o.multisine_phases = "random";
+  auto run = [&](uint64_t seed) {
+    const auto camp = make_campaign(truth, o, "test");
+    SimulatorOptions so;
+    so.noise = true;
+    so.seed = seed;
+    LockstepPlant plant(truth, so, "test");
+    std::vector<PairAnalyzer> an;
+    for (const char* pair : {"u_u:u", "u:y", "u:z"}) an.emplace_back(pair);
+    for (auto& a : an)
+      for (const auto& e : camp->events()) a.on_status(e);
+    for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq) {
+      const Block b = plant.advance(command_block(*camp, seq, o.block, o.sample_rate_hz, "test"));
+      for (auto& a : an) a.on_block(b);
+    }
+    std::vector<Frd> out;
+    for (auto& a : an) {
+      a.flush();
+      out.push_back(a.frd());
+    }
+    return out;
+  };
+  const auto fit = run(1), val = run(2);
+  std::vector<MeasuredPair> data;
+  for (size_t i = 0; i < fit.size(); ++i) data.push_back({fit[i].pair, fit[i], val[i]});
+  const Diagnosis d = diagnose(simulation(), data);
+  const Finding* nl = nullptr;
+  const Finding* pole = nullptr;
+  for (const Finding& f : d.findings) {
+    if (f.cause == CauseKind::kHysteresis) nl = &f;
+    if (f.cause == CauseKind::kPoleShift && f.input == "u") pole = &f;
+  }
+  ASSERT_NE(nl, nullptr);
+  ASSERT_NE(pole, nullptr);
+  EXPECT_NEAR(nl->parameters.at("width"), 0.03, 0.05 * 0.03);
+  EXPECT_NEAR(pole->parameters.at("to_rad_s"), 60, 0.02 * 60);
+  EXPECT_THAT(nl->explanation, HasSubstr("best linear approximation of a hysteresis"));
+  EXPECT_LT(d.validation_after, 0.5 * d.validation_before);
 }
 
 TEST(Diagnose, DampingErrorOfASimulatedPair) {

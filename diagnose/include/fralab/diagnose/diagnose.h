@@ -4,9 +4,9 @@
 // left out of fitting and of the error metric. For every measured pair the residual is R(w) =
 // G_meas(jw) / G_sim(jw) (ratio in dB and phase in degrees), with the measurement's uncertainty
 // sigma_R = sigma_eff / |G_sim|, where sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the
-// analyser/plant accuracy, 2e-3, plus aliasing_floor (w h)^2 for a chain sampled at 1/h). A pair is beyond its uncertainty when chi2 = sum |G_meas -
-// G_sim|^2 / sigma_eff^2 exceeds N + 4 sqrt(N) (N points; each complex point contributes 1 on
-// average when the model is right).
+// analyser/plant accuracy, 2e-3, plus aliasing_floor (w h)^2 for a chain sampled at 1/h). A pair is
+// beyond its uncertainty when chi2 = sum |G_meas - G_sim|^2 / sigma_eff^2 exceeds N + 4 sqrt(N) (N
+// points; each complex point contributes 1 on average when the model is right).
 //
 // Catalogue (each a factor F(s; theta) multiplying the simulated response, fitted by weighted least
 // squares over the points; s = jw, w rad/s; one unit per cause in diagnose/src/causes/, search
@@ -27,7 +27,14 @@
 //                       fitted first on the points below 0.3 of the simulated actuator's corner,
 //                       then alternately with the linear causes (a gain offset left out of the
 //                       width's fit) until the width moves by < 0.1 %: the simulation's own slow
-//                       actuator otherwise biases it
+//                       actuator otherwise biases it. An actuator curve measured by a multisine
+//                       (its points carry line_amplitude) is fitted with the element's best
+//                       linear approximation under that multisine instead (plant/nonlinearity.h
+//                       multisine_bla: the curve's usable lines at their command amplitudes
+//                       through the model's actuator; the trigger is the median level on the
+//                       non-excited lines, nl_rel, above min_odd_harmonic; every line fitted, the
+//                       alternation as above), and its predicted realisation-to-realisation
+//                       scatter joins sigma_eff on that curve: the same width either way
 //   missing_path        a response beyond the noise in a pair X:O the simulation has no path
 //                       for: the path fitted by TFNS (causes/missing_path.h)   gain, delay_s,
 //                       poles, zeros; its error_before is 1 (the simulation has no response)
@@ -61,11 +68,13 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "fralab/core/frd.h"
 #include "fralab/core/measurement_chain.h"
 #include "fralab/plant/model.h"
+#include "fralab/plant/nonlinearity.h"
 
 namespace fralab {
 
@@ -95,7 +104,7 @@ CauseKind cause_from_string(const std::string& s);
 Scope scope_from_string(const std::string& s);
 
 struct DiagnoseOptions {
-  double sigma_floor = 2e-3;      // relative accuracy floor of measurement and simulation
+  double sigma_floor = 2e-3;  // relative accuracy floor of measurement and simulation
   // ... plus this times (w h)^2, h = 1 / chain.sample_rate_hz: the chain's first-order model
   // leaves out the hold's aliased images, whose share grows as (w h)^2 (the J85 emulator: 3-4 % in
   // IGV:P3 at w h = 0.6, stepped sine and multisine alike).
@@ -121,6 +130,23 @@ struct DiagnoseOptions {
   MeasurementChain chain;
   void validate() const;
 };
+
+/// How an input was excited by a multisine, from its measured actuator curve (or another curve of
+/// the input): its lines w (rad/s, every valid point's, usable or not) and the command amplitude on
+/// each (FrdPoint::line_amplitude); `k` the lines as harmonic numbers of one period. The best
+/// linear approximations of the input's nonlinearities computed from it are kept (not thread-safe).
+struct MultisineExcitation {
+  std::vector<double> w, amplitude;
+  std::vector<int> k;
+  int realisations = 16;  // random-phase periods multisine_bla averages
+  /// The element `spec` under this multisine with each line's amplitude scaled by gain[j] (the
+  /// actuator before it): the BLA per line, and one realisation's scatter (var_nl).
+  const MultisineBla& bla(const NonlinearitySpec& spec, const std::vector<double>& gain) const;
+  mutable std::map<std::tuple<std::string, double, std::vector<double>>, MultisineBla> cache;
+};
+/// From a curve's valid points with line_amplitude > 0 (k: w over the largest w0 / m, m <= 1000,
+/// that makes every line a whole harmonic within 1e-6); nullopt for fewer than 2 such points.
+std::optional<MultisineExcitation> multisine_excitation(const Frd& curve);
 
 struct MeasuredPair {
   std::string pair;  // "X:O" (position-relative) or "u_X:X" (actuator)
@@ -191,9 +217,12 @@ Json diagnosis_to_json(const Diagnosis& d);
 
 /// The model's response for a measured pair ("X:O" position -> output, "u_X:X" the actuator's
 /// linear response, "u_X:O" command -> output); nullopt when the model has no such path.
-/// Measured through `chain`: times chain.pair_factor(E1, w).
+/// Measured through `chain`: times chain.pair_factor(E1, w). An actuator nonlinearity enters as
+/// measured: its describing function at the command `amplitude` (a sine), or, given the input's
+/// multisine `ms` (w one of its lines), its best linear approximation under that multisine.
 std::optional<std::complex<double>> model_pair_response(const Model& m, const std::string& pair,
                                                         double w, double amplitude = 0.0,
-                                                        const MeasurementChain& chain = {});
+                                                        const MeasurementChain& chain = {},
+                                                        const MultisineExcitation* ms = nullptr);
 
 }  // namespace fralab
