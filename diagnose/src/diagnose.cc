@@ -136,6 +136,7 @@ std::pair<std::string, std::optional<double>> primary_parameter(const Finding& f
     case CauseKind::kMeasurementCoupling:
       return {"gain", 0.0};
     case CauseKind::kSignError:
+    case CauseKind::kMissingPath:  // a whole path fitted by TFNS, no one parameter
       return {"", std::nullopt};
   }
   return {"", std::nullopt};

@@ -154,6 +154,36 @@ INSTANTIATE_TEST_SUITE_P(Faults, Kill,
                          ::testing::Values("plant", "acquire", "analyze", "record", "identify",
                                            "launcher"));
 
+// Issue 13: a multisine run resumes as a stepped one does. The orthogonal multisine of Wf and A8
+// (2 experiments of 2 periods, 18 s of engine time, paced at 5x), its acquisition killed mid-run,
+// then resumed: every frd and tf file and the transfer matrix identical to an undisturbed
+// multisine run of the same seed.
+TEST(Faults, AKilledMultisineRunResumesToTheUninterruptedNumbers) {
+  const std::string run =
+      " measure --engine j85_95 --input Wf,A8 --band 0.5:20 --points-per-decade"
+      " 3 --seed 3 --excitation multisine --min-cycles 2 ";
+  const std::string ref = tmpdir("multisine_ref"), d = tmpdir("multisine_kill");
+  auto c = sh(kBin + "/fralab" + run + "--out " + ref);
+  ASSERT_EQ(c.status, 0) << c.output;
+  c = sh("(" + kBin + "/fralab" + run + "--speed 5 --out " + d + " > " + d +
+         ".first 2>&1 & lp=$!; sleep 1.5; pkill -KILL -f '[f]ralab-acquire.*" + d +
+         "'; wait $lp; echo exit=$?)");
+  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(d + ".first");
+  c = sh(kBin + "/fralab measure --resume " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("resuming run"));
+  int files = 0;
+  for (const char* sub : {"frd", "tf"})
+    for (const auto& f : fs::directory_iterator(ref + "/" + sub)) {
+      const std::string name = std::string(sub) + "/" + f.path().filename().string();
+      EXPECT_EQ(slurp(f.path().string()), slurp(d + "/" + name)) << name;
+      ++files;
+    }
+  EXPECT_GT(files, 20);
+  EXPECT_EQ(slurp(ref + "/transfer_matrix.json"), slurp(d + "/transfer_matrix.json"));
+  EXPECT_EQ(json_load_file(d + "/run.json")["state"], "complete");
+}
+
 // Two runs forced onto one URL (one port: Linux hands both runs' datagrams to both): every process
 // takes only its run's messages, and both runs come out identical to the undisturbed one.
 TEST(Faults, TwoRunsSharingAPortNeverMix) {

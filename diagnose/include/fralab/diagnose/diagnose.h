@@ -30,11 +30,15 @@
 //                       actuator otherwise biases it. An actuator curve measured by a multisine
 //                       (its points carry line_amplitude) is fitted with the element's best
 //                       linear approximation under that multisine instead (plant/nonlinearity.h
-//                       multisine_bla: the curve's usable lines at their command amplitudes
-//                       through the model's actuator; the trigger is the median level on the
-//                       non-excited lines, nl_rel, above min_odd_harmonic; every line fitted, the
-//                       alternation as above), and its predicted realisation-to-realisation
-//                       scatter joins sigma_eff on that curve: the same width either way
+//                       multisine_bla: every line of the curve at its command amplitude through
+//                       the actuator as last estimated; the trigger is the median level on the
+//                       non-excited lines, nl_rel, above min_odd_harmonic). Every line is fitted:
+//                       the width by its profile (hysteresis and deadband over [1e-3 A, 1.9 A],
+//                       then the one found near its width), the linear causes refitted at each
+//                       candidate; passes repeat with the actuator re-estimated from the linear
+//                       causes until the width moves by < 0.5 % (at most 24); from the second
+//                       pass one realisation's predicted scatter (var_nl) joins sigma_eff on that
+//                       curve, and stays for every later chi2. The same width either way
 //   missing_path        a response beyond the noise in a pair X:O the simulation has no path
 //                       for: the path fitted by TFNS (causes/missing_path.h)   gain, delay_s,
 //                       poles, zeros; its error_before is 1 (the simulation has no response)
