@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "fralab/acquire/acquisition.h"
 #include "fralab/analyze/pair_analyzer.h"
@@ -263,18 +264,14 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
 }
 
 // Issue 13: a backlash measured by a multisine is fitted with its best linear approximation under
-// that multisine, and comes out as it does from a sine. The truth: the simulation's actuator three
-// times faster (60 rad/s instead of 20) with a backlash of width 0.03 at a command rms of 0.028
-// (the J85's A8 ratio); measured through the lab's own code (make_campaign's multisine, 4
-// random-phase realisations of 2 periods, the plant with its noise, the pair analyser), validation
-// on another seed. The diagnosis names the hysteresis within 5 % and the actuator's pole within
-// 2 % (the issue's tolerances for the J85), and the extended model is better than the simulation
-// (by less than the exact-data tests above: what remains is the distortion's scatter, no model
-// error).
-TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
+// that multisine, and comes out as it does from a sine. The truth: the simulation's actuator
+// (20 rad/s) moved to `pole` with a backlash of `width`, the command's rms 0.028; measured through
+// the lab's own code (make_campaign's multisine, 4 random-phase realisations of 2 periods, the
+// plant with its noise, the pair analyser), validation on another seed. Returns the diagnosis.
+Diagnosis multisine_backlash(double width, double pole) {
   Model truth = simulation();
-  truth.inputs[0].actuator = tf(1.0, {Root::Real(-60)});
-  truth.inputs[0].nonlinearity.push_back({"hysteresis", 0.03});
+  truth.inputs[0].actuator = tf(1.0, {Root::Real(-pole)});
+  truth.inputs[0].nonlinearity.push_back({"hysteresis", width});
   for (auto& o : truth.outputs) o.noise_rms = 1e-4;
   AcquireOptions o;
   o.band = "0.1:30";
@@ -308,19 +305,53 @@ TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
   const auto fit = run(1), val = run(2);
   std::vector<MeasuredPair> data;
   for (size_t i = 0; i < fit.size(); ++i) data.push_back({fit[i].pair, fit[i], val[i]});
-  const Diagnosis d = diagnose(simulation(), data);
+  return diagnose(simulation(), data);
+}
+
+// The J85's A8 case: a backlash of width 0.03 at a command rms of 0.028 and the actuator three
+// times faster than simulated. The hysteresis within 5 % and the actuator's pole within 2 % (the
+// issue's tolerances for the J85); the extended model better than the simulation (by less than
+// the exact-data tests above: what remains is the distortion's scatter).
+TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
+  const Diagnosis d = multisine_backlash(0.03, 60);
   const Finding* nl = nullptr;
-  const Finding* pole = nullptr;
+  const Finding* shift = nullptr;
   for (const Finding& f : d.findings) {
     if (f.cause == CauseKind::kHysteresis) nl = &f;
-    if (f.cause == CauseKind::kPoleShift && f.input == "u") pole = &f;
+    if (f.cause == CauseKind::kPoleShift && f.input == "u") shift = &f;
   }
   ASSERT_NE(nl, nullptr);
-  ASSERT_NE(pole, nullptr);
+  ASSERT_NE(shift, nullptr);
   EXPECT_NEAR(nl->parameters.at("width"), 0.03, 0.05 * 0.03);
-  EXPECT_NEAR(pole->parameters.at("to_rad_s"), 60, 0.02 * 60);
+  EXPECT_NEAR(shift->parameters.at("to_rad_s"), 60, 0.02 * 60);
   EXPECT_THAT(nl->explanation, HasSubstr("best linear approximation of a hysteresis"));
   EXPECT_LT(d.validation_after, 0.5 * d.validation_before);
+}
+
+// Random cases (width 0.3-1.5 of the rms, the actuator 0.5-4 times the simulated speed, seed 13):
+// what holds on plants not hand-picked is weaker. Each time a hysteresis is named and the
+// extended model at least halves the simulation's validation error; the width comes out within
+// 20 % in 3 of the 4 (measured: -16, -3.5 and -7.4 %; the pole within 1.5 and 5 %, and for the
+// first, 23.2 rad/s, 16 % from the simulated 20, not found: the width took it up); the fourth,
+// an actuator slower than simulated with a backlash wider than the rms, settles on a far slower
+// actuator with a narrow backlash (3.3 rad/s and 0.0036 for 12.8 and 0.041): the two look alike
+// from afar and the passes start from the simulated actuator.
+TEST(Diagnose, ActuatorBacklashFromItsMultisineBlaOnRandomCases) {
+  std::mt19937_64 g(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int within = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double width = 0.028 * (0.3 + 1.2 * u(g));
+    const double pole = 20 * std::exp(std::log(0.5) + u(g) * std::log(8));
+    const Diagnosis d = multisine_backlash(width, pole);
+    const Finding* nl = nullptr;
+    for (const Finding& f : d.findings)
+      if (f.cause == CauseKind::kHysteresis) nl = &f;
+    ASSERT_NE(nl, nullptr) << width << " " << pole;
+    within += std::abs(nl->parameters.at("width") / width - 1) < 0.2;
+    EXPECT_LT(d.validation_after, 0.5 * d.validation_before) << width << " " << pole;
+  }
+  EXPECT_GE(within, 3);
 }
 
 TEST(Diagnose, DampingErrorOfASimulatedPair) {
