@@ -10,10 +10,8 @@
 #include <cmath>
 #include <random>
 
-#include "fralab/acquire/acquisition.h"
-#include "fralab/analyze/pair_analyzer.h"
-#include "fralab/plant/lockstep.h"
 #include "fralab/plant/lti.h"
+#include "test_util.h"
 
 namespace fralab {
 // gtest prints the enums by name.
@@ -282,25 +280,8 @@ Diagnosis multisine_backlash(double width, double pole) {
   o.realisations = 4;
   o.multisine_phases = "random";
   auto run = [&](uint64_t seed) {
-    const auto camp = make_campaign(truth, o, "test");
-    SimulatorOptions so;
-    so.noise = true;
-    so.seed = seed;
-    LockstepPlant plant(truth, so, "test");
-    std::vector<PairAnalyzer> an;
-    for (const char* pair : {"u_u:u", "u:y", "u:z"}) an.emplace_back(pair);
-    for (auto& a : an)
-      for (const auto& e : camp->events()) a.on_status(e);
-    for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq) {
-      const Block b = plant.advance(command_block(*camp, seq, o.block, o.sample_rate_hz, "test"));
-      for (auto& a : an) a.on_block(b);
-    }
-    std::vector<Frd> out;
-    for (auto& a : an) {
-      a.flush();
-      out.push_back(a.frd());
-    }
-    return out;
+    return testing::analyse_run(testing::simulate_campaign(truth, o, true, seed),
+                                {"u_u:u", "u:y", "u:z"});
   };
   const auto fit = run(1), val = run(2);
   std::vector<MeasuredPair> data;

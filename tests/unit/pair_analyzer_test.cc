@@ -10,7 +10,6 @@
 #include <set>
 
 #include "fralab/acquire/acquisition.h"
-#include "fralab/plant/lockstep.h"
 #include "fralab/plant/lti.h"
 #include "fralab/plant/nonlinearity.h"
 #include "test_util.h"
@@ -578,15 +577,9 @@ TEST(PairAnalyzer, TheMeasuredBlaOfABacklashIsTheModelsMultisineBla) {
   o.slowest_time_constant_s = 0.2;
   o.realisations = 6;
   o.multisine_phases = "random";
-  const auto camp = make_campaign(m, o, "test");
-  LockstepPlant plant(m, {}, "test");
-  PairAnalyzer an("u_b:b");
-  for (const auto& e : camp->events()) an.on_status(e);
-  for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq)
-    an.on_block(plant.advance(command_block(*camp, seq, o.block, o.sample_rate_hz, "test")));
-  an.flush();
-  const auto pts = an.frd().points;
-  const StatusEvent& st = camp->events()[1];
+  const auto run = fralab::testing::simulate_campaign(m, o, false, 1);
+  const auto pts = fralab::testing::analyse_run(run, {"u_b:b"})[0].points;
+  const StatusEvent& st = run.events[1];
   const double df = st.sample_rate_hz / st.period_samples;
   std::vector<int> lines;
   std::vector<double> amp;

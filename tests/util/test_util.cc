@@ -7,6 +7,7 @@
 #include <random>
 
 #include "fralab/acquire/acquisition.h"
+#include "fralab/analyze/pair_analyzer.h"
 #include "fralab/core/text.h"
 #include "fralab/plant/lockstep.h"
 
@@ -69,17 +70,33 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
   o.sample_rate_hz = so.sample_rate_hz;
   o.slowest_time_constant_s = so.slowest_time_constant_s;
   o.block = block;
+  return simulate_campaign(m, o, noise, seed);
+}
+
+TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed) {
   const std::unique_ptr<Campaign> camp = make_campaign(m, o, "test");
   SimulatorOptions opt;
-  opt.sample_rate_hz = so.sample_rate_hz;
+  opt.sample_rate_hz = o.sample_rate_hz;
   opt.noise = noise;
   opt.seed = seed;
   LockstepPlant plant(m, opt, "test");
   TapeRun r;
   r.events = camp->events();
-  for (int64_t seq = 0; seq < command_block_count(*camp, block); ++seq)
-    r.blocks.push_back(plant.advance(command_block(*camp, seq, block, so.sample_rate_hz, "test")));
+  for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq)
+    r.blocks.push_back(plant.advance(command_block(*camp, seq, o.block, o.sample_rate_hz, "test")));
   return r;
+}
+
+std::vector<Frd> analyse_run(const TapeRun& r, const std::vector<std::string>& pairs) {
+  std::vector<Frd> out;
+  for (const std::string& pair : pairs) {
+    PairAnalyzer a(pair);
+    for (const auto& e : r.events) a.on_status(e);
+    for (const auto& b : r.blocks) a.on_block(b);
+    a.flush();
+    out.push_back(a.frd());
+  }
+  return out;
 }
 
 std::vector<FrdPoint> tf_points(const Tf& tf, double f_lo, double f_hi, int per_decade,

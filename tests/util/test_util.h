@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/acquire/acquisition.h"
 #include "fralab/acquire/campaign.h"
 #include "fralab/core/block.h"
 #include "fralab/core/frd.h"
@@ -37,6 +38,10 @@ struct TapeRun {
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
                       const SteppedSineOptions& so, bool noise, uint64_t seed, int block = 100,
                       double amplitude_pct = 2.0, const std::string& excitation = "stepped");
+/// The same with the acquisition's options as they are (realisations, phases, design, ...).
+TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed);
+/// Each pair's curve from a run: a pair analyser fed the run's events, then its blocks in order.
+std::vector<Frd> analyse_run(const TapeRun& r, const std::vector<std::string>& pairs);
 
 /// Frequency-response points of `tf` at `per_decade` log-spaced frequencies over [f_lo, f_hi] Hz,
 /// with complex Gaussian noise of standard deviation rel_noise * |G| (sigma set accordingly; 0:
