@@ -11,15 +11,30 @@
 namespace fralab {
 
 std::vector<FrdPoint> best_linear_approximation(const std::vector<FrdPoint>& points) {
-  std::vector<FrdPoint> out;
-  std::map<std::pair<std::string, double>, std::vector<const FrdPoint*>> groups;
+  // Groups in the order of their first point (equal w then keep the analyser's order), and every
+  // point not combined in its place.
+  std::map<std::pair<std::string, double>, size_t> group_of;
+  std::vector<std::vector<const FrdPoint*>> groups;
+  std::vector<std::pair<const FrdPoint*, size_t>> order;  // a point, or a group (nullptr, index)
   for (const FrdPoint& p : points) {
-    if (p.valid && p.sigma > 0)
-      groups[{p.input, p.w}].push_back(&p);
-    else
-      out.push_back(p);
+    if (!(p.valid && p.sigma > 0)) {
+      order.push_back({&p, 0});
+      continue;
+    }
+    auto [it, fresh] = group_of.emplace(std::make_pair(p.input, p.w), groups.size());
+    if (fresh) {
+      groups.emplace_back();
+      order.push_back({nullptr, it->second});
+    }
+    groups[it->second].push_back(&p);
   }
-  for (const auto& [key, g] : groups) {
+  std::vector<FrdPoint> out;
+  for (const auto& [single, index] : order) {
+    if (single) {
+      out.push_back(*single);
+      continue;
+    }
+    const std::vector<const FrdPoint*>& g = groups[index];
     if (g.size() < 2) {
       out.push_back(*g.front());
       continue;

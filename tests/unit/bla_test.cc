@@ -73,8 +73,8 @@ TEST(Bla, ALinearPlantsSpreadIsItsNoise) {
   EXPECT_NEAR(double(within) / lines, 0.632, 0.08);
 }
 
-// Single realisations, invalid points and points without sigma pass through; different inputs on
-// the same line are not mixed.
+// Single realisations, invalid points and points without sigma pass through in their order (equal
+// w keep the analyser's order); different inputs on the same line are not mixed.
 TEST(Bla, WhatIsNotSeveralRealisationsIsLeftAsItIs) {
   FrdPoint bad = point({1, 0}, 1, 0.1);
   bad.valid = false;
@@ -95,6 +95,10 @@ TEST(Bla, WhatIsNotSeveralRealisationsIsLeftAsItIs) {
     }
   }
   EXPECT_EQ(combined, 1);
+  EXPECT_EQ(out[0].input, "a");
+  EXPECT_EQ(out[1].input, "b");
+  EXPECT_FALSE(out[2].valid);
+  EXPECT_LT(out[3].sigma, 0);
   for (size_t i = 1; i < out.size(); ++i) EXPECT_LE(out[i - 1].w, out[i].w);
 }
 

@@ -30,7 +30,8 @@ namespace fralab {
 /// Combines points of several realisations: those with the same input and w (exactly: a line's w
 /// is computed the same way in every realisation) that are valid and carry a sigma (> 0) become
 /// one BLA point as above when there are two or more; any other point (a single realisation, an
-/// invalid one, one without sigma) is returned as it is. Output in ascending w, stable.
+/// invalid one, one without sigma) is returned as it is. Output in ascending w; equal w keep the
+/// order of `points` (a combined point stands where its first realisation did).
 std::vector<FrdPoint> best_linear_approximation(const std::vector<FrdPoint>& points);
 
 }  // namespace fralab
