@@ -241,6 +241,7 @@ std::optional<MultisineExcitation> multisine_excitation(const Frd& curve) {
     for (double x : ms.w)
       whole = whole && std::abs(x / base - std::round(x / base)) < 1e-6 * x / base;
     if (!whole) continue;
+    if (ms.w.back() / base > kMaxMultisineLine) return std::nullopt;  // beyond what is simulated
     for (double x : ms.w) ms.k.push_back(int(std::lround(x / base)));
     return ms;
   }

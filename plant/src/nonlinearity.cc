@@ -107,9 +107,14 @@ MultisineBla multisine_bla(const NonlinearitySpec& spec, const std::vector<int>&
   if (realisations < 2) throw InputError("multisine_bla: realisations must be >= 2");
   int kmax = 0;
   for (int k : lines) {
-    if (k < 1 || k > (1 << 20)) throw InputError("multisine_bla: line " + std::to_string(k));
+    if (k < 1 || k > kMaxMultisineLine)
+      throw InputError("multisine_bla: line " + std::to_string(k) + " outside 1.." +
+                       std::to_string(kMaxMultisineLine));
     kmax = std::max(kmax, k);
   }
+  for (double a : amplitudes)
+    if (!std::isfinite(a) || a < 0)
+      throw InputError("multisine_bla: amplitude " + std::to_string(a) + " is not finite >= 0");
   int P = 1024;  // >= 16 samples a cycle of the highest line (the element sees its peaks)
   while (P < 16 * kmax) P *= 2;
   const size_t L = lines.size(), B = size_t(P / 2 + 1);

@@ -96,4 +96,6 @@ TEST(Nonlinearity, AMultisinesBlaSpansNothingToTheIdentity) {
   EXPECT_THROW(multisine_bla({"rate_limit", 0, 1.0}, {1}, {1.0}), InputError);
   EXPECT_THROW(multisine_bla(backlash, {0}, {1.0}), InputError);
   EXPECT_THROW(multisine_bla(backlash, {1, 2}, {1.0}), InputError);
+  EXPECT_THROW(multisine_bla(backlash, {kMaxMultisineLine + 1}, {1.0}), InputError);
+  EXPECT_THROW(multisine_bla(backlash, {1}, {std::nan("")}), InputError);
 }

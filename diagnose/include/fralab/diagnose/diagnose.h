@@ -149,7 +149,8 @@ struct MultisineExcitation {
   mutable std::map<std::tuple<std::string, double, std::vector<double>>, MultisineBla> cache;
 };
 /// From a curve's valid points with line_amplitude > 0 (k: w over the largest w0 / m, m <= 1000,
-/// that makes every line a whole harmonic within 1e-6); nullopt for fewer than 2 such points.
+/// that makes every line a whole harmonic within 1e-6); nullopt for fewer than 2 such points, or
+/// lines no such period holds within kMaxMultisineLine harmonics (such a curve is taken as sines').
 std::optional<MultisineExcitation> multisine_excitation(const Frd& curve);
 
 struct MeasuredPair {

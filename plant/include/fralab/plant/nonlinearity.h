@@ -45,8 +45,9 @@ double deadband_describing_function(double amplitude, double width);
 /// forgets its start after one period). Only the input's path matters to such an element, not its
 /// speed, so neither the sample rate nor the frequency of a line enters. var_nl: the variance of
 /// one realisation's Y/X about the BLA (its stochastic nonlinear distortion). A small multisine
-/// inside a backlash's width moves nothing: BLA 0. InputError for another element, lines < 1,
-/// sizes that disagree, or realisations < 2.
+/// inside a backlash's width moves nothing: BLA 0. InputError for another element, lines outside
+/// 1..kMaxMultisineLine, amplitudes not finite >= 0, sizes that disagree, or realisations < 2.
+inline constexpr int kMaxMultisineLine = 1 << 16;  // periods of up to 2^20 samples simulated
 struct MultisineBla {
   std::vector<std::complex<double>> g;
   std::vector<double> var_nl;
