@@ -79,6 +79,11 @@ static std::vector<int> unexcited_neighbours(const std::vector<bool>& excited, i
   return out;
 }
 
+// A point's sigma, > 0 as the contract needs: noise-free periods repeat exactly and spread by 0.
+static double positive_sigma(double sigma, double mag) {
+  return sigma > 0 ? sigma : 1e-300 + 1e-15 * mag;
+}
+
 static std::pair<std::string, double> first_excited(const StatusEvent& st) {
   for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
     if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
@@ -498,8 +503,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
       s22 += std::norm(X2[p][k]);
       s12 += std::conj(X1[p][k]) * X2[p][k];
     }
-    q.sigma = std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1);
-    if (!(q.sigma > 0)) q.sigma = 1e-300 + 1e-15 * q.mag;  // noise-free: a sigma must be > 0
+    q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
     if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
     q.coherence = std::norm(s12) / (s11 * s22);
     // Non-excited neighbours: the nearest unexcited line on each side.
@@ -736,8 +740,7 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment
         var += std::norm(Ui(ee, q)) * sz / (double(1 + x.nb1[j].size()) * double(M) * (M - 1));
         nl += x.nl[j] / nu;
       }
-      p.sigma = std::sqrt(var) / std::abs(h1);
-      if (!(p.sigma > 0)) p.sigma = 1e-300 + 1e-15 * p.mag;  // noise-free: a sigma must be > 0
+      p.sigma = positive_sigma(std::sqrt(var) / std::abs(h1), p.mag);
       p.coherence = std::norm(R) / (std::norm(R) + double(nu) * p.n_cycles * p.sigma * p.sigma);
       p.nl_rel = nl;
       double ua = 0;

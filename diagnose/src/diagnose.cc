@@ -4,7 +4,6 @@
 #include <boost/math/tools/roots.hpp>
 #include <cmath>
 #include <functional>
-#include <numeric>
 
 #include "causes/cause.h"
 #include "causes/measurement_coupling.h"
@@ -264,9 +263,8 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   // The actuator's describing function at the command amplitude (linear part first), or its best
   // linear approximation under the multisine.
   C act = m.actuator_response(i, w);
-  size_t line = 0;
   if (ms && cmd && !in.nonlinearity.empty()) {
-    line = size_t(
+    const size_t line = size_t(
         std::min_element(ms->w.begin(), ms->w.end(),
                          [&](double a, double b) { return std::abs(a - w) < std::abs(b - w); }) -
         ms->w.begin());
@@ -303,12 +301,16 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   d.extended = sim;
   // Inputs excited by a multisine, from their actuator curve (else another curve of theirs): the
   // fitting data's and the validation's (another amplitude).
+  auto input_of = [](const std::string& pair) {
+    const std::string e1 = split_pair(pair).first;
+    return e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
+  };
   std::map<std::string, MultisineExcitation> ms_fit, ms_val;
   for (bool actuator : {true, false})
     for (const auto& mp : data) {
       auto [e1, e2] = split_pair(mp.pair);
       if (is_actuator_pair(e1, e2) != actuator) continue;
-      const std::string in = actuator ? e2 : (e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1);
+      const std::string in = input_of(mp.pair);
       if (!ms_fit.count(in))
         if (auto ms = multisine_excitation(mp.frd)) ms_fit.emplace(in, std::move(*ms));
       if (!ms_val.count(in))
@@ -318,10 +320,8 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   auto ms_of = [&](const std::string& pair, double line_amplitude,
                    bool validation) -> const MultisineExcitation* {
     if (!(line_amplitude > 0)) return nullptr;
-    auto [e1, e2] = split_pair(pair);
-    const std::string in = e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
     auto& set = validation ? ms_val : ms_fit;
-    auto it = set.find(in);
+    auto it = set.find(input_of(pair));
     return it == set.end() ? nullptr : &it->second;
   };
   // Prepare the pairs the simulation can speak to (and those it has no path for).
@@ -430,13 +430,14 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
           h3 += p.h3[q];
         }
       }
-      // A multisine's trigger: the median level on the non-excited lines (nl_rel); its width is
-      // fitted on every line (its BLA depends on all of them).
-      std::vector<size_t> all(N);
-      std::iota(all.begin(), all.end(), size_t(0));
-      std::vector<double> nl_rel = p.nl;
-      std::nth_element(nl_rel.begin(), nl_rel.begin() + N / 2, nl_rel.end());
-      if (by_multisine && nl_rel[N / 2] > opt.min_odd_harmonic && p.amp[0] > 0) {
+      // A multisine's trigger: the median level on the non-excited lines (nl_rel).
+      const double nl_median = [&] {
+        if (!by_multisine) return 0.0;
+        std::vector<double> v = p.nl;
+        std::nth_element(v.begin(), v.begin() + N / 2, v.end());
+        return v[N / 2];
+      }();
+      if (by_multisine && nl_median > opt.min_odd_harmonic && p.amp[0] > 0) {
         // A multisine: the element's BLA depends on every line through the actuator, which the
         // simulation may have wrong (the J85's A8: ten times too slow), and a width fitted on the
         // low lines alone is not resolved (they pass whole). The width by its profile: at each
@@ -499,7 +500,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
           best = at(best.nl.cause, best.nl.params["width"]);  // p.factor as this fit left it
           raw.push_back({k, best.nl});
           raw.back().c.detail =
-              explain_nonlinearity(p, best.nl, all, nl_rel[N / 2], corner, opt.low_corner_fraction);
+              explain_nonlinearity(p, best.nl, {0}, nl_median, corner, opt.low_corner_fraction);
           for (const Cause& c : best.lin) raw.push_back({k, c});
           continue;
         }

@@ -271,14 +271,7 @@ Diagnosis multisine_backlash(double width, double pole) {
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-pole)});
   truth.inputs[0].nonlinearity.push_back({"hysteresis", width});
   for (auto& o : truth.outputs) o.noise_rms = 1e-4;
-  AcquireOptions o;
-  o.band = "0.1:30";
-  o.excitation = Excitation::kMultisine;
-  o.points_per_decade = 8;
-  o.amplitude_pct = 4;
-  o.min_cycles = 2;
-  o.realisations = 4;
-  o.multisine_phases = "random";
+  const AcquireOptions o = testing::random_phase_multisine("0.1:30", 8, 4, 4);
   auto run = [&](uint64_t seed) {
     return testing::analyse_run(testing::simulate_campaign(truth, o, true, seed),
                                 {"u_u:u", "u:y", "u:z"});

@@ -474,15 +474,9 @@ TEST(PairAnalyzer, OrthogonalMultisineRefusesExperimentsThatDisagree) {
 // spread is noise: sigma_nl is below sigma_noise on most lines.
 TEST(PairAnalyzer, RealisationsGiveTheBestLinearApproximationWithTheNonlinearPartSeparated) {
   const Model m = two_by_two();
-  AcquireOptions o;
-  o.band = "0.1:20";
-  o.excitation = Excitation::kMultisine;
-  o.points_per_decade = 6;
-  o.amplitude_pct = 10;  // rms 0.0707 of a full scale of 1: peaks well inside it
-  o.min_cycles = 2;
+  // rms 0.0707 of a full scale of 1: peaks well inside it
+  AcquireOptions o = fralab::testing::random_phase_multisine("0.1:20", 6, 10, 8);
   o.slowest_time_constant_s = 0.1;
-  o.realisations = 8;
-  o.multisine_phases = "random";
   const auto camp = make_campaign(m, o, "test");
   auto tape = [&](double c, double noise) {
     std::mt19937_64 g(5);
@@ -568,15 +562,8 @@ TEST(PairAnalyzer, TheMeasuredBlaOfABacklashIsTheModelsMultisineBla) {
   Model m = two_by_two();
   const NonlinearitySpec backlash{"hysteresis", 0.1};
   m.inputs[1].nonlinearity.push_back(backlash);
-  AcquireOptions o;
-  o.band = "0.1:20";
-  o.excitation = Excitation::kMultisine;
-  o.points_per_decade = 6;
-  o.amplitude_pct = 10;
-  o.min_cycles = 2;
+  AcquireOptions o = fralab::testing::random_phase_multisine("0.1:20", 6, 10, 6);
   o.slowest_time_constant_s = 0.2;
-  o.realisations = 6;
-  o.multisine_phases = "random";
   const auto run = fralab::testing::simulate_campaign(m, o, false, 1);
   const auto pts = fralab::testing::analyse_run(run, {"u_b:b"})[0].points;
   const StatusEvent& st = run.events[1];

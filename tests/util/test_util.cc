@@ -73,6 +73,19 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
   return simulate_campaign(m, o, noise, seed);
 }
 
+AcquireOptions random_phase_multisine(const std::string& band, int points_per_decade,
+                                      double amplitude_pct, int realisations) {
+  AcquireOptions o;
+  o.band = band;
+  o.excitation = Excitation::kMultisine;
+  o.points_per_decade = points_per_decade;
+  o.amplitude_pct = amplitude_pct;
+  o.min_cycles = 2;
+  o.realisations = realisations;
+  o.multisine_phases = "random";
+  return o;
+}
+
 TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed) {
   const std::unique_ptr<Campaign> camp = make_campaign(m, o, "test");
   SimulatorOptions opt;

@@ -38,6 +38,10 @@ struct TapeRun {
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
                       const SteppedSineOptions& so, bool noise, uint64_t seed, int block = 100,
                       double amplitude_pct = 2.0, const std::string& excitation = "stepped");
+/// A multisine of `realisations` random-phase realisations of 2 periods each (the orthogonal
+/// design over the excited inputs) on `band` ("LO:HI" Hz), as fralab-acquire's options.
+AcquireOptions random_phase_multisine(const std::string& band, int points_per_decade,
+                                      double amplitude_pct, int realisations);
 /// The same with the acquisition's options as they are (realisations, phases, design, ...).
 TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed);
 /// Each pair's curve from a run: a pair analyser fed the run's events, then its blocks in order.

@@ -37,12 +37,12 @@
 //       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
 //       the nearest non-excited lines relative to |X2(k)|.
 // Points carry step = r n_u and line_amplitude, the input's command amplitude on the line (the
-// mean over experiments of 2 |U_qe| / P; a zippered or one-input multisine: for pairs u_X:E2). Several random-phase realisations of the same multisine (either
-// design) are combined in frd() into the best linear approximation per line, sigma split into its
-// noise and stochastic nonlinear parts (analyze/bla.h); one realisation's points are returned as
-// they are.
-// The commands and positions are kept from the design's first status
-// on (blocks before it keep E1 and E2 only). An experiment that is invalid (gaps, no command or
+// mean over experiments of 2 |U_qe| / P; a zippered or one-input multisine: for pairs u_X:E2).
+// Several random-phase realisations of the same multisine (either design) are combined in frd()
+// into the best linear approximation per line, sigma split into its noise and stochastic
+// nonlinear parts (analyze/bla.h); one realisation's points are returned as they are. The
+// commands and positions are kept from the design's first status on (blocks before it keep E1
+// and E2 only). An experiment that is invalid (gaps, no command or
 // position channel, a status stating another design) makes its realisation's points invalid with
 // its note; a realisation whose experiments never all arrive gives one invalid point at flush().
 // Arithmetic depends only on the samples and the status, never on arrival order or timing, so
