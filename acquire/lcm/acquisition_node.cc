@@ -43,6 +43,8 @@ struct AcquisitionNode::TapeWatch {
   int64_t final_seq = -1;  // the plant's final tape block, once seen
   std::set<int64_t> seen;  // tape seqs seen
   HeldSamples held;        // samples the plant held
+  AutoIntegrator* integrator = nullptr;
+  std::string error;  // the integrator refused a block (a corrupt record)
   void on_tape(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
     Block b;
     try {
@@ -56,6 +58,13 @@ struct AcquisitionNode::TapeWatch {
     last_seq = std::max(last_seq, b.seq);
     if (b.final_block) final_seq = b.seq;
     held.add(b);
+    if (integrator) {
+      try {
+        integrator->on_block(b);
+      } catch (const std::exception& e) {
+        error = std::string("adaptive stepped sine: ") + e.what();
+      }
+    }
   }
   /// The last tape block up to which every one was seen (none lost on the way here).
   int64_t contiguous() const { return contiguous_; }
@@ -71,13 +80,14 @@ AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campai
       acks_(std::make_unique<Acks>(o_.run_id, FlowControl(o_.consumers, o_.flow))) {
   sub_ = control_.subscribe(kAckChannel, &Acks::on_ack, acks_.get());
   sub_->setQueueCapacity(100000);
-  if (o_.acquire.free_running) {
+  if (o_.acquire.free_running || o_.auto_integrator) {
     tape_ = std::make_unique<TapeWatch>();
     tape_->run_id = o_.run_id;
+    tape_->integrator = o_.auto_integrator;
     tape_sub_ = data_.subscribe(kTapeChannel, &TapeWatch::on_tape, tape_.get());
     tape_sub_->setQueueCapacity(100000);
-    acks_->flow.tape_on_plant_clock();
   }
+  if (o_.acquire.free_running) acks_->flow.tape_on_plant_clock();
 }
 
 AcquisitionNode::~AcquisitionNode() {
@@ -133,8 +143,9 @@ Json AcquisitionNode::run() {
     if (o_.stop_requested && o_.stop_requested()) abort_run();
     handle_either(data_, control_, poll_ms);
     if (!acq.error.empty()) throw InputError(acq.error);
+    if (tape_ && !tape_->error.empty()) throw InputError(tape_->error);
     const double now = acq.now();
-    if (tape_ && tape_->last_seq >= 0) flow.published(Stream::kTape, tape_->last_seq);
+    if (o.free_running && tape_->last_seq >= 0) flow.published(Stream::kTape, tape_->last_seq);
     for (Stream s : {Stream::kCommand, Stream::kTape, Stream::kStatus}) {
       if (auto r = flow.due(s, now)) {
         if (s == Stream::kCommand)
@@ -179,16 +190,36 @@ Json AcquisitionNode::run() {
   publish_status(start);  // outside the flow control: informative
 
   const auto t0 = Clock::now();
-  const int64_t total = campaign.total_samples();
-  const int64_t nblocks = command_block_count(campaign, o.block);
   size_t ev = size_t(o_.first_status);
   next_block = o_.first_block;
-  const bool free = tape_ != nullptr;
+  const bool free = o.free_running;
   // Free-running: the last event ("done") and the final block wait until every step is known to
   // have been played without a held sample (the play-out after this loop).
-  const size_t n_events = free ? events.size() - 1 : events.size();
+  const size_t n_done_held = free ? 1 : 0;
   const int64_t lead_samples = int64_t(o.lead) * o.block;
-  for (int64_t b = o_.first_block; b < nblocks; ++b) {
+  AutoIntegrator* const ai = o_.auto_integrator;
+  // Adaptive: the decision pending at sample E is taken before a block starting at or after E goes
+  // out (the campaign, its events and its length may change then); the tape it needs is asked for
+  // again when it is slow to come.
+  auto decide_before = [&](int64_t b) {
+    double t_asked = acq.now();
+    while (ai->decision_sample() >= 0 && b * o.block >= ai->decision_sample()) {
+      if (ai->decide()) continue;
+      pump(5);
+      const auto [from, to] = ai->needed_samples();
+      int64_t lost = -1;
+      for (int64_t k = from / o.block; k <= (to - 1) / o.block && lost < 0; ++k)
+        if (!tape_->seen.count(k)) lost = k;
+      if (lost >= 0 && acq.now() - t_asked > 0.2) {
+        publish_flow(data_, o_.run_id, "resend", "tape", lost, (to - 1) / o.block);
+        t_asked = acq.now();
+      }
+    }
+  };
+  for (int64_t b = o_.first_block; b < command_block_count(campaign, o.block); ++b) {
+    if (ai) decide_before(b);
+    if (b >= command_block_count(campaign, o.block)) break;
+    const size_t n_events = events.size() - n_done_held;
     Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
     if (free) {  // ahead of the plant's clock by at most `lead` blocks; the plant does not wait
       blk.final_block = false;
@@ -222,6 +253,8 @@ Json AcquisitionNode::run() {
     flow.published(Stream::kCommand, b);
     next_block = b + 1;
   }
+  const int64_t total = campaign.total_samples();
+  const int64_t nblocks = command_block_count(campaign, o.block);
   int64_t last_command = nblocks - 1, last_tape = nblocks - 1;
   Json repeats = Json::array();
   if (free) {
@@ -345,6 +378,20 @@ Json AcquisitionNode::run() {
           {"retransmissions", flow.retransmissions()},
           {"items_retransmitted", flow.items_retransmitted()},
           {"plant_clock", free ? "free" : "lockstep"}};
+  if (ai) {
+    Json steps = Json::array();
+    int met = 0, limit = 0;
+    for (const auto& r : ai->results()) {
+      steps.push_back({{"input", r.input},
+                       {"f_hz", r.f_hz},
+                       {"cycles", r.cycles},
+                       {"worst_rel_sigma", r.worst_rel_sigma},
+                       {"state", r.state}});
+      met += r.state == "met";
+      limit += r.state == "limit";
+    }
+    sj["adaptive"] = {{"steps", steps}, {"met", met}, {"limit", limit}};
+  }
   if (free) {
     sj["held_samples"] = tape_->held.count();
     sj["repeated_steps"] = repeats;

@@ -43,6 +43,12 @@ struct AcquisitionLoopOptions {
   /// comes before is on the tape; the plant stands at the block's first sample).
   int64_t first_block = 0;
   int64_t first_status = 0;
+  /// The adaptive stepped sine (acquire/adaptive_sine.h): decides while running; the campaign
+  /// given to the node is its campaign, which grows as it decides. The node watches the tape for
+  /// it (asking the plant again for what is lost on the way) and publishes no command block
+  /// beyond a pending decision. The summary adds "adaptive": per step its input, frequency,
+  /// cycles, worst sigma / |G| and state, with the counts met / limit.
+  AutoIntegrator* auto_integrator = nullptr;
   /// The start event's message: the measurement chain (core/measurement_chain.h,
   /// chain_to_message), so that the tape says how it was measured.
   std::string start_message;
@@ -72,7 +78,7 @@ class AcquisitionNode {
   AcquisitionLoopOptions o_;
   std::unique_ptr<Acks> acks_;
   lcm::Subscription* sub_ = nullptr;
-  std::unique_ptr<TapeWatch> tape_;  // free-running plant only
+  std::unique_ptr<TapeWatch> tape_;  // free-running plant, or an adaptive stepped sine
   lcm::Subscription* tape_sub_ = nullptr;
 };
 

@@ -62,6 +62,16 @@ void add_acquire_flags(CLI::App* c, AcquireOptions& o, bool* auto_campaign) {
   c->add_option("--max-repeats", o.max_repeats,
                 "free-running: rounds of repeated steps before the run fails")
       ->capture_default_str();
+  c->add_option("--sigma-target", o.adaptive.sigma_target,
+                "stepped sine, adaptive: integrate each step until sigma / |G| on every pair of "
+                "its input is at most this (e.g. 0.01), at most the fixed plan's cycles "
+                "(--min-cycles, --min-integrate-s); 0: the fixed plan")
+      ->capture_default_str();
+  c->add_option("--pilot-cycles", o.adaptive.pilot_cycles,
+                "adaptive: cycles of each step's first window, and the unit of its extensions")
+      ->capture_default_str();
+  c->add_option("--adaptive-decided", o.adaptive_decided,
+                "adaptive, resume: the extensions taken before, STEP*CYCLES,... (from the tape)");
 }
 
 std::vector<std::string> acquire_flags(const AcquireOptions& o) {
@@ -102,6 +112,11 @@ std::vector<std::string> acquire_flags(const AcquireOptions& o) {
     f.insert(f.end(), {"--free-running", "--lead", std::to_string(o.lead), "--max-repeats",
                        std::to_string(o.max_repeats)});
   if (!o.inputs.empty()) f.insert(f.end(), {"--input", o.inputs});
+  if (o.adaptive.enabled()) {
+    f.insert(f.end(), {"--sigma-target", lossless(o.adaptive.sigma_target), "--pilot-cycles",
+                       std::to_string(o.adaptive.pilot_cycles)});
+    if (!o.adaptive_decided.empty()) f.insert(f.end(), {"--adaptive-decided", o.adaptive_decided});
+  }
   return f;
 }
 

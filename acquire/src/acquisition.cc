@@ -41,11 +41,17 @@ void AcquireOptions::validate() const {
     throw InputError("--multisine-phases \"" + multisine_phases +
                      "\": schroeder, random or low-crest");
   parse_band(band);
+  adaptive.validate();
+  if (adaptive.enabled() && (excitation != Excitation::kStepped || free_running))
+    throw InputError(
+        "--sigma-target: the adaptive stepped sine needs --excitation stepped, in "
+        "lockstep (not --free-running)");
+  if (!adaptive.enabled() && !adaptive_decided.empty())
+    throw InputError("--adaptive-decided without --sigma-target");
+  parse_decisions(adaptive_decided);
 }
 
-std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions& o,
-                                        const std::string& run_id) {
-  o.validate();
+SteppedSineOptions stepped_sine_options(const Model& model, const AcquireOptions& o) {
   SteppedSineOptions so;
   std::tie(so.f_lo_hz, so.f_hi_hz) = parse_band(o.band);
   so.points_per_decade = o.points_per_decade;
@@ -55,6 +61,13 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
   so.sample_rate_hz = o.sample_rate_hz;
   so.slowest_time_constant_s =
       o.slowest_time_constant_s >= 0 ? o.slowest_time_constant_s : slowest_time_constant_s(model);
+  return so;
+}
+
+std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions& o,
+                                        const std::string& run_id) {
+  o.validate();
+  const SteppedSineOptions so = stepped_sine_options(model, o);
   if (o.block * 8.0 * (model.inputs.size() * 2 + model.outputs.size() + 2) > 60000) {
     throw InputError("--block " + std::to_string(o.block) +
                      " would make tape blocks over 60 kB (LCM fragments); use a smaller block");
@@ -63,6 +76,10 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
   auto cin = campaign_inputs(model, o.amplitude_pct, o.amplitude_scale);
   switch (o.excitation) {
     case Excitation::kStepped:
+      if (o.adaptive.enabled())
+        return std::make_unique<AdaptiveSineCampaign>(cin, excite, so, o.adaptive.pilot_cycles,
+                                                      o.block, run_id,
+                                                      parse_decisions(o.adaptive_decided));
       return std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so),
                                                    so.sample_rate_hz, run_id);
     case Excitation::kSweep:

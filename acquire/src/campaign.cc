@@ -112,6 +112,7 @@ void SegmentCampaign::fill(int64_t start, int n, std::vector<std::vector<double>
     if (m >= total_ || segs_.empty()) continue;
     while (si + 1 < segs_.size() && segs_[si + 1].start <= m) ++si;
     const Segment& s = segs_[si];
+    if (m >= s.start + s.length) continue;  // after the last segment: the operating point
     const double t = double(m - s.start) / fs_;
     const double phi = s.beta == 0.0
                            ? s.phi0 + 2 * std::numbers::pi * s.fa * t

@@ -9,6 +9,7 @@
 
 #include "fralab/analyze/bla.h"
 #include "fralab/analyze/fourier_filter.h"
+#include "fralab/analyze/repeats.h"
 
 namespace fralab {
 
@@ -762,7 +763,8 @@ std::vector<FrdPoint> PairAnalyzer::take_new_points() {
 Frd PairAnalyzer::frd() const {
   Frd f;
   f.pair = pair_;
-  f.points = points_;
+  // An adaptive stepped sine's windows of one step are one point (analyze/repeats.h).
+  f = merge_repeated(f, Frd{pair_, points_, ""});
   for (const FrdPoint& p : best_linear_approximation(realisation_points_)) f.points.push_back(p);
   std::stable_sort(f.points.begin(), f.points.end(),
                    [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });

@@ -476,14 +476,18 @@ MeasureResult run_measure(const MeasureOptions& given) {
     throw InputError(std::string(e.what()) + " (everything measured is kept in " + o.out +
                      "; resume with `fralab measure --resume " + o.out + "`)");
   }
-  const double engine_total =
+  double engine_total =
       double(make_campaign(model, ao, r.run_id)->total_samples()) / o.acquire.sample_rate_hz;
-  r.engine_time_s = engine_total;
   if (fs::exists(o.out + "/acquire.json")) {
     Json acq_summary = json_load_file(o.out + "/acquire.json");
+    if (ao.adaptive.enabled()) {  // the campaign grew while running: its length is the summary's
+      engine_total = acq_summary.at("samples").get<double>() / o.acquire.sample_rate_hz;
+      if (acq_summary.contains("adaptive")) run["adaptive"] = acq_summary["adaptive"];
+    }
     run["retransmissions"] = acq_summary.value("retransmissions", 0);
     run["items_retransmitted"] = acq_summary.value("items_retransmitted", 0);
   }
+  r.engine_time_s = engine_total;
   run["state"] = "complete";
   run.erase("reason");
   run["engine_time_s"] = r.engine_time_s;

@@ -94,9 +94,23 @@ TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, u
   opt.seed = seed;
   LockstepPlant plant(m, opt, "test");
   TapeRun r;
-  r.events = camp->events();
-  for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq)
+  // The adaptive stepped sine decides as fralab-acquire does (acquisition_node.h): before a block
+  // at or after the pending decision's sample goes out.
+  std::unique_ptr<AutoIntegrator> ai;
+  if (auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(camp.get())) {
+    std::vector<std::string> outputs;
+    for (const auto& out : m.outputs) outputs.push_back(out.name);
+    ai = std::make_unique<AutoIntegrator>(*adaptive, outputs, o.adaptive);
+  }
+  for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq) {
+    while (ai && ai->decision_sample() >= 0 && seq * o.block >= ai->decision_sample())
+      if (!ai->decide()) throw std::logic_error("adaptive: the tape of a decision is missing");
+    if (seq >= command_block_count(*camp, o.block)) break;
     r.blocks.push_back(plant.advance(command_block(*camp, seq, o.block, o.sample_rate_hz, "test")));
+    if (ai) ai->on_block(r.blocks.back());
+  }
+  r.events = camp->events();
+  if (ai) r.adaptive = ai->results();
   return r;
 }
 

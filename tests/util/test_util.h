@@ -34,6 +34,7 @@ Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor 
 struct TapeRun {
   std::vector<StatusEvent> events;
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
+  std::vector<AutoIntegrator::StepResult> adaptive;  // an adaptive stepped sine's steps
 };
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
                       const SteppedSineOptions& so, bool noise, uint64_t seed, int block = 100,
@@ -42,7 +43,8 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
 /// design over the excited inputs) on `band` ("LO:HI" Hz), as fralab-acquire's options.
 AcquireOptions random_phase_multisine(const std::string& band, int points_per_decade,
                                       double amplitude_pct, int realisations);
-/// The same with the acquisition's options as they are (realisations, phases, design, ...).
+/// The same with the acquisition's options as they are (realisations, phases, design, ...); an
+/// adaptive stepped sine (o.adaptive) decides on the tape as fralab-acquire does.
 TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed);
 /// Each pair's curve from a run: a pair analyser fed the run's events, then its blocks in order.
 std::vector<Frd> analyse_run(const TapeRun& r, const std::vector<std::string>& pairs);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/acquire/adaptive_sine.h"
 #include "fralab/acquire/campaign.h"
 #include "fralab/core/block.h"
 #include "fralab/plant/model.h"
@@ -51,9 +52,18 @@ struct AcquireOptions {
   bool free_running = false;
   int lead = 10;
   int max_repeats = 3;
+  // Stepped sine, adaptive (acquire/adaptive_sine.h) when adaptive.sigma_target > 0: pilot
+  // windows of adaptive.pilot_cycles (min_cycles and min_integrate_s then do not apply), each step
+  // extended while running until its sigma / |G| meets the target or its limit. adaptive_decided:
+  // the extensions a resumed run took before (parse_decisions' text).
+  AdaptiveSineOptions adaptive;
+  std::string adaptive_decided;
   /// InputError naming the option (block, window, speed, band, excitation settings).
   void validate() const;
 };
+
+/// The stepped-sine plan's options (band, density, cycles, settle) on model `m`.
+SteppedSineOptions stepped_sine_options(const Model& m, const AcquireOptions& o);
 
 /// The campaign the options describe on model `m` (the plan of steps, sweep or multisine).
 std::unique_ptr<Campaign> make_campaign(const Model& m, const AcquireOptions& o,

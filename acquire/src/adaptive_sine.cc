@@ -1,0 +1,243 @@
+#include "fralab/acquire/adaptive_sine.h"
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+
+#include "fralab/analyze/repeats.h"
+#include "fralab/core/json_util.h"
+#include "fralab/core/text.h"
+
+namespace fralab {
+
+void AdaptiveSineOptions::validate() const {
+  if (!(sigma_target >= 0) || !std::isfinite(sigma_target))
+    throw InputError("--sigma-target must be > 0 (sigma / |G|, e.g. 0.01), or 0 for none");
+  if (pilot_cycles < 2) throw InputError("--pilot-cycles must be >= 2 (sigma needs two blocks)");
+}
+
+int extension_cycles(int n, double s, int limit, const AdaptiveSineOptions& o) {
+  const double t = o.sigma_target;
+  if (!(s > t) || n < 1) return 0;  // on target, or nothing usable to judge by
+  const double needed = std::min(double(n) * (s / t) * (s / t), 1e9);  // cycles in all
+  const int N1 = o.pilot_cycles;
+  const int room = (limit - n) / N1;
+  const int m = int(std::min<double>(room, std::ceil((needed - n) / N1)));
+  return std::max(0, m) * N1;
+}
+
+namespace {
+
+int parse_int(const std::string& s, const std::string& token) {
+  int v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || p != s.data() + s.size() || s.empty())
+    throw InputError("--adaptive-decided: \"" + token + "\" is not STEP*CYCLES (whole numbers)");
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> parse_decisions(const std::string& text) {
+  std::vector<std::pair<int, int>> out;
+  for (const std::string& tok : split_list(text, ',')) {
+    const auto star = tok.find('*');
+    if (star == std::string::npos)
+      throw InputError("--adaptive-decided: \"" + tok + "\" is not STEP*CYCLES");
+    out.emplace_back(parse_int(tok.substr(0, star), tok), parse_int(tok.substr(star + 1), tok));
+  }
+  return out;
+}
+
+std::string format_decisions(const std::vector<std::pair<int, int>>& d) {
+  std::string s;
+  for (const auto& [g, c] : d)
+    s += (s.empty() ? "" : ",") + std::to_string(g) + "*" + std::to_string(c);
+  return s;
+}
+
+AdaptiveSineCampaign::AdaptiveSineCampaign(std::vector<CampaignInput> inputs,
+                                           std::vector<int> excite, const SteppedSineOptions& fixed,
+                                           int pilot_cycles, int block, std::string run_id,
+                                           const std::vector<std::pair<int, int>>& decided)
+    : SegmentCampaign(std::move(inputs), fixed.sample_rate_hz),
+      block_(block),
+      run_id_(std::move(run_id)) {
+  SteppedSineOptions p = fixed;
+  p.min_cycles = pilot_cycles;
+  p.min_integrate_s = 0;
+  const std::vector<SineStep> plan = plan_stepped_sine(p), limits = plan_stepped_sine(fixed);
+  if (excite.empty()) throw InputError("campaign: no input to excite");
+  if (block < 1) throw InputError("campaign: block must be >= 1");
+  for (int i : excite) {
+    if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
+    for (size_t k = 0; k < plan.size(); ++k) {
+      steps_.emplace_back(i, plan[k]);
+      limit_.push_back(std::max(plan[k].n_cycles, limits[k].n_cycles));
+    }
+  }
+  ext_.resize(steps_.size());
+  build(run_id_);
+  for (const auto& [g, c] : decided) extend(g, c);
+}
+
+int AdaptiveSineCampaign::cycles(int g) const {
+  int n = step(g).n_cycles;
+  for (int c : ext_.at(size_t(g))) n += c;
+  return n;
+}
+
+void AdaptiveSineCampaign::extend(int g, int c) {
+  if (g < 0 || g >= n_steps())
+    throw InputError("adaptive step " + std::to_string(g) + " is outside the campaign's " +
+                     std::to_string(n_steps()) + " steps");
+  const int N1 = step(g).n_cycles;
+  if (c <= 0 || c % N1 != 0 || cycles(g) + int64_t(c) > (1 << 20))
+    throw InputError("adaptive step " + std::to_string(g) + ": " + std::to_string(c) +
+                     " more cycles is no multiple of its " + std::to_string(N1) +
+                     " (or beyond 2^20 in all)");
+  ext_[size_t(g)].push_back(c);
+  decided_.emplace_back(g, c);
+  build(run_id_);
+}
+
+void AdaptiveSineCampaign::build(const std::string& run_id) {
+  segs_.clear();
+  events_.clear();
+  total_ = 0;
+  start_.assign(steps_.size(), 0);
+  end_.assign(steps_.size(), 0);
+  double phi = 0.0;
+  int64_t seq = 0;
+  const int n_steps = int(steps_.size());
+  for (int g = 0; g < n_steps; ++g) {
+    const auto& [i, s] = steps_[size_t(g)];
+    StatusEvent e;
+    e.run_id = run_id;
+    e.sample_rate_hz = fs_;
+    e.step = g;
+    e.n_steps = n_steps;
+    e.frequency_hz = s.f_hz;
+    e.inputs = names();
+    e.amplitudes = only(i);
+    e.seq = seq++;
+    e.state = RunState::kSettle;
+    e.sample = total_;
+    e.ref_phase_rad = phi;
+    e.n_samples = s.settle_samples;
+    e.n_cycles = s.n_cycles;
+    start_[size_t(g)] = total_;
+    events_.push_back(e);
+    if (s.settle_samples > 0) phi = add_segment(i, s.settle_samples, s.f_hz, 0.0, phi);
+    std::vector<int> windows = {s.n_cycles};
+    windows.insert(windows.end(), ext_[size_t(g)].begin(), ext_[size_t(g)].end());
+    for (int c : windows) {
+      e.seq = seq++;
+      e.state = RunState::kIntegrate;
+      e.sample = total_;
+      e.ref_phase_rad = phi;
+      e.n_cycles = c;
+      e.n_samples = s.integrate_samples * (c / s.n_cycles);  // c: whole pilots, the same f
+      events_.push_back(e);
+      phi = add_segment(i, e.n_samples, s.f_hz, 0.0, phi);
+    }
+    end_[size_t(g)] = total_;
+    // The sine goes on to the next block boundary, where the next step's settle starts.
+    if (const int64_t fill = (block_ - total_ % block_) % block_; fill > 0)
+      phi = add_segment(i, fill, s.f_hz, 0.0, phi);
+  }
+  // One block at the operating point ends the run: the last step's decision comes before it.
+  total_ += block_;
+  finish(run_id, seq, n_steps, Excitation::kStepped);
+}
+
+AutoIntegrator::AutoIntegrator(AdaptiveSineCampaign& c, std::vector<std::string> outputs,
+                               AdaptiveSineOptions o, int64_t first_sample)
+    : c_(c), outputs_(std::move(outputs)), o_(o) {
+  o_.validate();
+  while (g_ < c_.n_steps() && c_.step_start(g_) < first_sample) ++g_;
+  feed_events();
+}
+
+AutoIntegrator::~AutoIntegrator() = default;
+
+int64_t AutoIntegrator::decision_sample() const {
+  return g_ < c_.n_steps() ? c_.window_end(g_) : -1;
+}
+
+std::pair<int64_t, int64_t> AutoIntegrator::needed_samples() const {
+  if (g_ >= c_.n_steps()) return {0, 0};
+  return {c_.step_start(g_), c_.window_end(g_)};
+}
+
+void AutoIntegrator::feed_events() {
+  if (g_ >= c_.n_steps()) return;
+  const int x = c_.input_of(g_);
+  auto& an = an_;
+  if (an.empty()) {  // the step's analysers, fresh for each step (they hold its samples only)
+    const std::string in = c_.inputs()[size_t(x)].name;
+    AnalyzerOptions ao;
+    ao.input = in;
+    for (const std::string& out : outputs_)
+      an.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao));
+    an.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao));
+  }
+  const auto& ev = c_.events();
+  while (fed_ < ev.size() && ev[fed_].sample < c_.window_end(g_) &&
+         ev[fed_].state != RunState::kDone) {
+    if (ev[fed_].step == g_)
+      for (auto& a : an) a->on_status(ev[fed_]);
+    ++fed_;
+  }
+}
+
+void AutoIntegrator::on_block(const Block& b) {
+  if (g_ >= c_.n_steps()) return;
+  if (b.start_sample + b.n_samples <= c_.step_start(g_) || b.start_sample >= c_.window_end(g_))
+    return;
+  for (auto& a : an_) {
+    a->on_block(b);
+    for (const FrdPoint& p : a->take_new_points()) {
+      Frd one;
+      one.pair = a->pair();
+      one.points = {p};
+      auto& [merged, windows] = merged_[a->pair()];
+      merged = windows == 0 ? one : merge_repeated(merged, one);
+      ++windows;
+    }
+  }
+}
+
+bool AutoIntegrator::decide() {
+  if (g_ >= c_.n_steps()) return true;
+  // Every pair's point of the window ending at E: the merged points hold all the step's cycles.
+  const int n = c_.cycles(g_);
+  const size_t windows = 1 + c_.extensions(g_).size();
+  double worst = -1;
+  for (const auto& a : an_) {
+    auto it = merged_.find(a->pair());
+    if (it == merged_.end() || it->second.second < windows) return false;  // not in yet
+    for (const FrdPoint& p : it->second.first.points)
+      if (p.valid && p.sigma > 0 && p.mag > 0) worst = std::max(worst, p.sigma / p.mag);
+  }
+  const double f = c_.step(g_).f_hz;
+  if (const int more = extension_cycles(n, worst, c_.limit(g_), o_); more > 0) {
+    c_.extend(g_, more);
+    feed_events();
+    return true;
+  }
+  StepResult r;
+  r.input = c_.inputs()[size_t(c_.input_of(g_))].name;
+  r.f_hz = f;
+  r.cycles = n;
+  r.worst_rel_sigma = worst;
+  r.state = worst < 0 ? "unusable" : worst <= o_.sigma_target ? "met" : "limit";
+  results_.push_back(r);
+  an_.clear();
+  merged_.clear();
+  ++g_;
+  feed_events();
+  return true;
+}
+
+}  // namespace fralab
