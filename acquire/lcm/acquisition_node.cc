@@ -378,20 +378,7 @@ Json AcquisitionNode::run() {
           {"retransmissions", flow.retransmissions()},
           {"items_retransmitted", flow.items_retransmitted()},
           {"plant_clock", free ? "free" : "lockstep"}};
-  if (ai) {
-    Json steps = Json::array();
-    int met = 0, limit = 0;
-    for (const auto& r : ai->results()) {
-      steps.push_back({{"input", r.input},
-                       {"f_hz", r.f_hz},
-                       {"cycles", r.cycles},
-                       {"worst_rel_sigma", r.worst_rel_sigma},
-                       {"state", r.state}});
-      met += r.state == "met";
-      limit += r.state == "limit";
-    }
-    sj["adaptive"] = {{"steps", steps}, {"met", met}, {"limit", limit}};
-  }
+  if (ai) sj["adaptive"] = adaptive_steps_json(ai->results());
   if (free) {
     sj["held_samples"] = tape_->held.count();
     sj["repeated_steps"] = repeats;

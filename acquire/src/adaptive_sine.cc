@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "fralab/analyze/repeats.h"
+#include "fralab/core/frd.h"
 #include "fralab/core/json_util.h"
 #include "fralab/core/text.h"
 
@@ -54,6 +55,53 @@ std::string format_decisions(const std::vector<std::pair<int, int>>& d) {
   for (const auto& [g, c] : d)
     s += (s.empty() ? "" : ",") + std::to_string(g) + "*" + std::to_string(c);
   return s;
+}
+
+namespace {
+
+const char* step_state(double worst, double target) {
+  return worst < 0 ? "unusable" : worst <= target ? "met" : "limit";
+}
+
+}  // namespace
+
+std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double target) {
+  std::map<int, AdaptiveStep> by_step;
+  for (const Frd& f : curves) {
+    const auto [e1, e2] = split_pair(f.pair);
+    for (const FrdPoint& p : f.points) {
+      if (p.input.empty() || !(e1 == p.input || (e1 == "u_" + p.input && e2 == p.input))) continue;
+      AdaptiveStep& s = by_step[p.step];
+      s.input = p.input;
+      s.step = p.step;
+      s.f_hz = p.w / (2 * std::numbers::pi);
+      s.cycles = std::max(s.cycles, p.n_cycles);
+      if (p.valid && p.sigma > 0 && p.mag > 0)
+        s.worst_rel_sigma = std::max(s.worst_rel_sigma, p.sigma / p.mag);
+    }
+  }
+  std::vector<AdaptiveStep> out;
+  for (auto& [g, s] : by_step) {
+    s.state = step_state(s.worst_rel_sigma, target);
+    out.push_back(s);
+  }
+  return out;
+}
+
+Json adaptive_steps_json(const std::vector<AdaptiveStep>& steps) {
+  Json v = Json::array();
+  int met = 0, limit = 0;
+  for (const AdaptiveStep& r : steps) {
+    v.push_back({{"input", r.input},
+                 {"step", r.step},
+                 {"f_hz", r.f_hz},
+                 {"cycles", r.cycles},
+                 {"worst_rel_sigma", r.worst_rel_sigma},
+                 {"state", r.state}});
+    met += r.state == "met";
+    limit += r.state == "limit";
+  }
+  return {{"steps", v}, {"met", met}, {"limit", limit}};
 }
 
 AdaptiveSineCampaign::AdaptiveSineCampaign(std::vector<CampaignInput> inputs,
@@ -226,12 +274,13 @@ bool AutoIntegrator::decide() {
     feed_events();
     return true;
   }
-  StepResult r;
+  AdaptiveStep r;
   r.input = c_.inputs()[size_t(c_.input_of(g_))].name;
+  r.step = g_;
   r.f_hz = f;
   r.cycles = n;
   r.worst_rel_sigma = worst;
-  r.state = worst < 0 ? "unusable" : worst <= o_.sigma_target ? "met" : "limit";
+  r.state = step_state(worst, o_.sigma_target);
   results_.push_back(r);
   an_.clear();
   merged_.clear();

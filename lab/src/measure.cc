@@ -235,8 +235,12 @@ MeasureResult run_measure(const MeasureOptions& given) {
     if (cut > 0)
       std::cerr << "fralab: " << tape << ": cut " << cut
                 << " bytes of a partly written last event\n";
-    const auto camp = make_campaign(model, ao, r.run_id);
-    rp = plan_resume(tape, r.run_id, *camp, ao.block);
+    if (ao.adaptive.enabled()) {
+      rp = plan_adaptive_resume(tape, r.run_id, model, ao);  // sets the decisions taken
+    } else {
+      const auto camp = make_campaign(model, ao, r.run_id);
+      rp = plan_resume(tape, r.run_id, *camp, ao.block);
+    }
     std::cerr << "fralab: resuming run " << r.run_id << ": " << rp.blocks_on_tape
               << " tape blocks on the tape; "
               << (rp.complete ? "every block is there"
@@ -480,14 +484,20 @@ MeasureResult run_measure(const MeasureOptions& given) {
       double(make_campaign(model, ao, r.run_id)->total_samples()) / o.acquire.sample_rate_hz;
   if (fs::exists(o.out + "/acquire.json")) {
     Json acq_summary = json_load_file(o.out + "/acquire.json");
-    if (ao.adaptive.enabled()) {  // the campaign grew while running: its length is the summary's
+    // The adaptive campaign grew while running: its length is the summary's.
+    if (ao.adaptive.enabled())
       engine_total = acq_summary.at("samples").get<double>() / o.acquire.sample_rate_hz;
-      if (acq_summary.contains("adaptive")) run["adaptive"] = acq_summary["adaptive"];
-    }
     run["retransmissions"] = acq_summary.value("retransmissions", 0);
     run["items_retransmitted"] = acq_summary.value("items_retransmitted", 0);
   }
   r.engine_time_s = engine_total;
+  if (ao.adaptive.enabled()) {  // each step as decided, from the curves (a resumed run's too)
+    std::vector<Frd> curves;
+    for (const std::string& p : r.pairs)
+      if (const std::string f = o.out + "/frd/" + pair_file_stem(p) + ".json"; fs::exists(f))
+        curves.push_back(load_frd(f));
+    run["adaptive"] = adaptive_steps_json(adaptive_steps(curves, ao.adaptive.sigma_target));
+  }
   run["state"] = "complete";
   run.erase("reason");
   run["engine_time_s"] = r.engine_time_s;

@@ -1,6 +1,7 @@
 #include "fralab/lab/resume.h"
 
 #include <filesystem>
+#include <map>
 #include <set>
 
 #include "fralab/acquire/acquisition.h"
@@ -14,6 +15,61 @@ int64_t cut_tape_to_whole_events(const std::string& path) {
   const auto size = int64_t(std::filesystem::file_size(path));
   if (offset < size) std::filesystem::resize_file(path, uintmax_t(offset));
   return size - offset;
+}
+
+namespace {
+
+// The run's status events on the tape (seq >= 0, each once, in seq order).
+std::vector<StatusEvent> tape_status(const std::string& tape, const std::string& run_id) {
+  std::map<int64_t, StatusEvent> by_seq;
+  read_tape_file(tape, [&](const TapeEvent& ev) {
+    if (ev.channel != kStatusChannel) return;
+    lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
+    try {
+      const excitation_status_t m = decode_checked<excitation_status_t>(&rb, ev.channel);
+      if (m.run_id == run_id && m.seq >= 0) by_seq.emplace(m.seq, from_msg(m));
+    } catch (const InputError& e) {
+      throw InputError(tape + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
+    }
+  });
+  std::vector<StatusEvent> v;
+  for (auto& [seq, e] : by_seq) v.push_back(std::move(e));
+  return v;
+}
+
+}  // namespace
+
+ResumePoint plan_adaptive_resume(const std::string& tape, const std::string& run_id, const Model& m,
+                                 AcquireOptions& o) {
+  const std::vector<StatusEvent> st = tape_status(tape, run_id);
+  std::vector<std::pair<int, int>> decided;
+  std::set<int> seen_window;
+  int open = 0;  // the first step not closed on the tape
+  for (const StatusEvent& e : st) {
+    if (e.state == RunState::kIntegrate && !seen_window.insert(e.step).second)
+      decided.emplace_back(e.step, e.n_cycles);  // a window after the step's first
+    if (e.state == RunState::kSettle) open = std::max(open, e.step);
+    if (e.state == RunState::kDone) open = std::max(open, e.step);
+  }
+  o.adaptive_decided = format_decisions(decided);
+  ResumePoint r = plan_resume(tape, run_id, *make_campaign(m, o, run_id), o.block);
+  if (r.complete) return r;
+  const int first = std::min(r.first_step, open);
+  std::vector<std::pair<int, int>> before;
+  for (const auto& d : decided)
+    if (d.first < first) before.push_back(d);
+  o.adaptive_decided = format_decisions(before);
+  const auto c = make_campaign(m, o, run_id);
+  const auto& ac = dynamic_cast<const AdaptiveSineCampaign&>(*c);
+  if (first < ac.n_steps()) {
+    r.first_step = first;
+    r.first_block = std::min(ac.step_start(first) / o.block, r.blocks_on_tape);
+    r.first_status = 0;
+    while (r.first_status < int64_t(c->events().size()) &&
+           c->events()[size_t(r.first_status)].sample < r.first_block * o.block)
+      ++r.first_status;
+  }
+  return r;
 }
 
 ResumePoint plan_resume(const std::string& tape, const std::string& run_id, const Campaign& c,

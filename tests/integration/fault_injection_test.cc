@@ -184,6 +184,44 @@ TEST(Faults, AKilledMultisineRunResumesToTheUninterruptedNumbers) {
   EXPECT_EQ(json_load_file(d + "/run.json")["state"], "complete");
 }
 
+// Issue 13 item 4: an adaptive stepped sine's campaign grows with the decisions it takes while
+// running; killed mid-run and resumed, it reads them back from the tape, takes the open step's
+// again on the same samples, and ends identical to an undisturbed run: every frd and tf file, the
+// transfer matrix, and each step's cycles (Wf over 0.5-20 Hz: five steps extended, one at its
+// limit; 210 s of engine time, paced at 10x).
+TEST(Faults, AKilledAdaptiveRunResumesToTheUninterruptedDecisions) {
+  const std::string run =
+      " measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3 --seed 3"
+      " --excitation stepped --sigma-target 0.01 --min-integrate-s 16 ";
+  const std::string ref = tmpdir("adaptive_ref"), d = tmpdir("adaptive_kill");
+  auto c = sh(kBin + "/fralab" + run + "--out " + ref);
+  ASSERT_EQ(c.status, 0) << c.output;
+  c = sh("(" + kBin + "/fralab" + run + "--speed 10 --out " + d + " > " + d +
+         ".first 2>&1 & lp=$!; sleep 8; pkill -KILL -f '[f]ralab-acquire.*" + d +
+         "'; wait $lp; echo exit=$?)");
+  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(d + ".first");
+  c = sh(kBin + "/fralab measure --resume " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("resuming run"));
+  int files = 0;
+  for (const char* sub : {"frd", "tf"})
+    for (const auto& f : fs::directory_iterator(ref + "/" + sub)) {
+      const std::string name = std::string(sub) + "/" + f.path().filename().string();
+      EXPECT_EQ(slurp(f.path().string()), slurp(d + "/" + name)) << name;
+      ++files;
+    }
+  EXPECT_GT(files, 10);
+  EXPECT_EQ(slurp(ref + "/transfer_matrix.json"), slurp(d + "/transfer_matrix.json"));
+  const Json a = json_load_file(ref + "/run.json"), b = json_load_file(d + "/run.json");
+  EXPECT_EQ(b["state"], "complete");
+  EXPECT_EQ(a["engine_time_s"], b["engine_time_s"]);
+  EXPECT_EQ(a["adaptive"], b["adaptive"]);  // every step's cycles, sigma and state
+  ASSERT_EQ(a["adaptive"]["steps"].size(), 6u);
+  int extended = 0;
+  for (const auto& s : a["adaptive"]["steps"]) extended += s["cycles"].get<int>() > 4;
+  EXPECT_GE(extended, 3);  // the decisions the resumed run had to read back or take again
+}
+
 // Two runs forced onto one URL (one port: Linux hands both runs' datagrams to both): every process
 // takes only its run's messages, and both runs come out identical to the undisturbed one.
 TEST(Faults, TwoRunsSharingAPortNeverMix) {

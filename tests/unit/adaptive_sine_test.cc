@@ -182,6 +182,16 @@ TEST(AdaptiveSine, EachStepStopsOnTargetOrAtItsLimitWithTheAnalysersNumbers) {
     EXPECT_LE(r.cycles, plan[g].n_cycles);
     extended += r.cycles > 4;
   }
+  // The run's record, computed from the curves alone (a resumed run's too), is the decisions'.
+  const auto from_curves = adaptive_steps(curves, t);
+  ASSERT_EQ(from_curves.size(), run.adaptive.size());
+  for (size_t g = 0; g < from_curves.size(); ++g) {
+    EXPECT_EQ(from_curves[g].step, run.adaptive[g].step);
+    EXPECT_EQ(from_curves[g].cycles, run.adaptive[g].cycles);
+    EXPECT_EQ(from_curves[g].worst_rel_sigma, run.adaptive[g].worst_rel_sigma);
+    EXPECT_EQ(from_curves[g].state, run.adaptive[g].state);
+    EXPECT_NEAR(from_curves[g].f_hz, run.adaptive[g].f_hz, 1e-12 * run.adaptive[g].f_hz);
+  }
   // The case covers all three outcomes: quiet steps done at the pilot, steps extended to meet the
   // target, steps at their limit.
   EXPECT_GE(met, 2);

@@ -34,7 +34,7 @@ Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor 
 struct TapeRun {
   std::vector<StatusEvent> events;
   std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
-  std::vector<AutoIntegrator::StepResult> adaptive;  // an adaptive stepped sine's steps
+  std::vector<AdaptiveStep> adaptive;  // an adaptive stepped sine's steps
 };
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
                       const SteppedSineOptions& so, bool noise, uint64_t seed, int block = 100,

@@ -36,6 +36,7 @@
 
 #include "fralab/acquire/campaign.h"
 #include "fralab/analyze/pair_analyzer.h"
+#include "fralab/core/json_util.h"
 
 namespace fralab {
 
@@ -55,6 +56,26 @@ int extension_cycles(int cycles, double worst_rel_sigma, int limit, const Adapti
 /// "G*C,G*C,...": step G extended by C cycles, in the order taken. InputError naming the token.
 std::vector<std::pair<int, int>> parse_decisions(const std::string& text);
 std::string format_decisions(const std::vector<std::pair<int, int>>& d);
+
+/// A step of an adaptive run, as decided: its input, frequency, cycles, worst sigma / |G| over the
+/// pairs of its input, and "met", "limit" (short of the target at its limit) or "unusable" (no
+/// point with a sigma).
+struct AdaptiveStep {
+  std::string input;
+  int step = 0;
+  double f_hz = 0;
+  int cycles = 0;
+  double worst_rel_sigma = -1;
+  std::string state;
+};
+
+/// An adaptive run's steps from its curves (the analysers' points, a step's windows merged): per
+/// step (FrdPoint::step) of input X, over the points of pairs X:O and u_X:X (the decision's
+/// pairs), what AutoIntegrator decided on. In step order.
+std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double sigma_target);
+
+/// Steps as run.json and the acquisition's summary write them: {"steps": [...], "met", "limit"}.
+Json adaptive_steps_json(const std::vector<AdaptiveStep>& steps);
 
 class AdaptiveSineCampaign : public SegmentCampaign {
  public:
@@ -109,16 +130,8 @@ class AutoIntegrator {
   /// Takes the pending decision when every pair's point of the window is in (the campaign
   /// extended, or the step ended); false while tape is missing.
   bool decide();
-  /// Per step decided: its input, frequency, cycles, worst sigma / |G|, "met", "limit" or
-  /// "unusable"; and totals.
-  struct StepResult {
-    std::string input;
-    double f_hz = 0;
-    int cycles = 0;
-    double worst_rel_sigma = -1;
-    std::string state;
-  };
-  const std::vector<StepResult>& results() const { return results_; }
+  /// The steps decided so far.
+  const std::vector<AdaptiveStep>& results() const { return results_; }
 
  private:
   void feed_events();
@@ -130,7 +143,7 @@ class AutoIntegrator {
   std::vector<std::unique_ptr<PairAnalyzer>> an_;  // the step's pairs
   // per pair: the step's windows merged (analyze/repeats.h), and how many are in
   std::map<std::string, std::pair<Frd, size_t>> merged_;
-  std::vector<StepResult> results_;
+  std::vector<AdaptiveStep> results_;
 };
 
 }  // namespace fralab

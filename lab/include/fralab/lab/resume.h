@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <string>
 
+#include "fralab/acquire/acquisition.h"
 #include "fralab/acquire/campaign.h"
 
 namespace fralab {
@@ -33,5 +34,14 @@ int64_t cut_tape_to_whole_events(const std::string& path);
 /// command block). InputError naming the tape when it holds nothing of that run.
 ResumePoint plan_resume(const std::string& tape, const std::string& run_id, const Campaign& c,
                         int block);
+
+/// The same for an adaptive stepped sine (acquire/adaptive_sine.h), whose campaign grew with the
+/// decisions taken while it ran: they are read back from the tape's integrate statuses (a step's
+/// windows after its first), the resume point planned on the campaign they make, and moved back
+/// to the first step not closed on the tape (no later step's settle there: its last decision may
+/// not have been taken). `o.adaptive_decided` is set to the decisions before that step (the
+/// resumed acquisition takes the others again, on the same samples: the same decisions).
+ResumePoint plan_adaptive_resume(const std::string& tape, const std::string& run_id, const Model& m,
+                                 AcquireOptions& o);
 
 }  // namespace fralab
