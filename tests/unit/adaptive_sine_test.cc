@@ -221,5 +221,33 @@ TEST(AdaptiveSine, TheSameTapeMakesTheSameDecisions) {
   EXPECT_TRUE(differs);
 }
 
+// Stopping when the estimated sigma meets the target favours low estimates; the points must still
+// be honest. Over 40 noise seeds of the 9-step run (360 points), the share of merged points within
+// 3 sigma of the truth (a complex Gaussian error: 1 - e^-9 ideally; a sigma estimated from K = 4
+// to 8 blocks has heavier tails) stays at least 0.98 and within 0.01 of the fixed plan's, and the
+// adaptive runs take less engine time. Measured: fixed 0.989, adaptive (1 %) 0.986; 71 s and 51 s.
+TEST(AdaptiveSine, StoppingOnTargetKeepsTheSigmasHonest) {
+  const Model m = noisy_plant(0.002);
+  auto measure = [&](double t, double* engine_s) {
+    int n = 0, within = 0;
+    for (uint64_t seed = 1; seed <= 40; ++seed) {
+      const auto run = fralab::testing::simulate_campaign(m, adaptive_run(t), true, seed);
+      *engine_s += double(run.blocks.size()) * 100 / 1000.0;
+      const auto curves = fralab::testing::analyse_run(run, {"u:y"});
+      for (const FrdPoint& p : curves[0].points) {
+        const auto truth = foh_sampled_response(m.paths[0].tf, p.w, 1000.0);
+        ++n;
+        within += std::abs(p.value() - truth) < 3 * p.sigma;
+      }
+    }
+    return double(within) / n;
+  };
+  double fixed_s = 0, adaptive_s = 0;
+  const double fixed = measure(0, &fixed_s), adaptive = measure(0.01, &adaptive_s);
+  EXPECT_GE(adaptive, 0.98);
+  EXPECT_GE(adaptive, fixed - 0.01);
+  EXPECT_LT(adaptive_s, 0.8 * fixed_s);
+}
+
 }  // namespace
 }  // namespace fralab

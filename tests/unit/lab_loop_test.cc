@@ -99,6 +99,61 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   }
 }
 
+// The adaptive stepped sine: the acquisition decides on the tape it watches while the plant and an
+// analyser run; the live curves, the decisions and the campaign's length equal, bit for bit, the
+// same run decided offline (simulate_campaign, the same AutoIntegrator on the same samples).
+TEST(LabLoop, TheAdaptiveAcquisitionDecidesAsTheOfflineRun) {
+  Model m = plant_model();
+  m.outputs[0].noise_rms = 0.002;
+  AcquireOptions o;
+  o.band = "0.5:20";
+  o.points_per_decade = 5;
+  o.min_integrate_s = 4.0;
+  o.slowest_time_constant_s = 0.5;
+  o.amplitude_pct = 2.0;
+  o.adaptive.sigma_target = 0.01;
+  const auto camp = make_campaign(m, o, "memq-run");
+  auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(camp.get());
+  ASSERT_NE(adaptive, nullptr);
+  AutoIntegrator integrator(*adaptive, {"y"}, o.adaptive);
+
+  lcm::LCM bus("memq://");
+  ASSERT_TRUE(bus.good());
+  SimulatorOptions sim;
+  sim.seed = 3;
+  PlantNode plant(bus, bus, LockstepPlant(m, sim, "memq-run"));
+  AnalyzerNode analyser(bus, bus, {"u:y", "u_u:u"}, {}, "analyze", "memq-run");
+  AcquisitionLoopOptions lo;
+  lo.run_id = "memq-run";
+  lo.consumers = {"analyze"};
+  lo.acquire = o;
+  lo.auto_integrator = &integrator;
+  AcquisitionNode acquisition(bus, bus, *camp, lo);
+  plant.announce_ready();
+  analyser.announce_ready();
+  const Json summary = acquisition.run();
+  EXPECT_EQ(plant.error(), "");
+  ASSERT_TRUE(analyser.done());
+  const std::vector<Frd> live = analyser.finish();
+
+  const auto offline = fralab::testing::simulate_campaign(m, o, true, 3);
+  EXPECT_EQ(summary["samples"], int64_t(offline.blocks.size()) * o.block);
+  EXPECT_EQ(summary["adaptive"], adaptive_steps_json(offline.adaptive));
+  const auto want = fralab::testing::analyse_run(offline, {"u:y", "u_u:u"});
+  ASSERT_EQ(live.size(), want.size());
+  int extended = 0;
+  for (size_t k = 0; k < live.size(); ++k) {
+    ASSERT_EQ(live[k].points.size(), 9u) << live[k].pair;  // one per step, windows merged
+    ASSERT_EQ(live[k].points.size(), want[k].points.size());
+    for (size_t i = 0; i < want[k].points.size(); ++i) {
+      EXPECT_EQ(live[k].points[i].mag, want[k].points[i].mag) << live[k].pair << " " << i;
+      EXPECT_EQ(live[k].points[i].sigma, want[k].points[i].sigma) << live[k].pair << " " << i;
+      extended += live[k].points[i].n_cycles > 4;
+    }
+  }
+  EXPECT_GE(extended, 4);  // decisions were taken, not only pilots
+}
+
 TEST(LabLoop, AConsumerThatNeverSaysReadyIsNamed) {
   const Model m = plant_model();
   AcquireOptions o;
