@@ -17,14 +17,29 @@ void AdaptiveSineOptions::validate() const {
   if (pilot_cycles < 2) throw InputError("--pilot-cycles must be >= 2 (sigma needs two blocks)");
 }
 
-int extension_cycles(int n, double s, int limit, const AdaptiveSineOptions& o) {
+StepDecision decide_step(int n, const std::vector<double>& rel, int limit,
+                         const AdaptiveSineOptions& o) {
   const double t = o.sigma_target;
-  if (!(s > t) || n < 1) return 0;  // on target, or nothing usable to judge by
-  const double needed = std::min(double(n) * (s / t) * (s / t), 1e9);  // cycles in all
-  const int N1 = o.pilot_cycles;
-  const int room = (limit - n) / N1;
-  const int m = int(std::min<double>(room, std::ceil((needed - n) / N1)));
-  return std::max(0, m) * N1;
+  StepDecision d;
+  for (double s : rel) {
+    d.worst_all = std::max(d.worst_all, s);
+    if (s * std::sqrt(double(n) / std::max(limit, n)) > kUndetectable)
+      ++d.undetectable;  // |G| under 3 sigma even at the limit: nothing there to measure
+    else
+      d.worst = std::max(d.worst, s);
+  }
+  if (d.worst > t) {
+    const double needed = std::min(double(n) * (d.worst / t) * (d.worst / t), 1e9);  // in all
+    const int N1 = o.pilot_cycles;
+    const int room = (limit - n) / N1;
+    d.more = std::max(0, int(std::min<double>(room, std::ceil((needed - n) / N1)))) * N1;
+  }
+  if (d.more == 0)
+    d.state = rel.empty()                    ? "unusable"
+              : d.worst >= 0 && d.worst <= t ? "met"
+              : limit - n < o.pilot_cycles   ? "limit"
+                                             : "undetectable";
+  return d;
 }
 
 namespace {
@@ -57,32 +72,30 @@ std::string format_decisions(const std::vector<std::pair<int, int>>& d) {
   return s;
 }
 
-namespace {
-
-const char* step_state(double worst, double target) {
-  return worst < 0 ? "unusable" : worst <= target ? "met" : "limit";
-}
-
-}  // namespace
-
-std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double target) {
-  std::map<int, AdaptiveStep> by_step;
+std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double target,
+                                         const std::vector<int>& limits) {
+  AdaptiveSineOptions o;
+  o.sigma_target = target;
+  std::map<int, std::pair<AdaptiveStep, std::vector<double>>> by_step;
   for (const Frd& f : curves) {
     const auto [e1, e2] = split_pair(f.pair);
     for (const FrdPoint& p : f.points) {
       if (p.input.empty() || !(e1 == p.input || (e1 == "u_" + p.input && e2 == p.input))) continue;
-      AdaptiveStep& s = by_step[p.step];
+      auto& [s, rel] = by_step[p.step];
       s.input = p.input;
       s.step = p.step;
       s.f_hz = p.w / (2 * std::numbers::pi);
       s.cycles = std::max(s.cycles, p.n_cycles);
-      if (p.valid && p.sigma > 0 && p.mag > 0)
-        s.worst_rel_sigma = std::max(s.worst_rel_sigma, p.sigma / p.mag);
+      if (p.valid && p.sigma > 0 && p.mag > 0) rel.push_back(p.sigma / p.mag);
     }
   }
   std::vector<AdaptiveStep> out;
-  for (auto& [g, s] : by_step) {
-    s.state = step_state(s.worst_rel_sigma, target);
+  for (auto& [g, sr] : by_step) {
+    auto& [s, rel] = sr;
+    if (g < 0 || g >= int(limits.size()))
+      throw InputError("adaptive step " + std::to_string(g) + " is outside the run's " +
+                       std::to_string(limits.size()) + " steps");
+    s.decision = decide_step(s.cycles, rel, limits[size_t(g)], o);
     out.push_back(s);
   }
   return out;
@@ -90,18 +103,21 @@ std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double 
 
 Json adaptive_steps_json(const std::vector<AdaptiveStep>& steps) {
   Json v = Json::array();
-  int met = 0, limit = 0;
+  std::map<std::string, int> count;
   for (const AdaptiveStep& r : steps) {
     v.push_back({{"input", r.input},
                  {"step", r.step},
                  {"f_hz", r.f_hz},
                  {"cycles", r.cycles},
-                 {"worst_rel_sigma", r.worst_rel_sigma},
-                 {"state", r.state}});
-    met += r.state == "met";
-    limit += r.state == "limit";
+                 {"worst_rel_sigma", r.decision.worst},
+                 {"worst_rel_sigma_all_pairs", r.decision.worst_all},
+                 {"undetectable_pairs", r.decision.undetectable},
+                 {"state", r.decision.state}});
+    ++count[r.decision.state];
   }
-  return {{"steps", v}, {"met", met}, {"limit", limit}};
+  Json j = {{"steps", v}};
+  for (const char* k : {"met", "limit", "undetectable", "unusable"}) j[k] = count[k];
+  return j;
 }
 
 AdaptiveSineCampaign::AdaptiveSineCampaign(std::vector<CampaignInput> inputs,
@@ -261,26 +277,24 @@ bool AutoIntegrator::decide() {
   // Every pair's point of the window ending at E: the merged points hold all the step's cycles.
   const int n = c_.cycles(g_);
   const size_t windows = 1 + c_.extensions(g_).size();
-  double worst = -1;
+  std::vector<double> rel;
   for (const auto& a : an_) {
     auto it = merged_.find(a->pair());
     if (it == merged_.end() || it->second.second < windows) return false;  // not in yet
     for (const FrdPoint& p : it->second.first.points)
-      if (p.valid && p.sigma > 0 && p.mag > 0) worst = std::max(worst, p.sigma / p.mag);
+      if (p.valid && p.sigma > 0 && p.mag > 0) rel.push_back(p.sigma / p.mag);
   }
-  const double f = c_.step(g_).f_hz;
-  if (const int more = extension_cycles(n, worst, c_.limit(g_), o_); more > 0) {
-    c_.extend(g_, more);
+  AdaptiveStep r;
+  r.decision = decide_step(n, rel, c_.limit(g_), o_);
+  if (r.decision.more > 0) {
+    c_.extend(g_, r.decision.more);
     feed_events();
     return true;
   }
-  AdaptiveStep r;
   r.input = c_.inputs()[size_t(c_.input_of(g_))].name;
   r.step = g_;
-  r.f_hz = f;
+  r.f_hz = c_.step(g_).f_hz;
   r.cycles = n;
-  r.worst_rel_sigma = worst;
-  r.state = step_state(worst, o_.sigma_target);
   results_.push_back(r);
   an_.clear();
   merged_.clear();

@@ -14,19 +14,22 @@
 // before the next block goes out (at most one block of filler a step). One block with every input
 // at its operating point ends the run (so the last step is decided before the final block).
 //
-// The decision (AutoIntegrator, extension_cycles): after each window of step g the pairs of its
-// input (X:O for every output O, and u_X:X) are analysed as the analysers do (pair_analyzer.h),
-// each pair's windows of the step merged by inverse variance (analyze/repeats.h). With n the
-// cycles integrated and s the largest sigma / |G| over those pairs, the target t needs n (s / t)^2
-// cycles in all (the noise of a Fourier filter's mean falls as 1 / sqrt(cycles)); the step goes on
+// The decision (AutoIntegrator, decide_step): after each window of step g the pairs of its input
+// (X:O for every output O, and u_X:X) are analysed as the analysers do (pair_analyzer.h), each
+// pair's windows of the step merged by inverse variance (analyze/repeats.h). With n the cycles
+// integrated so far and s_p pair p's sigma / |G|, the noise of a Fourier filter's mean falls as
+// 1 / sqrt(cycles), so p would reach s_p sqrt(n / limit) at the step's limit. A pair still above
+// 1/3 there (|G| under 3 sigma: an absent path, or one buried in noise at this frequency) does
+// not hold the step: however long it is integrated it measures nothing. With s the largest s_p
+// of the pairs that hold it, the target t needs n (s / t)^2 cycles in all, and the step goes on
 // for
-//   c = N1 ceil((n (s / t)^2 - n) / N1) cycles, at most the step's limit - n rounded down to a
-//   multiple of N1,
+//   c = N1 ceil((n (s / t)^2 - n) / N1) cycles, at most limit - n rounded down to whole N1,
 // the limit being the fixed stepped sine's cycles at that step (max(min_cycles, ceil(
-// min_integrate_s f)), acquire/campaign.h): an adaptive run never integrates a step longer than
-// the fixed one would, and stops early where the target is met. c = 0 (s <= t, or at the limit)
-// ends the step. Points that are invalid or carry no sigma do not count. Every decision depends on
-// the tape's samples only, so a run, its replay and its resumption make the same decisions.
+// min_integrate_s f)), acquire/campaign.h): every pair with a response gets the target or the
+// fixed run's integration, an adaptive run never integrates a step longer than the fixed one
+// would, and quiet steps stop early. c = 0 ends the step. Points that are invalid or carry no
+// sigma do not count. Every decision depends on the tape's samples only, so a run, its replay and
+// its resumption make the same decisions.
 #pragma once
 
 #include <map>
@@ -48,33 +51,45 @@ struct AdaptiveSineOptions {
   void validate() const;
 };
 
-/// The extension after `cycles` integrated with worst relative sigma `worst_rel_sigma` (< 0: no
-/// usable point) at a step whose limit is `limit` cycles: the rule above, 0 to end the step.
-int extension_cycles(int cycles, double worst_rel_sigma, int limit, const AdaptiveSineOptions& o);
+/// A step's decision after `cycles` integrated, from each pair's sigma / |G| (`rel_sigmas`, the
+/// pairs with a usable point) and its cycle limit: the rule above.
+/// sigma / |G| beyond which a response is not told from zero (|G| < 3 sigma).
+inline constexpr double kUndetectable = 1.0 / 3.0;
+
+struct StepDecision {
+  int more = 0;           // cycles to go on for; 0: the step ends
+  double worst = -1;      // largest sigma / |G| of the pairs that hold the step (-1: none)
+  double worst_all = -1;  // ... of every pair
+  int undetectable = 0;   // pairs whose |G| stays under 3 sigma even at the limit
+  std::string state;      // when it ends: "met"; "limit" (short, no whole pilot left below its
+                          // limit); "undetectable" (ended before its limit: no pair holds the
+                          // step); "unusable" (no pair with a sigma)
+};
+StepDecision decide_step(int cycles, const std::vector<double>& rel_sigmas, int limit,
+                         const AdaptiveSineOptions& o);
 
 /// Decisions taken (what a resumed acquisition is given, AcquireOptions's adaptive_decided):
 /// "G*C,G*C,...": step G extended by C cycles, in the order taken. InputError naming the token.
 std::vector<std::pair<int, int>> parse_decisions(const std::string& text);
 std::string format_decisions(const std::vector<std::pair<int, int>>& d);
 
-/// A step of an adaptive run, as decided: its input, frequency, cycles, worst sigma / |G| over the
-/// pairs of its input, and "met", "limit" (short of the target at its limit) or "unusable" (no
-/// point with a sigma).
+/// A step of an adaptive run, as decided: its input, frequency, cycles and decision.
 struct AdaptiveStep {
   std::string input;
   int step = 0;
   double f_hz = 0;
   int cycles = 0;
-  double worst_rel_sigma = -1;
-  std::string state;
+  StepDecision decision;
 };
 
 /// An adaptive run's steps from its curves (the analysers' points, a step's windows merged): per
-/// step (FrdPoint::step) of input X, over the points of pairs X:O and u_X:X (the decision's
-/// pairs), what AutoIntegrator decided on. In step order.
-std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double sigma_target);
+/// step (FrdPoint::step) of input X, over the points of pairs X:O and u_X:X, with `limits` each
+/// step's cycle limit (AdaptiveSineCampaign::limit), what AutoIntegrator decided on. In step order.
+std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double sigma_target,
+                                         const std::vector<int>& limits);
 
-/// Steps as run.json and the acquisition's summary write them: {"steps": [...], "met", "limit"}.
+/// Steps as run.json and the acquisition's summary write them: {"steps": [...], and the count of
+/// steps per state}.
 Json adaptive_steps_json(const std::vector<AdaptiveStep>& steps);
 
 class AdaptiveSineCampaign : public SegmentCampaign {
