@@ -176,20 +176,8 @@ void AdaptiveSineCampaign::build(const std::string& run_id) {
   const int n_steps = int(steps_.size());
   for (int g = 0; g < n_steps; ++g) {
     const auto& [i, s] = steps_[size_t(g)];
-    StatusEvent e;
-    e.run_id = run_id;
-    e.sample_rate_hz = fs_;
-    e.step = g;
-    e.n_steps = n_steps;
-    e.frequency_hz = s.f_hz;
-    e.inputs = names();
-    e.amplitudes = only(i);
+    StatusEvent e = sine_step_settle(run_id, i, g, n_steps, s, phi);
     e.seq = seq++;
-    e.state = RunState::kSettle;
-    e.sample = total_;
-    e.ref_phase_rad = phi;
-    e.n_samples = s.settle_samples;
-    e.n_cycles = s.n_cycles;
     start_[size_t(g)] = total_;
     events_.push_back(e);
     if (s.settle_samples > 0) phi = add_segment(i, s.settle_samples, s.f_hz, 0.0, phi);

@@ -68,6 +68,24 @@ double SegmentCampaign::add_segment(int input, int64_t length, double fa, double
   return std::fmod(phi0 + 2 * std::numbers::pi * cycles, 2 * std::numbers::pi);
 }
 
+StatusEvent SegmentCampaign::sine_step_settle(const std::string& run_id, int i, int step,
+                                              int n_steps, const SineStep& s, double phi) const {
+  StatusEvent e;
+  e.run_id = run_id;
+  e.sample_rate_hz = fs_;
+  e.step = step;
+  e.n_steps = n_steps;
+  e.frequency_hz = s.f_hz;
+  e.n_cycles = s.n_cycles;
+  e.inputs = names();
+  e.amplitudes = only(i);
+  e.state = RunState::kSettle;
+  e.sample = total_;
+  e.ref_phase_rad = phi;
+  e.n_samples = s.settle_samples;
+  return e;
+}
+
 std::vector<std::string> SegmentCampaign::names() const {
   std::vector<std::string> v;
   for (const auto& in : inputs_) v.push_back(in.name);
@@ -136,20 +154,8 @@ SteppedSineCampaign::SteppedSineCampaign(std::vector<CampaignInput> inputs, std:
     if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
     for (const SineStep& s : steps) {
       const double dphi = 2 * std::numbers::pi * s.f_hz / fs;
-      StatusEvent e;
-      e.run_id = run_id;
-      e.sample_rate_hz = fs;
-      e.step = global++;
-      e.n_steps = n_steps;
-      e.frequency_hz = s.f_hz;
-      e.n_cycles = s.n_cycles;
-      e.inputs = names();
-      e.amplitudes = only(i);
+      StatusEvent e = sine_step_settle(run_id, i, global++, n_steps, s, phi);
       e.seq = seq++;
-      e.state = RunState::kSettle;
-      e.sample = total_;
-      e.ref_phase_rad = phi;
-      e.n_samples = s.settle_samples;
       events_.push_back(e);
       e.seq = seq++;
       e.state = RunState::kIntegrate;

@@ -86,6 +86,46 @@ TEST(AdaptiveSine, DecisionsReadBackAsWritten) {
   EXPECT_THROW(target(NAN).validate(), InputError);
 }
 
+Model noisy_plant(double noise_rms);
+
+TEST(AdaptiveSine, OptionsThatCannotWorkAreRefusedByName) {
+  auto refused = [](AcquireOptions o, const std::string& what) {
+    try {
+      o.validate();
+      ADD_FAILURE() << "taken: " << what;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(what));
+    }
+  };
+  AcquireOptions o;
+  o.adaptive.sigma_target = 0.01;
+  EXPECT_NO_THROW(o.validate());
+  AcquireOptions bad = o;
+  bad.excitation = Excitation::kMultisine;
+  refused(bad, "--excitation stepped");
+  bad = o;
+  bad.free_running = true;
+  bad.speed = 1;
+  refused(bad, "--free-running");
+  bad = o;
+  bad.adaptive.pilot_cycles = 1;
+  refused(bad, "--pilot-cycles");
+  bad = o;
+  bad.adaptive.sigma_target = NAN;
+  refused(bad, "--sigma-target");
+  bad = o;
+  bad.adaptive_decided = "3*x";
+  refused(bad, "\"3*x\"");
+  bad = AcquireOptions();
+  bad.adaptive_decided = "3*4";
+  refused(bad, "without --sigma-target");
+  // A decision the campaign cannot take (not whole pilots, no such step) is refused by name.
+  o.adaptive_decided = "2*6";
+  EXPECT_THROW(make_campaign(noisy_plant(0), o, "r"), InputError);
+  o.adaptive_decided = "999*4";
+  EXPECT_THROW(make_campaign(noisy_plant(0), o, "r"), InputError);
+}
+
 std::vector<CampaignInput> one_input() {
   CampaignInput in;
   in.name = "u";

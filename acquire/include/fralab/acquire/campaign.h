@@ -98,6 +98,10 @@ class SegmentCampaign : public Campaign {
   double add_segment(int input, int64_t length, double fa, double beta, double phi0);
   /// Closes the run with its "done" event.
   void finish(const std::string& run_id, int64_t seq, int n_steps, Excitation excitation);
+  /// The settle status of a sine step exciting input i, starting now (at total_) with reference
+  /// phase phi (seq left for the caller): what a stepped sine's step status says.
+  StatusEvent sine_step_settle(const std::string& run_id, int i, int step, int n_steps,
+                               const SineStep& s, double phi) const;
   /// Every input's name, and amplitudes with only input i excited.
   std::vector<std::string> names() const;
   std::vector<double> only(int i) const;
