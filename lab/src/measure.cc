@@ -497,9 +497,9 @@ MeasureResult run_measure(const MeasureOptions& given) {
       if (const std::string f = o.out + "/frd/" + pair_file_stem(p) + ".json"; fs::exists(f))
         curves.push_back(load_frd(f));
     const auto camp = make_campaign(model, ao, r.run_id);
+    const auto& adaptive = dynamic_cast<const AdaptiveSineCampaign&>(*camp);
     std::vector<int> limits;
-    for (int g = 0; g < dynamic_cast<const AdaptiveSineCampaign&>(*camp).n_steps(); ++g)
-      limits.push_back(dynamic_cast<const AdaptiveSineCampaign&>(*camp).limit(g));
+    for (int g = 0; g < adaptive.n_steps(); ++g) limits.push_back(adaptive.limit(g));
     run["adaptive"] = adaptive_steps_json(adaptive_steps(curves, ao.adaptive.sigma_target, limits));
   }
   run["state"] = "complete";
