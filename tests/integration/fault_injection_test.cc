@@ -159,13 +159,12 @@ INSTANTIATE_TEST_SUITE_P(Faults, Kill,
 // resumed run must end identical to the undisturbed one (every frd and tf file, at least
 // `min_files`, and the transfer matrix). Returns {REF, D}.
 std::pair<std::string, std::string> kill_and_resume(const std::string& run, const std::string& name,
-                                                    int speed, double kill_after_s,
-                                                    int min_files) {
+                                                    int speed, double kill_after_s, int min_files) {
   const std::string ref = tmpdir(name + "_ref"), d = tmpdir(name + "_kill");
   auto c = sh(kBin + "/fralab" + run + "--out " + ref);
   EXPECT_EQ(c.status, 0) << c.output;
-  c = sh("(" + kBin + "/fralab" + run + "--speed " + std::to_string(speed) + " --out " + d +
-         " > " + d + ".first 2>&1 & lp=$!; sleep " + std::to_string(kill_after_s) +
+  c = sh("(" + kBin + "/fralab" + run + "--speed " + std::to_string(speed) + " --out " + d + " > " +
+         d + ".first 2>&1 & lp=$!; sleep " + std::to_string(kill_after_s) +
          "; pkill -KILL -f '[f]ralab-acquire.*" + d + "'; wait $lp; echo exit=$?)");
   EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(d + ".first");
   c = sh(kBin + "/fralab measure --resume " + d);

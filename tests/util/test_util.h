@@ -33,7 +33,7 @@ Model siso_model(const Tf& path, const Tf* actuator = nullptr, const Tf* sensor 
 /// `excitation` "stepped", "sweep", "multisine" or "multisine:zippered" (the multisine's design).
 struct TapeRun {
   std::vector<StatusEvent> events;
-  std::vector<Block> blocks;  // tape blocks: u_<inputs>, positions, outputs
+  std::vector<Block> blocks;           // tape blocks: u_<inputs>, positions, outputs
   std::vector<AdaptiveStep> adaptive;  // an adaptive stepped sine's steps
 };
 TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
