@@ -51,11 +51,11 @@ struct AdaptiveSineOptions {
   void validate() const;
 };
 
-/// A step's decision after `cycles` integrated, from each pair's sigma / |G| (`rel_sigmas`, the
-/// pairs with a usable point) and its cycle limit: the rule above.
 /// sigma / |G| beyond which a response is not told from zero (|G| < 3 sigma).
 inline constexpr double kUndetectable = 1.0 / 3.0;
 
+/// A step's decision after `cycles` integrated, from each pair's sigma / |G| (`rel_sigmas`, the
+/// pairs with a usable point) and its cycle limit: the rule above.
 struct StepDecision {
   int more = 0;           // cycles to go on for; 0: the step ends
   double worst = -1;      // largest sigma / |G| of the pairs that hold the step (-1: none)
