@@ -92,14 +92,8 @@ int main(int argc, char** argv) {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     // The adaptive stepped sine decides while running, on the tape of the model's outputs.
-    std::unique_ptr<AutoIntegrator> integrator;
-    if (auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(campaign.get())) {
-      std::vector<std::string> outputs;
-      for (const auto& out : model.outputs) outputs.push_back(out.name);
-      integrator = std::make_unique<AutoIntegrator>(*adaptive, outputs, o.adaptive,
-                                                    lo_first_block * o.block);
-      lo.auto_integrator = integrator.get();
-    }
+    const auto integrator = make_auto_integrator(*campaign, model, o, lo_first_block * o.block);
+    lo.auto_integrator = integrator.get();
     AcquisitionNode node(lcm, ctl, camp, lo);
     const Json sj = node.run();
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";

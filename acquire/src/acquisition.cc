@@ -102,6 +102,16 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
   throw InputError("unknown excitation");
 }
 
+std::unique_ptr<AutoIntegrator> make_auto_integrator(Campaign& c, const Model& m,
+                                                     const AcquireOptions& o,
+                                                     int64_t first_sample) {
+  auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(&c);
+  if (!adaptive) return nullptr;
+  std::vector<std::string> outputs;
+  for (const auto& out : m.outputs) outputs.push_back(out.name);
+  return std::make_unique<AutoIntegrator>(*adaptive, outputs, o.adaptive, first_sample);
+}
+
 int64_t command_block_count(const Campaign& c, int block) {
   return (c.total_samples() + block - 1) / block;
 }

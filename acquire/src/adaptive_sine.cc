@@ -225,20 +225,19 @@ std::pair<int64_t, int64_t> AutoIntegrator::needed_samples() const {
 void AutoIntegrator::feed_events() {
   if (g_ >= c_.n_steps()) return;
   const int x = c_.input_of(g_);
-  auto& an = an_;
-  if (an.empty()) {  // the step's analysers, fresh for each step (they hold its samples only)
+  if (an_.empty()) {  // the step's analysers, fresh for each step (they hold its samples only)
     const std::string in = c_.inputs()[size_t(x)].name;
     AnalyzerOptions ao;
     ao.input = in;
     for (const std::string& out : outputs_)
-      an.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao));
-    an.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao));
+      an_.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao));
+    an_.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao));
   }
   const auto& ev = c_.events();
   while (fed_ < ev.size() && ev[fed_].sample < c_.window_end(g_) &&
          ev[fed_].state != RunState::kDone) {
     if (ev[fed_].step == g_)
-      for (auto& a : an) a->on_status(ev[fed_]);
+      for (auto& a : an_) a->on_status(ev[fed_]);
     ++fed_;
   }
 }

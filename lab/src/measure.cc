@@ -480,8 +480,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
     throw InputError(std::string(e.what()) + " (everything measured is kept in " + o.out +
                      "; resume with `fralab measure --resume " + o.out + "`)");
   }
-  double engine_total =
-      double(make_campaign(model, ao, r.run_id)->total_samples()) / o.acquire.sample_rate_hz;
+  const auto camp = make_campaign(model, ao, r.run_id);
+  double engine_total = double(camp->total_samples()) / o.acquire.sample_rate_hz;
   if (fs::exists(o.out + "/acquire.json")) {
     Json acq_summary = json_load_file(o.out + "/acquire.json");
     // The adaptive campaign grew while running: its length is the summary's.
@@ -496,7 +496,6 @@ MeasureResult run_measure(const MeasureOptions& given) {
     for (const std::string& p : r.pairs)
       if (const std::string f = o.out + "/frd/" + pair_file_stem(p) + ".json"; fs::exists(f))
         curves.push_back(load_frd(f));
-    const auto camp = make_campaign(model, ao, r.run_id);
     const auto& adaptive = dynamic_cast<const AdaptiveSineCampaign&>(*camp);
     std::vector<int> limits;
     for (int g = 0; g < adaptive.n_steps(); ++g) limits.push_back(adaptive.limit(g));

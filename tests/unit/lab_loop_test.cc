@@ -113,9 +113,8 @@ TEST(LabLoop, TheAdaptiveAcquisitionDecidesAsTheOfflineRun) {
   o.amplitude_pct = 2.0;
   o.adaptive.sigma_target = 0.01;
   const auto camp = make_campaign(m, o, "memq-run");
-  auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(camp.get());
-  ASSERT_NE(adaptive, nullptr);
-  AutoIntegrator integrator(*adaptive, {"y"}, o.adaptive);
+  const auto integrator = make_auto_integrator(*camp, m, o);
+  ASSERT_NE(integrator, nullptr);
 
   lcm::LCM bus("memq://");
   ASSERT_TRUE(bus.good());
@@ -127,7 +126,7 @@ TEST(LabLoop, TheAdaptiveAcquisitionDecidesAsTheOfflineRun) {
   lo.run_id = "memq-run";
   lo.consumers = {"analyze"};
   lo.acquire = o;
-  lo.auto_integrator = &integrator;
+  lo.auto_integrator = integrator.get();
   AcquisitionNode acquisition(bus, bus, *camp, lo);
   plant.announce_ready();
   analyser.announce_ready();

@@ -96,12 +96,7 @@ TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, u
   TapeRun r;
   // The adaptive stepped sine decides as fralab-acquire does (acquisition_node.h): before a block
   // at or after the pending decision's sample goes out.
-  std::unique_ptr<AutoIntegrator> ai;
-  if (auto* adaptive = dynamic_cast<AdaptiveSineCampaign*>(camp.get())) {
-    std::vector<std::string> outputs;
-    for (const auto& out : m.outputs) outputs.push_back(out.name);
-    ai = std::make_unique<AutoIntegrator>(*adaptive, outputs, o.adaptive);
-  }
+  const std::unique_ptr<AutoIntegrator> ai = make_auto_integrator(*camp, m, o);
   for (int64_t seq = 0; seq < command_block_count(*camp, o.block); ++seq) {
     while (ai && ai->decision_sample() >= 0 && seq * o.block >= ai->decision_sample())
       if (!ai->decide()) throw std::logic_error("adaptive: the tape of a decision is missing");

@@ -69,6 +69,13 @@ SteppedSineOptions stepped_sine_options(const Model& m, const AcquireOptions& o)
 std::unique_ptr<Campaign> make_campaign(const Model& m, const AcquireOptions& o,
                                         const std::string& run_id);
 
+/// The decisions of an adaptive stepped sine (acquire/adaptive_sine.h) on the campaign
+/// make_campaign made for `o`, on the tape of model `m`'s outputs; steps starting before
+/// `first_sample` (a resumed run) are taken. nullptr when the campaign is not adaptive.
+std::unique_ptr<AutoIntegrator> make_auto_integrator(Campaign& c, const Model& m,
+                                                     const AcquireOptions& o,
+                                                     int64_t first_sample = 0);
+
 /// Number of command blocks of `block` samples that carry the whole campaign.
 int64_t command_block_count(const Campaign& c, int block);
 
