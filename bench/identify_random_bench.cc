@@ -124,10 +124,10 @@ int main(int argc, char** argv) {
       if (verbose)
         std::printf(
             "  %2d %-20s N=%2zu truth %d/%d tau %.3f | fit %d/%d tau %.4f %-18s err %.2e oracle "
-            "%.2e %.1f ms\n",
+            "%.2e %.1f ms chi2 %.3f oracle %.3f\n",
             i, c.category.c_str(), c.points.size(), c.truth.num_order(), c.truth.den_order(),
             c.truth.delay_s, r.num_order, r.den_order, r.tf.delay_s, r.status_str().c_str(),
-            ef.back(), eo.back(), ms.back());
+            ef.back(), eo.back(), ms.back(), r.chi2_per_dof, o.chi2_per_dof);
     }
     const double mf = quantile(ef, 0.5), pf = quantile(ef, 0.9), mo = quantile(eo, 0.5),
                  po = quantile(eo, 0.9);

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "fralab/plant/model.h"
+#include "random_frd.h"
 #include "test_util.h"
 
 using namespace fralab;
@@ -67,9 +68,9 @@ void check_roots(const std::string& name, const std::vector<Root>& truth,
   }
 }
 
-// max_beyond: the fraction of in-band roots allowed outside max(root_tol, 3 sigma). At 5 % noise
-// two close real roots (P5/Wf 85 %: 81.7 and 130 rad/s) come back as one pair near zeta = 1, whose
-// location sigma does not describe the split into two reals.
+// max_beyond: the fraction of in-band roots allowed outside max(root_tol, 3 sigma). (Two close
+// real roots that come back as one pair near zeta = 1, P5/Wf 85 % at 5 % noise, are covered by the
+// pair's sigma since it includes the split into two reals.)
 void check_recovery(double noise, double root_tol, uint64_t seed, double max_beyond = 0.0) {
   int n = 0, within = 0, total = 0, beyond = 0;
   for (const auto& [name, tf] : report_tfs()) {
@@ -107,7 +108,7 @@ TEST(Tfns, NoiseFreeRecoversEveryReportTransferFunctionTo0_1Percent) {
 }
 TEST(Tfns, OnePercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.01, 0.02, 3); }
 TEST(Tfns, TwoPercentNoiseRecoversRootsWithin2Percent) { check_recovery(0.02, 0.02, 3); }
-TEST(Tfns, FivePercentNoiseRecoversRootsWithinTheirSigma) { check_recovery(0.05, 0.02, 3, 0.01); }
+TEST(Tfns, FivePercentNoiseRecoversRootsWithinTheirSigma) { check_recovery(0.05, 0.02, 3); }
 
 TEST(Tfns, LowestAdequateOrderIsChosenByTheNoise) {
   // A third-order truth whose third pole is far above the band is not identifiable with 2 %
@@ -358,4 +359,68 @@ TEST(Tfns, AnUndampedDipoleIsNotAPadeDelay) {
   t.zeros = {Root::Pair(100.0, -0.5)};
   t.poles = {Root::Real(-2.0), Root::Pair(100.5, 0.5)};
   EXPECT_EQ(find_pade_sets(t).size(), 1u);
+}
+
+// The identifier against an oracle told the true orders and delay (refine_tf from the truth) on the
+// issue-14 generator's cases it was not tuned on (seed 5), at 2 % noise with sigma and without:
+// orders, model error and 3-sigma coverage of the in-band roots (bench/identify_random_bench.cc
+// prints the same at every noise level).
+TEST(Tfns, RandomCasesComeBackAtTheirOrdersWithTheOraclesError) {
+  constexpr int kCases = 32;
+  // Measured: orders 31 and 32 of 32, median ratio 1.000, every in-band root within max(2 %, 3
+  // sigma). (Before candidates were refined when SK's fit already passed: 30 of 32, 1.023, 96 %.)
+  constexpr double kMinOrdersRight = 0.9, kMaxMedianRatio = 1.05, kMinCoverage = 0.98;
+  for (const bool sigma : {true, false}) {
+    int right = 0, total = 0, within = 0, beyond = 0;
+    std::vector<double> ratio;
+    for (int i = 0; i < kCases; ++i) {
+      const auto c = fralab::testing::random_frd_case(i, 0.02, sigma, 5);
+      const FitResult r = fit_tf(c.points, FitOptions{});
+      FitOptions oracle;
+      oracle.delay = FitOptions::Delay::kFixed;
+      oracle.delay_s = c.truth.delay_s;
+      const FitResult o = refine_tf(c.points, c.truth, oracle);
+      right += r.num_order == c.truth.num_order() && r.den_order == c.truth.den_order();
+      ratio.push_back(fralab::testing::model_error(r.tf, c.truth, c.w_lo, c.w_hi) /
+                      fralab::testing::model_error(o.tf, c.truth, c.w_lo, c.w_hi));
+      const std::string name = c.category + " " + std::to_string(i);
+      check_roots(name, c.truth.poles, r.tf.poles, r.pole_info, c.w_lo, c.w_hi, 0.02, &within,
+                  &total, &beyond);
+      check_roots(name, c.truth.zeros, r.tf.zeros, r.zero_info, c.w_lo, c.w_hi, 0.02, &within,
+                  &total, &beyond);
+    }
+    std::nth_element(ratio.begin(), ratio.begin() + kCases / 2, ratio.end());
+    const double median = ratio[kCases / 2];
+    std::printf("sigma %s: orders right %d of %d, median error ratio %.3f, %d of %d roots beyond\n",
+                sigma ? "given" : "withheld", right, kCases, median, beyond, total);
+    EXPECT_GE(right, kMinOrdersRight * kCases) << (sigma ? "with sigma" : "without sigma");
+    EXPECT_LE(median, kMaxMedianRatio) << (sigma ? "with sigma" : "without sigma");
+    EXPECT_GE(total - beyond, kMinCoverage * total) << (sigma ? "with sigma" : "without sigma");
+  }
+}
+
+// Two real poles where the data have a resonance: the refinement takes real roots of one sign in
+// pairs (zeta >= 1 is two reals), so it can cross into the resonance; at the true orders (2/4,
+// a pair at 0.158 rad/s near the band's lower edge, 10 % noise) the fit reaches the oracle's chi^2.
+// (Refined as separate reals it stopped at chi^2/dof 1.32 against 1.12.)
+TEST(Tfns, RealPolesCanBecomeAResonanceInTheRefinement) {
+  const auto c = fralab::testing::random_frd_case(27, 0.10, true, 1);
+  ASSERT_EQ(c.truth.den_order(), 4);
+  ASSERT_EQ(c.truth.num_order(), 2);
+  FitOptions o;
+  o.den_order_start = o.max_den_order = 4;
+  o.num_order_start = o.min_num_order = 2;
+  o.delay = FitOptions::Delay::kNone;
+  const FitResult r = fit_tf(c.points, o);
+  FitOptions oracle;
+  oracle.delay = FitOptions::Delay::kNone;
+  const FitResult best = refine_tf(c.points, c.truth, oracle);
+  std::string poles;
+  bool resonance = false;
+  for (const Root& p : r.tf.poles) {
+    poles += p.str() + "; ";
+    resonance = resonance || (p.pair && p.zeta < 1 && p.wn < 0.3);
+  }
+  EXPECT_LT(r.chi2_per_dof, 1.02 * best.chi2_per_dof) << poles;
+  EXPECT_TRUE(resonance) << poles;
 }
