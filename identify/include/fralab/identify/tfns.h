@@ -15,20 +15,27 @@
 //    remains (||d|| = 1): never normal equations in raw powers of s. The iterate with the lowest
 //    real error is kept; an iteration that has not lowered it for 8 iterations stops (SK is a
 //    fixed point, not a descent: with noise or a wrong delay it can oscillate).
+//    When SK's fit at (n, m) is not adequate, SK is run again with its first weights from vector
+//    fitting's n poles (vector_fitting.h) and the better of the two is kept.
 // 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
 //    left half plane.
 // 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
 //    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
-//    model wins only with fewer parameters. Output-error refinement (Levenberg-Marquardt, Eigen) of
-//    sum_i W_i |G_i - G_a(j w_i)|^2 over the factored parameters (real poles -exp(t), pairs
-//    wn = exp(a), zeta = exp(b): stable by construction) and, with delay auto, tau jointly.
-//    Candidates are screened with at most 60 residual evaluations; the chosen fit (and a screened
-//    candidate within 3x of adequate) is refined to convergence.
+//    model wins only with no more parameters and a lower criterion (5). Output-error refinement
+//    (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the factored parameters
+//    (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by construction; real roots of
+//    one sign are refined in pairs, zeta >= 1 being two reals, so they can become a resonance)
+//    and, with delay auto, tau jointly. Every candidate short of hopeless (chi^2/dof < 30) is
+//    refined, screened with at most 60 residual evaluations; candidates compared across orders,
+//    and the chosen fit, are refined to convergence.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
-//    c_n. At each n, numerator orders n down to n-3 are tried; the fewest parameters that pass win.
-//    Above order 3, raising stops when two successive orders improve the error by less than 5 %.
+//    c_n. At each n, numerator orders n down to min_num_order are tried. Among adequate
+//    candidates the lowest criterion chi^2 + ln(2N) p wins (twice BIC's penalty: an added root's
+//    location is searched), and the order is raised past the first adequate one while the
+//    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
+//    raising stops when two successive orders improve the error by less than 5 %.
 // Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
 // on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
 // Units: w rad/s, tau seconds, phases radians inside, degrees in files.
@@ -71,7 +78,10 @@ struct RootInfo {
   double real = 0, imag = 0;  // s-plane location (upper half plane for pairs), rad/s
   double wn = 0, zeta = 0;    // frequency and damping (pairs); wn = |real| for real roots
   bool pair = false;
-  double rel_sigma = -1;  // standard deviation of the location, relative to |root| (< 0: unknown)
+  // Standard deviation of the location, relative to |root| (< 0: unknown): from the refinement's
+  // covariance; for a pair hypot(sigma_ln_wn, min(sigma_zeta / sqrt(1 - zeta^2),
+  // sqrt(2 sigma_zeta))), the second term the split into two reals near zeta = 1.
+  double rel_sigma = -1;
 };
 
 /// A pole pair and zero pair (or real pole and RHP real zero) mirrored about the imaginary axis:
