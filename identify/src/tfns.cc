@@ -126,7 +126,7 @@ std::vector<Root> to_roots(const std::vector<C>& lam, double scale) {
   return out;
 }
 
-constexpr int kSkStall = 8;
+constexpr int kSkStall = 3;
 
 struct Sk {
   bool ok = false;
@@ -154,6 +154,8 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
   Sk r;
   double best_sse = 1e300;
   int it_best = 0;
+  Basis best_basis;
+  VecR best_num, best_den;
   const int order = std::max(n, m);
   for (int it = 1; it <= o.max_iterations; ++it) {
     std::vector<double> sw(M);
@@ -185,7 +187,7 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     VecR a = svd.matrixV().col(n);
     VecR bb = -std::sqrt(2.0) * (Q1tAD * a);  // the least-squares N for this D: AN^+ = 2 AN^T
     const C d0 = poly_at(b, a, 0.0), n0 = poly_at(b, bb, 0.0);
-    if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) return r;  // best so far, if any
+    if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) break;  // the best so far, if any
     std::vector<C> dk(M);
     double eph = 0, sse = 0;
     for (int i = 0; i < M; ++i) {
@@ -198,20 +200,26 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     r.iterations = it;
     r.e_phi = eph;
     // SK is a fixed-point iteration, not a descent: keep the iterate with the lowest real error.
+    // Its roots are computed once, for the iterate returned.
     if (sse < best_sse && std::isfinite(sse)) {
       best_sse = sse;
       it_best = it;
+      best_basis = std::move(b);
+      best_num = bb;
+      best_den = a;
       r.tf.gain = (n0 / d0).real();
-      r.tf.zeros = to_roots(poly_roots(b, bb), ws);
-      r.tf.poles = to_roots(poly_roots(b, a), ws);
       r.ok = std::isfinite(r.tf.gain);
     }
     // Converged, out of iterations, or stalled: an iteration that oscillates without lowering the
     // real error for kSkStall iterations will not converge (noise, a wrong delay); the
     // output-error refinement continues from the best iterate.
-    if ((it > 1 && eph <= o.c_phi) || it == o.max_iterations || it - it_best >= kSkStall) return r;
+    if ((it > 1 && eph <= o.c_phi) || it == o.max_iterations || it - it_best >= kSkStall) break;
     for (int i = 0; i < M; ++i) phi[i] = d.W[i] / std::norm(dk[i]);
     dprev = dk;
+  }
+  if (r.ok) {
+    r.tf.zeros = to_roots(poly_roots(best_basis, best_num), ws);
+    r.tf.poles = to_roots(poly_roots(best_basis, best_den), ws);
   }
   return r;
 }

@@ -13,7 +13,7 @@
 //    +-j w_i with weights phi_i, so coefficients stay real); N is eliminated by projecting onto
 //    those orthonormal columns and D is the smallest right singular vector of the QR factor of what
 //    remains (||d|| = 1): never normal equations in raw powers of s. The iterate with the lowest
-//    real error is kept; an iteration that has not lowered it for 8 iterations stops (SK is a
+//    real error is kept; an iteration that has not lowered it for 3 iterations stops (SK is a
 //    fixed point, not a descent: with noise or a wrong delay it can oscillate).
 //    When SK's fit at (n, m) is not adequate, SK is run again with its first weights from vector
 //    fitting's n poles (vector_fitting.h) and the better of the two is kept.
