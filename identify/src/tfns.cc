@@ -937,7 +937,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
           if (o.refine && (free_delay || near)) {
             Cand r = t;
-            refine_cand(r, kScreenEvaluations);
+            // Past an adequate order a shorter screening: only a clear gain can win there (the
+            // best is then refined to convergence before it is compared).
+            refine_cand(r, sel.ok ? kScreenEvaluations / 3 : kScreenEvaluations);
             // Stopped by the screening budget while close to adequate: finish it before judging.
             if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
             if (r.rank <= t.rank) t = r;
