@@ -13,6 +13,7 @@
 #include <functional>
 
 #include "fralab/plant/model.h"
+#include "shell.h"
 
 using namespace fralab;
 namespace fs = std::filesystem;
@@ -72,11 +73,7 @@ int run(const std::string& cmd) {
 // Runs the diagnosis of `truth` against the simulation; returns diagnosis.json.
 Json diagnose(const std::string& name, const Model& truth, bool plots = false,
               std::string* out_dir = nullptr) {
-  const std::string d =
-      (fs::temp_directory_path() / ("fralab_diag_" + name + "_" + std::to_string(getpid())))
-          .string();
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const std::string d = fralab::testing::tmpdir(name, "fralab_diag_");
   save_model(d + "/sim.json", simulation());
   save_model(d + "/truth.json", truth);
   const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
@@ -276,9 +273,7 @@ void expect_j85_95_findings(const Json& j) {
 
 // The default demonstration (stepped sine; 5 points per decade to keep CI short).
 TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
-  const std::string d =
-      (fs::temp_directory_path() / ("fralab_diag_j85_" + std::to_string(getpid()))).string();
-  fs::remove_all(d);
+  const std::string d = fralab::testing::tmpdir("j85", "fralab_diag_") + "/out";
   const std::string cmd =
       kBin +
       "/fralab diagnose --simulation j85_95_sim --engine j85_95 --points-per-decade 5 --out " + d;
@@ -290,9 +285,7 @@ TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
 // backlash distorts at the multisine's level) finds the same nine findings within the same
 // tolerances, at 10 points per decade, in at most 10 min of engine time (validation apart).
 TEST(Diagnose, J85AutoCampaignFindsTheSameInTenMinutesOfEngineTime) {
-  const std::string d =
-      (fs::temp_directory_path() / ("fralab_diag_auto_" + std::to_string(getpid()))).string();
-  fs::remove_all(d);
+  const std::string d = fralab::testing::tmpdir("auto", "fralab_diag_") + "/out";
   const std::string cmd = kBin +
                           "/fralab diagnose --simulation j85_95_sim --engine j85_95 --excitation "
                           "auto --min-cycles 2 --out " +

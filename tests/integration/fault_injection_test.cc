@@ -25,6 +25,7 @@ using fralab::Json;
 using fralab::json_load_file;
 using fralab::testing::sh;
 using fralab::testing::slurp;
+using fralab::testing::shared_tmpdir;
 using fralab::testing::tmpdir;
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
@@ -39,7 +40,7 @@ const std::string kRun =
 // The undisturbed run every other run is compared with.
 const std::string& reference() {
   static const std::string dir = [] {
-    const std::string d = tmpdir("fault_ref");
+    const std::string d = shared_tmpdir("fault_ref");
     const auto c = sh(kBin + "/fralab" + kRun + "--out " + d);
     EXPECT_EQ(c.status, 0) << c.output;
     return d;

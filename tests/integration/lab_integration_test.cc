@@ -31,6 +31,7 @@ const std::string kBin = FRALAB_BIN_DIR;
 
 using fralab::testing::Cmd;
 using fralab::testing::sh;
+using fralab::testing::shared_tmpdir;
 using fralab::testing::tmpdir;
 
 const std::string kSmall = " --input Wf --band 1:10 --points-per-decade 3 --min-integrate-s 2 ";
@@ -38,7 +39,7 @@ const std::string kSmall = " --input Wf --band 1:10 --points-per-decade 3 --min-
 // One measurement shared by several tests.
 const std::string& measured() {
   static std::string dir = [] {
-    std::string d = tmpdir("measure");
+    std::string d = shared_tmpdir("measure");
     Cmd c = sh(kBin + "/fralab measure --engine j85_95" + kSmall + "--seed 5 --out " + d);
     EXPECT_EQ(c.status, 0) << c.output;
     return d;

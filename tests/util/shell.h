@@ -1,7 +1,8 @@
 // Shell helpers for the integration tests: run a command (stdout and stderr captured, exit status)
-// and make a fresh scratch folder per test process.
+// and make a fresh scratch folder per test process (removed after a test that passes).
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fralab::testing {
 
@@ -28,13 +30,52 @@ inline Cmd sh(const std::string& cmd) {
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
 }
 
-/// $TMPDIR/fralab_it_<name>_<pid>, emptied.
-inline std::string tmpdir(const std::string& name) {
+/// Scratch folders made for the running test (removed when it passes, kept for a look when it
+/// fails) and for the whole program (shared by several tests: removed at its end when every test
+/// passed). A run of the integration suite writes some GB of tapes and reports.
+inline std::vector<std::string>& test_scratch() {
+  static std::vector<std::string> dirs;
+  return dirs;
+}
+inline std::vector<std::string>& program_scratch() {
+  static std::vector<std::string> dirs;
+  return dirs;
+}
+class RemoveScratchOfPassedTests : public ::testing::EmptyTestEventListener {
+  void OnTestEnd(const ::testing::TestInfo& info) override {
+    std::error_code ec;
+    if (info.result() && info.result()->Passed())
+      for (const std::string& d : test_scratch()) std::filesystem::remove_all(d, ec);
+    test_scratch().clear();
+  }
+  void OnTestProgramEnd(const ::testing::UnitTest& unit) override {
+    std::error_code ec;
+    if (unit.Passed())
+      for (const std::string& d : program_scratch()) std::filesystem::remove_all(d, ec);
+  }
+};
+inline const bool kScratchCleanerInstalled = [] {
+  ::testing::UnitTest::GetInstance()->listeners().Append(new RemoveScratchOfPassedTests);
+  return true;
+}();
+
+/// $TMPDIR/<prefix><name>_<pid>, emptied; removed after the test if it passes.
+inline std::string tmpdir(const std::string& name, const std::string& prefix = "fralab_it_") {
   namespace fs = std::filesystem;
-  auto d = fs::temp_directory_path() / ("fralab_it_" + name + "_" + std::to_string(getpid()));
+  auto d = fs::temp_directory_path() / (prefix + name + "_" + std::to_string(getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
+  test_scratch().push_back(d.string());
   return d.string();
+}
+
+/// The same for a folder several tests share (made once, e.g. in a static): removed at the
+/// program's end if every test passed.
+inline std::string shared_tmpdir(const std::string& name) {
+  const std::string d = tmpdir(name);
+  test_scratch().pop_back();
+  program_scratch().push_back(d);
+  return d;
 }
 
 /// The whole file, bytes as they are ("" when it cannot be read).
