@@ -919,33 +919,37 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
             return t;
           };
           const Sk sk = sk_err(tau, n, m, o).second;
-          Cand t = sk.ok ? sk_cand(sk) : Cand{};
-          // SK from D = 1 not adequate: the same order from vector fitting's poles, the better
-          // of the two starting the refinement (SK alone can stall in a poor basin).
-          if (!t.adequate) {
+          std::vector<Cand> ts;
+          if (sk.ok) ts.push_back(sk_cand(sk));
+          // SK from D = 1 not adequate: the same order also from vector fitting's poles (SK alone
+          // can stall in a poor basin). The better start is refined first, the other too when
+          // that one does not become adequate: which refines better is
+          // not told by their errors before (a J85 tape's u_Wf:P3 at 9/9: VF's start was the better
+          // SK fit and refined to chi^2/dof 8.4, SK's own to 1.2).
+          if (ts.empty() || !ts[0].adequate) {
             if (const std::vector<C>* vp = vf_poles(tau, n)) {
               const Sk sk2 = sk_err(tau, n, m, o, vp).second;
-              if (sk2.ok) {
-                Cand t2 = sk_cand(sk2);
-                if (!t.ok || t2.rank < t.rank) t = t2;
-              }
+              if (sk2.ok) ts.push_back(sk_cand(sk2));
             }
           }
-          if (!t.ok) continue;
-          // Every candidate short of hopeless is refined (output error is the fit's criterion;
-          // an adequate SK fit is not yet its optimum): with a free delay jointly with the delay,
-          // from the grid delay it sits at.
-          const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
-          if (o.refine && (free_delay || near)) {
-            Cand r = t;
-            // Past an adequate order a shorter screening: only a clear gain can win there (the
-            // best is then refined to convergence before it is compared).
-            refine_cand(r, sel.ok ? kScreenEvaluations / 3 : kScreenEvaluations);
-            // Stopped by the screening budget while close to adequate: finish it before judging.
-            if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
-            if (r.rank <= t.rank) t = r;
+          if (ts.size() == 2 && ts[1].rank < ts[0].rank) std::swap(ts[0], ts[1]);
+          for (Cand& t : ts) {
+            // Every candidate short of hopeless is refined (output error is the fit's criterion;
+            // an adequate SK fit is not yet its optimum): with a free delay jointly with the
+            // delay, from the grid delay it sits at.
+            const bool near = d.has_sigma ? t.chi2dof < 30.0 : t.s.e_n < 1000 * o.c_n;
+            if (o.refine && (free_delay || near)) {
+              Cand r = t;
+              // Past an adequate order a shorter screening: only a clear gain can win there (the
+              // best is then refined to convergence before it is compared).
+              refine_cand(r, sel.ok ? kScreenEvaluations / 3 : kScreenEvaluations);
+              // Stopped by the screening budget while close to adequate: finish it before judging.
+              if (r.unfinished && !r.adequate && r.misfit < 3.0) refine_cand(r, 0);
+              if (r.rank <= t.rank) t = r;
+            }
+            if (!c.ok || t.rank < c.rank) c = t;
+            if (c.adequate) break;
           }
-          if (!c.ok || t.rank < c.rank) c = t;
           if (c.adequate) break;  // an adequate start: the others cannot be preferred at this order
         }
         if (!c.ok) continue;
