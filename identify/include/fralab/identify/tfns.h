@@ -16,7 +16,8 @@
 //    real error is kept; an iteration that has not lowered it for 3 iterations stops (SK is a
 //    fixed point, not a descent: with noise or a wrong delay it can oscillate).
 //    When SK's fit at (n, m) is not adequate, SK is run again with its first weights from vector
-//    fitting's n poles (vector_fitting.h) and the better of the two is kept.
+//    fitting's n poles (vector_fitting.h); the better of the two is refined first, the other too
+//    when that one does not become adequate.
 // 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
 //    left half plane.
 // 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
