@@ -24,8 +24,8 @@
 using fralab::Json;
 using fralab::json_load_file;
 using fralab::testing::sh;
-using fralab::testing::slurp;
 using fralab::testing::shared_tmpdir;
+using fralab::testing::slurp;
 using fralab::testing::tmpdir;
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
@@ -162,12 +162,13 @@ INSTANTIATE_TEST_SUITE_P(Faults, Kill,
 std::pair<std::string, std::string> kill_and_resume(const std::string& run, const std::string& name,
                                                     int speed, double kill_after_s, int min_files) {
   const std::string ref = tmpdir(name + "_ref"), d = tmpdir(name + "_kill");
+  const std::string first = tmpdir(name + "_first") + "/output.txt";  // the killed run's output
   auto c = sh(kBin + "/fralab" + run + "--out " + ref);
   EXPECT_EQ(c.status, 0) << c.output;
   c = sh("(" + kBin + "/fralab" + run + "--speed " + std::to_string(speed) + " --out " + d + " > " +
-         d + ".first 2>&1 & lp=$!; sleep " + std::to_string(kill_after_s) +
+         first + " 2>&1 & lp=$!; sleep " + std::to_string(kill_after_s) +
          "; pkill -KILL -f '[f]ralab-acquire.*" + d + "'; wait $lp; echo exit=$?)");
-  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(d + ".first");
+  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(first);
   c = sh(kBin + "/fralab measure --resume " + d);
   EXPECT_EQ(c.status, 0) << c.output;
   EXPECT_THAT(c.output, HasSubstr("resuming run"));
