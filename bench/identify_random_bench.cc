@@ -121,13 +121,26 @@ int main(int argc, char** argv) {
                   &covered_o);
       root_counts(c.truth.zeros, o.tf.zeros, o.zero_info, c.w_lo, c.w_hi, &tot_o, &within_o,
                   &covered_o);
-      if (verbose)
+      if (verbose) {
+        // The order criterion fit_tf compares adequate candidates by (chi^2 + ln(2N) p), for the
+        // fit and for the truth's structure refined with its delay free (when it has one): a
+        // wrong order with the oracle's criterion lower is a search the fit lost; higher, the
+        // data do not support the true order.
+        FitOptions ao;
+        ao.delay = c.truth.delay_s > 0 ? FitOptions::Delay::kAuto : FitOptions::Delay::kNone;
+        const FitResult oa = refine_tf(c.points, c.truth, ao);
+        auto crit = [&](const FitResult& f, bool free_delay) {
+          const double n = double(f.n_points), p = f.num_order + f.den_order + 1 + free_delay;
+          return f.chi2_per_dof * std::max(1.0, n - p / 2) + std::log(2 * n) * p;
+        };
         std::printf(
             "  %2d %-20s N=%2zu truth %d/%d tau %.3f | fit %d/%d tau %.4f %-18s err %.2e oracle "
-            "%.2e %.1f ms chi2 %.3f oracle %.3f\n",
+            "%.2e %.1f ms chi2 %.3f oracle %.3f crit %.1f oracle %.1f%s\n",
             i, c.category.c_str(), c.points.size(), c.truth.num_order(), c.truth.den_order(),
             c.truth.delay_s, r.num_order, r.den_order, r.tf.delay_s, r.status_str().c_str(),
-            ef.back(), eo.back(), ms.back(), r.chi2_per_dof, o.chi2_per_dof);
+            ef.back(), eo.back(), ms.back(), r.chi2_per_dof, o.chi2_per_dof,
+            crit(r, r.tf.delay_s > 0), crit(oa, c.truth.delay_s > 0), ok ? "" : "  WRONG");
+      }
     }
     const double mf = quantile(ef, 0.5), pf = quantile(ef, 0.9), mo = quantile(eo, 0.5),
                  po = quantile(eo, 0.9);

@@ -379,6 +379,14 @@ void merge_real_roots(std::vector<Root>& v) {
 // LM from `start`. max_evaluations > 0 caps the residual evaluations (a screening refinement of a
 // candidate: most converge within a few tens; a start that wanders is continued only if it wins);
 // 0: the full budget, 200 (p + 1). *budget_hit tells whether the cap stopped it.
+// Stops early when the objective has stalled: sum W |e|^2 lowered by less than kStallChi2 (with
+// sigma: in chi^2 units, nothing a criterion can see) or by less than kStallRel of itself (without)
+// over kStallSteps steps. A root running off along a flat valley (two real poles packed as a pair,
+// zeta -> 1500 and one pole -> 1e7 rad/s) otherwise crawls on to the whole budget: measured on the
+// random benchmark's seed 4, 0.5 %, such crawls were 3/4 of the time, and stopping them changed
+// no fit's order.
+constexpr int kStallSteps = 10;
+constexpr double kStallChi2 = 0.01, kStallRel = 1e-4;
 Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations = 0,
           bool* budget_hit = nullptr) {
   if (budget_hit) *budget_hit = false;
@@ -397,7 +405,18 @@ Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations =
   lm.parameters.xtol = 1e-12;
   lm.parameters.ftol = 1e-14;
   VecR x = p.pack(merged);
-  const auto status = lm.minimize(x);
+  auto status = lm.minimizeInit(x);
+  if (status != Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
+    double mark = INFINITY;  // the objective kStallSteps steps ago
+    for (int step = 1;; ++step) {
+      status = lm.minimizeOneStep(x);
+      if (status != Eigen::LevenbergMarquardtSpace::Running) break;
+      if (step % kStallSteps) continue;
+      const double now = lm.fnorm * lm.fnorm;
+      if (mark - now < (d.has_sigma ? kStallChi2 : kStallRel * now)) break;
+      mark = now;
+    }
+  }
   if (budget_hit) *budget_hit = status == Eigen::LevenbergMarquardtSpace::TooManyFunctionEvaluation;
   Tf out = p.unpack(x);
   for (const Root& q : out.poles)
@@ -519,6 +538,16 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
   }
   if (free_delay) out.delay = sd(k);
   return out;
+}
+
+// Pruning thresholds (see prune in fit_tf): a pole-zero couple closer than this fraction of the
+// pole's modulus, a root with at least this relative sigma.
+constexpr double kPruneNear = 0.5, kPruneSigma = 0.5;
+
+// A root's location in the upper half plane (a pair's upper member).
+C upper(const Root& r) {
+  const C l = r.locations()[0];
+  return l.imag() < 0 ? std::conj(l) : l;
 }
 
 int n_params(const Tf& t, bool free_delay) {
@@ -767,6 +796,52 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   auto refine_cand = [&](Cand& c, int budget) {
     c.tf = refine(d, c.tf, c.free_delay, budget, &c.unfinished);
     evaluate(c);
+  };
+  // Pruning of a fit: the order search can end above the data's order with roots the data do not
+  // determine, kept because the SK fit at that order needed them to pass. Removed in turn, the
+  // rest refined, each of: a zero and the nearest pole of its kind closer than kPruneNear of the
+  // pole's modulus (a near-cancelling couple), and a root whose relative sigma is kPruneSigma or
+  // more, never below the orders the options ask for. The best (adequate first, then the criterion)
+  // replaces the fit while it is better. Measured (bench/identify_random_bench.cc, seeds 1-5): a
+  // 2/5 pair of close resonances at 2 % noise came back 7/10 with three couples within 0.3 % (the
+  // oracle's criterion 91 vs 127); orders right at 5 % rose on 3 of 5 seeds, none fell.
+  auto prune = [&](Cand& fit) {
+    for (bool better = true; better;) {
+      better = false;
+      std::vector<std::pair<int, int>> cuts;  // (zero index or -1, pole index or -1)
+      for (size_t i = 0; i < fit.tf.zeros.size(); ++i) {
+        const C lz = upper(fit.tf.zeros[i]);
+        int jb = -1;
+        double db = kPruneNear;
+        for (size_t j = 0; j < fit.tf.poles.size(); ++j) {
+          if (fit.tf.poles[j].pair != fit.tf.zeros[i].pair) continue;
+          const C lp = upper(fit.tf.poles[j]);
+          const double dist = std::abs(lz - lp) / std::abs(lp);
+          if (dist < db) db = dist, jb = int(j);
+        }
+        if (jb >= 0) cuts.push_back({int(i), jb});
+      }
+      const Sigmas sg = parameter_sigmas(d, fit.tf, fit.free_delay, fit.s.sse);
+      for (size_t i = 0; i < sg.zeros.size(); ++i)
+        if (!(sg.zeros[i] < kPruneSigma)) cuts.push_back({int(i), -1});
+      for (size_t j = 0; j < sg.poles.size(); ++j)
+        if (!(sg.poles[j] < kPruneSigma)) cuts.push_back({-1, int(j)});
+      Cand next = fit;
+      for (const auto& [i, j] : cuts) {
+        Cand c = fit;
+        if (i >= 0) c.tf.zeros.erase(c.tf.zeros.begin() + i);
+        if (j >= 0) c.tf.poles.erase(c.tf.poles.begin() + j);
+        // The orders asked for stay (min_num_order, den_order_start).
+        if (c.tf.num_order() < o.min_num_order || c.tf.den_order() < o.den_order_start) continue;
+        refine_cand(c, 0);
+        if (c.adequate != next.adequate ? c.adequate
+                                        : (c.adequate ? c.crit < next.crit : c.rank < next.rank)) {
+          next = c;
+          better = true;
+        }
+      }
+      if (better) fit = next;
+    }
   };
   // One order loop for a delay hypothesis; returns the lowest adequate candidate or the best.
   // SK error of orders (n, m) with delay tau removed.
@@ -1068,6 +1143,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     refine_cand(r, 0);
     if (r.rank <= fin.rank) fin = r;
   }
+  if (o.refine) prune(fin);
   fill_result(res, d, fin.tf, fin.free_delay, fin.s, fin.chi2dof, fin.adequate, fin.iterations,
               fin.e_phi, fin.reflected);
   return res;
