@@ -384,9 +384,10 @@ void merge_real_roots(std::vector<Root>& v) {
 // over kStallSteps steps. A root running off along a flat valley (two real poles packed as a pair,
 // zeta -> 1500 and one pole -> 1e7 rad/s) otherwise crawls on to the whole budget: measured on the
 // random benchmark's seed 4, 0.5 %, such crawls were 3/4 of the time, and stopping them changed
-// no fit's order.
+// no fit's order. A tenth of a chi^2 unit over ten steps (0.01 before: the same orders on seeds
+// 1-5, BM_Order3Fit100Points 4.5 -> 3.2 ms) moves a parameter by at most ~0.3 of its sigma.
 constexpr int kStallSteps = 10;
-constexpr double kStallChi2 = 0.01, kStallRel = 1e-4;
+constexpr double kStallChi2 = 0.1, kStallRel = 1e-4;
 Tf refine(const Data& d, const Tf& start, bool free_delay, int max_evaluations = 0,
           bool* budget_hit = nullptr) {
   if (budget_hit) *budget_hit = false;
@@ -882,9 +883,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     if (coarse_tau >= 0 && top == coarse_top) return coarse_tau;
     FitOptions quick = o;
     quick.max_iterations = 6;
-    auto err_at = [&](double tau) {
-      return std::min(sk_err(tau, 2, 1, quick).first, sk_err(tau, 2, 2, quick).first);
-    };
+    // The SK error at (2, 2) (the min of (2, 1) and (2, 2) before: the same delays on the random
+    // benchmark, half the time).
+    auto err_at = [&](double tau) { return sk_err(tau, 2, 2, quick).first; };
     const int G =
         std::clamp(int(std::ceil(top * d.w.back() / 3.0)) + 1, top < o.max_delay_s ? 6 : 16, 100);
     double bt = 0, be = err_at(0.0);
