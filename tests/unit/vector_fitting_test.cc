@@ -91,14 +91,24 @@ TEST(VectorFitting, AnUnstablePoleIsReflected) {
   EXPECT_LT(worst_pole_error({C(-2.0, 0.0)}, r.poles), 1e-6);
 }
 
-TEST(VectorFitting, OnePercentNoiseKeepsTheResolvedPolesWithinTwoPercent) {
+// At 1 % noise, over 40 noise draws (not one chosen draw: a single seed met 2 % where others gave
+// 3-7 %): the worst pole of each fit, nearly always the 260 rad/s pair (zeta 0.4) next to a zero
+// pair at 120, lies within 2 % in the median draw and within 5 % in 90 % of them. Measured: median
+// 1.3 %, p90 3.5 %, worst 6.7 %.
+TEST(VectorFitting, OnePercentNoiseKeepsThePolesWithinTwoPercentInTheMedianDraw) {
+  constexpr int kDraws = 40;
+  constexpr double kMedianTol = 0.02, kP90Tol = 0.05;
   const Tf tf = six_poles();
-  const Data d = sample(tf, 0.1, 1000.0, 60, 0.01, 7);
-  const VectorFitResult r = vector_fit_poles(d.w, d.g, d.W, tf.den_order());
-  ASSERT_TRUE(r.ok);
-  // The in-band resonances and the real poles the data resolve (all but 260 rad/s, zeta 0.4, next
-  // to a zero pair at 120: its pole position is still within 2 %).
-  EXPECT_LT(worst_pole_error(true_poles(tf), r.poles), 0.02);
+  std::vector<double> worst;
+  for (unsigned seed = 1; seed <= kDraws; ++seed) {
+    const Data d = sample(tf, 0.1, 1000.0, 60, 0.01, seed);
+    const VectorFitResult r = vector_fit_poles(d.w, d.g, d.W, tf.den_order());
+    ASSERT_TRUE(r.ok) << "draw " << seed;
+    worst.push_back(worst_pole_error(true_poles(tf), r.poles));
+  }
+  std::sort(worst.begin(), worst.end());
+  EXPECT_LT(worst[kDraws / 2], kMedianTol);
+  EXPECT_LT(worst[kDraws * 9 / 10 - 1], kP90Tol);
 }
 
 TEST(VectorFitting, TooFewPointsOrBadOptionsSaySo) {
