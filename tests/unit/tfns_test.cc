@@ -383,7 +383,7 @@ TEST(Tfns, AnUndampedDipoleIsNotAPadeDelay) {
 // prints the same at every noise level).
 TEST(Tfns, RandomCasesComeBackAtTheirOrdersWithTheOraclesError) {
   constexpr int kCases = 32;
-  // Measured: orders 30 and 31 of 32, median ratio 1.000, 135 and 136 of 136 in-band roots within
+  // Measured: orders 31 and 32 of 32, median ratio 1.000, 136 of 136 in-band roots within
   // max(2 %, 3 sigma). (Before candidates were refined when SK's fit already passed: 30 of 32,
   // 1.023, 96 %.)
   constexpr double kMinOrdersRight = 0.9, kMaxMedianRatio = 1.05, kMinCoverage = 0.98;

@@ -17,18 +17,24 @@
 //    fixed point, not a descent: with noise or a wrong delay it can oscillate).
 //    When SK's fit at (n, m) is not adequate, SK is run again with its first weights from vector
 //    fitting's n poles (vector_fitting.h); the better of the two is refined first, the other too
-//    when that one does not become adequate.
+//    when that one does not become adequate. Below the first adequate order this restart is made
+//    at m = n, and at lower m only when it won at a higher m of that n.
 // 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
 //    left half plane.
 // 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
 //    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
-//    model wins only with no more parameters and a lower criterion (5). Output-error refinement
+//    model wins only with no more parameters and a lower criterion (5). The search: a grid over
+//    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then a golden section
+//    around its best; per order, the delay starts are the best separated points of an SK (n, n)
+//    grid +-10 windows around that best, and around the grid's runner-up local minimum when it is
+//    within 10 % of the best (a high relative degree makes the (2, 2) grid nearly flat). Output-error refinement
 //    (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the factored parameters
 //    (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by construction; real roots of
 //    one sign are refined in pairs, zeta >= 1 being two reals, so they can become a resonance)
 //    and, with delay auto, tau jointly. Every candidate short of hopeless (chi^2/dof < 30) is
 //    refined, screened with at most 60 residual evaluations; candidates compared across orders,
-//    and the chosen fit, are refined to convergence.
+//    and the chosen fit, are refined to convergence. A refinement also stops when the objective
+//    has fallen by less than 0.1 chi^2 units (without sigma: 1e-4 of itself) over ten steps.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
@@ -37,6 +43,10 @@
 //    location is searched), and the order is raised past the first adequate one while the
 //    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
 //    raising stops when two successive orders improve the error by less than 5 %.
+// 6. Pruning of the chosen fit: each zero with the nearest pole of its kind closer than half the
+//    pole's modulus, and each root whose relative sigma is >= 0.5, is removed in turn and the rest
+//    refined; the best (adequate first, then the criterion of 5) replaces the fit while better,
+//    never below min_num_order / den_order_start nor to more zeros than poles.
 // Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
 // on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
 // Units: w rad/s, tau seconds, phases radians inside, degrees in files.
