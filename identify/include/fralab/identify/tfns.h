@@ -123,6 +123,9 @@ struct FitResult {
   double gain_rel_sigma = -1;                  // relative standard deviation of the DC gain
   double delay_sigma_s = -1;                   // standard deviation of a fitted delay
   double noise_rel = -1;  // without sigma: the relative noise level the stop rule used (< 0: c_n)
+  // With sigma and no order adequate: the factor sigma was scaled by to choose the order (sqrt of
+  // the lowest chi^2/dof reached); 1: not scaled. chi2_per_dof stays against the sigma given.
+  double sigma_scale = 1;
   std::string status_str() const;
 };
 
