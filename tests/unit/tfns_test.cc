@@ -462,7 +462,7 @@ TEST(Tfns, RootsTheDataDoNotDetermineArePruned) {
 TEST(Tfns, DataThatScatterMoreThanTheirSigmaAreFittedAtTheirOrders) {
   constexpr int kCases = 16;
   constexpr double kMinOrdersRight = 0.9;           // measured: 16 of 16
-  constexpr double kScaleLo = 1.5, kScaleHi = 2.5;  // measured: 1.64-2.0
+  constexpr double kScaleLo = 1.5, kScaleHi = 2.5;  // measured: 1.64-2.05
   int right = 0;
   for (int i = 0; i < kCases; ++i) {
     auto c = fralab::testing::random_frd_case(i, 0.02, true, 1);

@@ -43,7 +43,10 @@
 //    location is searched), and the order is raised past the first adequate one while the
 //    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
 //    raising stops when two successive orders improve the error by less than 5 %.
-// 6. Pruning of the chosen fit: each zero with the nearest pole of its kind closer than half the
+// 6. With sigma and no order adequate (the data scatter more than their sigma says), steps 2-5 run
+//    again with sigma scaled by sqrt of the lowest chi^2/dof any physical candidate reached; the
+//    status stays kMaxOrderReached, chi2_per_dof against the sigma given, sigma_scale the scale.
+// 7. Pruning of the chosen fit: each zero with the nearest pole of its kind closer than half the
 //    pole's modulus, and each root whose relative sigma is >= 0.5, is removed in turn and the rest
 //    refined; the best (adequate first, then the criterion of 5) replaces the fit while better,
 //    never below min_num_order / den_order_start nor to more zeros than poles.
