@@ -1178,6 +1178,14 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         pick = &c;
       }
     }
+    if (!pick && pass > 0) {  // (not seen) the first pass's fit stands, against the sigma given
+      for (size_t i = 0; i < d.w.size(); ++i) {
+        d.sigma[i] /= sigma_scale;
+        d.W[i] *= sigma_scale * sigma_scale;
+      }
+      sigma_scale = 1;
+      break;
+    }
     if (!pick) {
       res.message = "no order from " + std::to_string(o.den_order_start) + " to " +
                     std::to_string(max_n) + " could be fitted";
@@ -1202,7 +1210,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   if (o.refine) prune(fin);
   fill_result(res, d, fin.tf, fin.free_delay, fin.s, fin.chi2dof, fin.adequate, fin.iterations,
               fin.e_phi, fin.reflected);
-  if (sigma_scale != 1) {  // figures against the sigma given; the status too
+  if (sigma_scale != 1) {  // figures against the sigma given (or estimated); the status too
     const double scaled = res.chi2_per_dof;
     res.sigma_scale = sigma_scale;
     res.chi2_per_dof = scaled * sigma_scale * sigma_scale;
@@ -1210,9 +1218,11 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     char buf[320];
     std::snprintf(buf, sizeof buf,
                   "%s: order %d/%d, chi2/dof %.3g, delay %.4g s, %d SK iterations; no order meets "
-                  "the sigma given: chosen with sigma x%.3g (chi2/dof %.3g)",
+                  "the %s: chosen with sigma x%.3g (chi2/dof %.3g)",
                   res.status_str().c_str(), res.num_order, res.den_order, res.chi2_per_dof,
-                  res.tf.delay_s, res.iterations, sigma_scale, scaled);
+                  res.tf.delay_s, res.iterations,
+                  res.noise_rel >= 0 ? "noise level estimated" : "sigma given", sigma_scale,
+                  scaled);
     res.message = buf;
   }
   return res;
