@@ -27,14 +27,18 @@ std::string Root::str() const {
   return os.str();
 }
 
+// One complex division for the whole denominator.
 Complex Tf::rational(Complex s) const {
-  Complex v(gain, 0.0);
-  for (const Root& z : zeros) v *= z.factor(s);
-  for (const Root& p : poles) v /= p.factor(s);
-  return v;
+  Complex num(gain, 0.0), den(1.0, 0.0);
+  for (const Root& z : zeros) num *= z.factor(s);
+  for (const Root& p : poles) den *= p.factor(s);
+  return num / den;
 }
 
-Complex Tf::at(double w) const { return rational(Complex(0.0, w)) * std::polar(1.0, -w * delay_s); }
+Complex Tf::at(double w) const {
+  const Complex r = rational(Complex(0.0, w));
+  return delay_s == 0 ? r : r * std::polar(1.0, -w * delay_s);
+}
 
 namespace {
 // prod of the factors as a polynomial, highest power first.
