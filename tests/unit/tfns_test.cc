@@ -521,3 +521,25 @@ TEST(Tfns, AMeasuredPathWithASharpResonanceIsFittedAdequately) {
   EXPECT_LT(r.chi2_per_dof, 1.5) << r.message;
   EXPECT_NEAR(r.tf.delay_s, 0.011, 0.001) << r.message;  // the J85's Wf:P3 delay
 }
+
+// Two real poles 16 decades apart (a pole at 1e-8 rad/s: an integrator in a 0.1-100 rad/s band,
+// and one at 1e8) are refined as one pair (zeta 5e7) and split back: the smaller root computed as
+// -wn (zeta - sqrt(zeta^2 - 1)) cancelled to -7.45e-9 or to 0 (a model the data's frequencies
+// could not evaluate); it must come back as the root it was, and the model finite.
+TEST(Tfns, AnOverdampedPairSplitsBackIntoItsRealPolesExactly) {
+  Tf truth;
+  truth.gain = 1e8;
+  truth.poles = {Root::Real(-1e-8), Root::Real(-1e8), Root::Pair(20.0, 0.3)};
+  const auto pts = tf_points(truth, 0.1 / (2 * M_PI), 100 / (2 * M_PI), 10, 0.0, 1);
+  FitOptions o;
+  o.delay = FitOptions::Delay::kNone;
+  const FitResult r = refine_tf(pts, truth, o);
+  std::vector<double> reals;
+  for (const Root& p : r.tf.poles)
+    if (!p.pair) reals.push_back(p.real);
+  ASSERT_EQ(reals.size(), 2u) << r.message;
+  std::sort(reals.begin(), reals.end());
+  EXPECT_NEAR(reals[0] / -1e8, 1.0, 1e-6);
+  EXPECT_NEAR(reals[1] / -1e-8, 1.0, 1e-6);  // the cancelling form gave 0.745 or 0
+  for (const FrdPoint& p : pts) EXPECT_TRUE(std::isfinite(std::abs(r.tf.at(p.w))));
+}

@@ -27,14 +27,18 @@
 //    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then a golden section
 //    around its best; per order, the delay starts are the best separated points of an SK (n, n)
 //    grid +-10 windows around that best, and around the grid's runner-up local minimum when it is
-//    within 10 % of the best (a high relative degree makes the (2, 2) grid nearly flat). Output-error refinement
-//    (Levenberg-Marquardt, Eigen) of sum_i W_i |G_i - G_a(j w_i)|^2 over the factored parameters
-//    (real poles -exp(t), pairs wn = exp(a), zeta = exp(b): stable by construction; real roots of
-//    one sign are refined in pairs, zeta >= 1 being two reals, so they can become a resonance)
-//    and, with delay auto, tau jointly. Every candidate short of hopeless (chi^2/dof < 30) is
-//    refined, screened with at most 60 residual evaluations; candidates compared across orders,
-//    and the chosen fit, are refined to convergence. A refinement also stops when the objective
-//    has fallen by less than 0.1 chi^2 units (without sigma: 1e-4 of itself) over ten steps.
+//    within 10 % of the best (a high relative degree makes the (2, 2) grid nearly flat).
+//    Output-error refinement (MINPACK's Levenberg-Marquardt, steps from the normal equations by
+//    Cholesky, a converged optimum polished by one QR-solved Gauss-Newton step) of sum_i W_i |G_i -
+//    G_a(j w_i)|^2 over the factored parameters (real poles -exp(t), pairs wn = exp(a), zeta =
+//    exp(b): stable by construction; real roots of one sign are refined in pairs, zeta >= 1 being
+//    two reals, so they can become a resonance) and, with delay auto, tau jointly. Every candidate
+//    short of hopeless (chi^2/dof < 30) is refined, screened with at most 60 residual evaluations;
+//    candidates compared across orders, and the chosen fit, are refined to convergence. A
+//    refinement also stops when the objective has fallen by less than 0.1 chi^2 units (without
+//    sigma: 1e-4 of itself) over ten steps. A candidate that fits but is refused for a cancelling
+//    dipole (a zero and a pole of one kind within 1e-3) has the couple removed and the rest
+//    refined.
 // 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
