@@ -27,12 +27,35 @@ std::string Root::str() const {
   return os.str();
 }
 
-// One complex division for the whole denominator.
+// One complex division for the whole denominator. The running products are kept within
+// 2^-500..2^500 by exact power-of-two scalings whose exponent is applied to the quotient, so roots
+// decades away from s cannot overflow (or underflow) them; inside that range the arithmetic is the
+// plain quotient.
 Complex Tf::rational(Complex s) const {
+  static const double kBig = std::ldexp(1.0, 500), kSmall = std::ldexp(1.0, -500);
   Complex num(gain, 0.0), den(1.0, 0.0);
-  for (const Root& z : zeros) num *= z.factor(s);
-  for (const Root& p : poles) den *= p.factor(s);
-  return num / den;
+  int exponent = 0;  // the value is num / den * 2^exponent
+  auto keep_in_range = [&](Complex& v, int sign) {
+    const double m = std::abs(v.real()) + std::abs(v.imag());
+    if (m > kBig) {
+      v = Complex(std::ldexp(v.real(), -500), std::ldexp(v.imag(), -500));
+      exponent += sign * 500;
+    } else if (m < kSmall && m > 0) {
+      v = Complex(std::ldexp(v.real(), 500), std::ldexp(v.imag(), 500));
+      exponent -= sign * 500;
+    }
+  };
+  for (const Root& z : zeros) {
+    num *= z.factor(s);
+    keep_in_range(num, 1);
+  }
+  for (const Root& p : poles) {
+    den *= p.factor(s);
+    keep_in_range(den, -1);
+  }
+  const Complex q = num / den;
+  return exponent == 0 ? q
+                       : Complex(std::ldexp(q.real(), exponent), std::ldexp(q.imag(), exponent));
 }
 
 Complex Tf::at(double w) const {

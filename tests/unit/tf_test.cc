@@ -123,3 +123,19 @@ TEST(Tf, PolynomialCoefficientsAreTheFactorsExpanded) {
     EXPECT_LT(std::abs(n / d - tf.rational(s)), 1e-14 * std::abs(tf.rational(s))) << w;
   }
 }
+
+// 40 zeros at 1e-8 rad/s and 40 poles at 1.0001e-8: at 1e4 rad/s each factor is ~1e12, so the
+// numerator's and the denominator's products alone are ~1e480 (beyond double); the value is the
+// ratio, (1.0001)^40 in magnitude and a phase of 40 (atan(w/1e-8) - atan(w/1.0001e-8)) ~ 0.
+TEST(Tf, ManyRootsFarBelowTheFrequencyDoNotOverflow) {
+  Tf t;
+  t.gain = 1.0;
+  for (int k = 0; k < 40; ++k) {
+    t.zeros.push_back(Root::Real(-1e-8));
+    t.poles.push_back(Root::Real(-1.0001e-8));
+  }
+  const Complex g = t.at(1e4);
+  ASSERT_TRUE(std::isfinite(std::abs(g)));
+  EXPECT_NEAR(std::abs(g), std::pow(1.0001, 40), 1e-9);
+  EXPECT_NEAR(std::arg(g), 0.0, 1e-9);
+}
