@@ -31,9 +31,11 @@ std::string Root::str() const {
 // 2^-500..2^500 by exact power-of-two scalings whose exponent is applied to the quotient, so roots
 // decades away from s cannot overflow (or underflow) them; inside that range the arithmetic is the
 // plain quotient.
-Complex Tf::rational(Complex s) const {
+namespace {
+template <class Factor>
+Complex rational_with(const Tf& t, Factor factor) {
   static const double kBig = std::ldexp(1.0, 500), kSmall = std::ldexp(1.0, -500);
-  Complex num(gain, 0.0), den(1.0, 0.0);
+  Complex num(t.gain, 0.0), den(1.0, 0.0);
   int exponent = 0;  // the value is num / den * 2^exponent
   auto keep_in_range = [&](Complex& v, int sign) {
     const double m = std::abs(v.real()) + std::abs(v.imag());
@@ -45,21 +47,26 @@ Complex Tf::rational(Complex s) const {
       exponent -= sign * 500;
     }
   };
-  for (const Root& z : zeros) {
-    num *= z.factor(s);
+  for (const Root& z : t.zeros) {
+    num *= factor(z);
     keep_in_range(num, 1);
   }
-  for (const Root& p : poles) {
-    den *= p.factor(s);
+  for (const Root& p : t.poles) {
+    den *= factor(p);
     keep_in_range(den, -1);
   }
   const Complex q = num / den;
   return exponent == 0 ? q
                        : Complex(std::ldexp(q.real(), exponent), std::ldexp(q.imag(), exponent));
 }
+}  // namespace
+
+Complex Tf::rational(Complex s) const {
+  return rational_with(*this, [s](const Root& r) { return r.factor(s); });
+}
 
 Complex Tf::at(double w) const {
-  const Complex r = rational(Complex(0.0, w));
+  const Complex r = rational_with(*this, [w](const Root& f) { return f.factor_jw(w); });
   return delay_s == 0 ? r : r * std::polar(1.0, -w * delay_s);
 }
 

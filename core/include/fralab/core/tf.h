@@ -32,6 +32,12 @@ struct Root {
   int order() const { return pair ? 2 : 1; }
   /// The unity-DC-gain factor at s: 1 - s/real, or s^2/wn^2 + 2 zeta s/wn + 1.
   Complex factor(Complex s) const;
+  /// factor(s) at s = j w (w in rad/s), the same value to the last bit without complex products:
+  /// (1 - w^2/wn^2, 2 zeta w/wn), or (1, -w/real).
+  Complex factor_jw(double w) const {
+    return pair ? Complex(-(w * w) / (wn * wn) + 1.0, ((2.0 * zeta) * w) / wn)
+                : Complex(1.0, -(w / real));
+  }
   /// The root(s) in the s-plane (one for a real root, the pair's two for a pair).
   std::vector<Complex> locations() const;
   /// Strictly in the open left half plane.

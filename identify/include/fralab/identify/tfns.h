@@ -80,14 +80,15 @@ struct FitOptions {
                              // outside
   // Without sigma (issue 14): the stop rule is the reduced chi^2 against sigma_i = s |G_i|, s the
   // data's relative noise level: `tolerance` when > 0, else estimated from the data (the residual
-  // of deliberately over-fitted models, delay removed), never below noise_floor. false: TFNS's
-  // E_N <= c_n.
+  // of deliberately over-fitted models, delay removed: of the over-fit as a model of roots, or of
+  // its polynomials when rooting a degenerate over-fit lost more than 100x), never below
+  // noise_floor. false: TFNS's E_N <= c_n.
   bool estimate_noise = true;
-  double tolerance = 0;        // assumed relative noise (rms |G - G_a| / |G| accepted); 0: estimate
-  double noise_floor = 1e-10;  // lowest estimated relative noise (noise-free data fit to ~this)
-  int min_num_order = 0;       // numerator orders tried at each n: n down to max(this, 0)
-  bool refine = true;          // output-error refinement
-  bool use_sigma = true;       // weight by 1/sigma^2 when present
+  double tolerance = 0;       // assumed relative noise (rms |G - G_a| / |G| accepted); 0: estimate
+  double noise_floor = 1e-9;  // lowest estimated relative noise (noise-free data fit to ~this)
+  int min_num_order = 0;      // numerator orders tried at each n: n down to max(this, 0)
+  bool refine = true;         // output-error refinement
+  bool use_sigma = true;      // weight by 1/sigma^2 when present
   /// Throws InputError naming the bad option.
   void validate() const;
 };
