@@ -1292,14 +1292,15 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         if (c.from_vf) vf_won = true;
         // Below the first adequate order, a clearly inadequate (n, n) ends this n: a lower
         // numerator order is a special case of it (zeros at infinity) and cannot pass where it
-        // misses by kSkipMisfit. Only when (n, n) is a sound optimum of its order, which it may not
-        // be: its error must be below the lower orders' best (a nested model that does worse is a
-        // failed fit) by a factor under kSkipGain (a large gain says n is at or near the data's
-        // order, where a zero at infinity is a poorly conditioned limit: a 6/7 truth without noise
-        // fitted (7, 7) to e_n 2e-7 and (7, 6) to 3e-18), and above rounding (e_n > 1e-10); and
-        // not with a free delay (there (n, n) starts from grid delays and misses more often: the
-        // skip lost a noise-free 0/3 delay case's first pass on seed 2). Measured on the random
-        // benchmark (seeds 1-5): the same fits case by case, 5-25 % less time.
+        // misses by kSkipMisfit. Only when (n, n) (refined when within reach, chi^2/dof < 30; else
+        // SK's fit) is a sound optimum of its order, which it may not be: its error must be below
+        // the lower orders' best (a nested model that does worse is a failed fit) by a factor under
+        // kSkipGain (a large gain says n is at or near the data's order, where a zero at infinity
+        // is a poorly conditioned limit: a 6/7 truth without noise fitted (7, 7) to e_n 2e-7 and
+        // (7, 6) to 3e-18), and above rounding (e_n > 1e-10). Not in the delayed loop: its fits
+        // start from grid delays and miss more often (the skip lost a noise-free 0/3 delay case's
+        // first pass on seed 2). Measured on the random benchmark (seeds 1-5): the same fits case
+        // by case, 5-25 % less time.
         if (m == n && !free_delay && !sel.ok && !found.ok && !c.adequate && !c.unfinished &&
             c.misfit > kSkipMisfit && c.s.e_n > 1e-10 &&
             (!best.ok || (c.rank > best.rank / kSkipGain && c.rank < best.rank))) {
