@@ -1140,14 +1140,9 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
       s2 = INFINITY;
       const int N = int(d.w.size());
       const int n_hi = std::min(14, (N - 3) / 2);
-      std::vector<double> taus = {0.0};
-      // A coarse delay below 0.05 rad at the top frequency is no delay: tau = 0 serves.
-      if (o.delay == FitOptions::Delay::kAuto && coarse_delay(o.max_delay_s) * d.w.back() > 0.05)
-        taus.push_back(coarse_delay(o.max_delay_s));
-      if (o.delay == FitOptions::Delay::kFixed) taus = {o.delay_s};
       FitOptions oo = o;
       oo.max_iterations = 12;
-      for (double tau : taus) {
+      auto over_fit = [&](double tau) {
         for (int n = n_hi; n >= std::max(1, n_hi - 2); n -= 2) {
           const auto [rooted, sk] = sk_err(tau, n, n, oo);
           const double sse = rooted <= kRootedSlack * sk.sse ? rooted : sk.sse;
@@ -1155,7 +1150,15 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           if (dof < 2 || !(sse < 1e300)) continue;
           if (sse / dof < s2) s2 = sse / dof, dof_est = dof;
         }
-      }
+      };
+      over_fit(o.delay == FitOptions::Delay::kFixed ? o.delay_s : 0.0);
+      // With the delay searched, also with the coarse delay removed, unless the delay-free
+      // over-fits are already at the floor (the estimate cannot go lower: the coarse grid over the
+      // whole delay range is left to the delayed loop, if it runs). A coarse delay below 0.05 rad
+      // at the top frequency is no delay: tau = 0 served.
+      if (o.delay == FitOptions::Delay::kAuto && !(s2 <= o.noise_floor * o.noise_floor) &&
+          coarse_delay(o.max_delay_s) * d.w.back() > 0.05)
+        over_fit(coarse_delay(o.max_delay_s));
     }
     if (std::isfinite(s2)) {
       const double s = std::max(std::sqrt(s2), o.noise_floor);
