@@ -1309,7 +1309,7 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         if (m == n && !free_delay && !sel.ok && !found.ok && !c.adequate && !c.unfinished &&
             c.misfit > kSkipMisfit && c.s.e_n > 1e-10 &&
             (!best.ok || (c.rank > best.rank / kSkipGain && c.rank < best.rank))) {
-          if (!best_n.ok) best_n = c;
+          best_n = c;  // (n, n) is this order's first candidate
           break;
         }
         // Numerator orders below n - 3 start from the delay of this order's best candidate so far
