@@ -1,8 +1,12 @@
 // Identification speed: every transfer function of the report (Tables 4-23, the 57 of models/:
 // actuators and paths at 70/85/95 %) fitted from 0.05-100 Hz data, 10 points per decade, 2 % noise;
-// and one order-3 fit from 100 points.
+// one order-3 fit from 100 points; and the smallest right singular vector of an SK iteration's
+// triangular factor (null_vector.h) against the JacobiSVD it replaced, at denominator orders n.
 #include <benchmark/benchmark.h>
 
+#include <random>
+
+#include "fralab/identify/null_vector.h"
 #include "fralab/identify/tfns.h"
 #include "fralab/plant/model.h"
 #include "test_util.h"
@@ -38,5 +42,32 @@ static void BM_Order3Fit100Points(benchmark::State& state) {
   state.counters["points"] = double(d.size());
 }
 BENCHMARK(BM_Order3Fit100Points)->Unit(benchmark::kMicrosecond);
+
+// An (n+1) x (n+1) triangular factor of a 60 x (n+1) Gaussian matrix with columns graded over
+// 8 decades (a weighted polynomial basis is about that ill-conditioned).
+static Eigen::MatrixXd graded_triangular_factor(int n) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  Eigen::MatrixXd A(60, n + 1);
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i < 60; ++i) A(i, j) = n01(rng) * std::pow(10.0, -8.0 * j / n);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  return qr.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
+}
+
+static void BM_NullVector(benchmark::State& state) {
+  const Eigen::MatrixXd R = graded_triangular_factor(int(state.range(0)));
+  for (auto _ : state) benchmark::DoNotOptimize(smallest_right_singular_vector(R)(0));
+}
+BENCHMARK(BM_NullVector)->Arg(4)->Arg(10)->Arg(14)->Unit(benchmark::kMicrosecond);
+
+static void BM_NullVectorJacobiSvd(benchmark::State& state) {
+  const Eigen::MatrixXd R = graded_triangular_factor(int(state.range(0)));
+  for (auto _ : state) {
+    Eigen::JacobiSVD<Eigen::MatrixXd, Eigen::NoQRPreconditioner> svd(R, Eigen::ComputeFullV);
+    benchmark::DoNotOptimize(svd.matrixV()(0, R.cols() - 1));
+  }
+}
+BENCHMARK(BM_NullVectorJacobiSvd)->Arg(4)->Arg(10)->Arg(14)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();
