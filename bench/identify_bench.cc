@@ -4,8 +4,6 @@
 // triangular factor (null_vector.h) against the JacobiSVD it replaced, at denominator orders n.
 #include <benchmark/benchmark.h>
 
-#include <random>
-
 #include "fralab/identify/null_vector.h"
 #include "fralab/identify/tfns.h"
 #include "fralab/plant/model.h"
@@ -43,26 +41,19 @@ static void BM_Order3Fit100Points(benchmark::State& state) {
 }
 BENCHMARK(BM_Order3Fit100Points)->Unit(benchmark::kMicrosecond);
 
-// An (n+1) x (n+1) triangular factor of a 60 x (n+1) Gaussian matrix with columns graded over
-// 8 decades (a weighted polynomial basis is about that ill-conditioned).
-static Eigen::MatrixXd graded_triangular_factor(int n) {
-  std::mt19937 rng(7);
-  std::normal_distribution<double> n01(0.0, 1.0);
-  Eigen::MatrixXd A(60, n + 1);
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i < 60; ++i) A(i, j) = n01(rng) * std::pow(10.0, -8.0 * j / n);
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
-  return qr.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
+// An SK iteration's (n+1) x (n+1) factor: of a 60-row matrix with columns graded over 8 decades.
+static Eigen::MatrixXd sk_factor(int n) {
+  return fralab::testing::graded_triangular_factor(60, n + 1, 7, 8);
 }
 
 static void BM_NullVector(benchmark::State& state) {
-  const Eigen::MatrixXd R = graded_triangular_factor(int(state.range(0)));
+  const Eigen::MatrixXd R = sk_factor(int(state.range(0)));
   for (auto _ : state) benchmark::DoNotOptimize(smallest_right_singular_vector(R)(0));
 }
 BENCHMARK(BM_NullVector)->Arg(4)->Arg(10)->Arg(14)->Unit(benchmark::kMicrosecond);
 
 static void BM_NullVectorJacobiSvd(benchmark::State& state) {
-  const Eigen::MatrixXd R = graded_triangular_factor(int(state.range(0)));
+  const Eigen::MatrixXd R = sk_factor(int(state.range(0)));
   for (auto _ : state) {
     Eigen::JacobiSVD<Eigen::MatrixXd, Eigen::NoQRPreconditioner> svd(R, Eigen::ComputeFullV);
     benchmark::DoNotOptimize(svd.matrixV()(0, R.cols() - 1));

@@ -2,35 +2,14 @@
 
 #include <gtest/gtest.h>
 
-#include <random>
+#include "test_util.h"
 
 using namespace fralab;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using fralab::testing::graded_triangular_factor;
 
 namespace {
-
-// The triangular factor of a rows x k matrix with N(0, 1) entries; with `dependent`, the last
-// column is a combination of the others plus `perturb` times noise (a null direction to
-// s_min ~ perturb: noise-free SK data make such R at s_min ~ eps s_max).
-MatrixXd triangular_factor(int rows, int k, unsigned seed, bool dependent = false,
-                           double perturb = 0, double decades = 4) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> n01(0.0, 1.0);
-  MatrixXd A(rows, k);
-  for (int i = 0; i < rows; ++i)
-    for (int j = 0; j < k; ++j) A(i, j) = n01(rng);
-  if (dependent) {
-    VectorXd c(k - 1);
-    for (int j = 0; j < k - 1; ++j) c(j) = n01(rng);
-    A.col(k - 1) = A.leftCols(k - 1) * c;
-    for (int i = 0; i < rows; ++i) A(i, k - 1) += perturb * n01(rng);
-  }
-  // Columns scaled over `decades`: R's condition is that of a weighted polynomial basis, not ~1.
-  for (int j = 0; j < k; ++j) A.col(j) *= std::pow(10.0, -decades * j / std::max(1, k - 1));
-  Eigen::HouseholderQR<MatrixXd> qr(A);
-  return qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
-}
 
 Eigen::JacobiSVD<MatrixXd> svd_of(const MatrixXd& R) {
   return Eigen::JacobiSVD<MatrixXd>(R, Eigen::ComputeFullV);
@@ -44,7 +23,7 @@ TEST(NullVector, MatchesTheSvdOnRandomTriangularFactors) {
   constexpr double kResidualTol = 1e-10, kAngleTol = 1e-8;
   for (int k = 1; k <= 15; ++k) {
     for (unsigned seed = 1; seed <= 5; ++seed) {
-      const MatrixXd R = triangular_factor(60, k, 100 * k + seed);
+      const MatrixXd R = graded_triangular_factor(60, k, 100 * k + seed, 4);
       const auto svd = svd_of(R);
       const double smin = svd.singularValues()(k - 1);
       const VectorXd x = smallest_right_singular_vector(R);
@@ -64,7 +43,7 @@ TEST(NullVector, ReachesTheSvdsResidualOnANearlySingularGradedFactor) {
   constexpr double kRelTol = 1e-6;
   for (int k : {4, 8, 15}) {
     for (unsigned seed = 1; seed <= 5; ++seed) {
-      const MatrixXd R = triangular_factor(60, k, seed, true, 1e-10, 8);
+      const MatrixXd R = graded_triangular_factor(60, k, seed, 8, true, 1e-10);
       const double smin = svd_of(R).singularValues()(k - 1);
       const VectorXd x = smallest_right_singular_vector(R);
       EXPECT_NEAR((R * x).norm(), smin, kRelTol * smin) << "k " << k << " seed " << seed;
@@ -75,7 +54,7 @@ TEST(NullVector, ReachesTheSvdsResidualOnANearlySingularGradedFactor) {
 // An exactly singular R (a zero on the diagonal, so a triangular solve divides by zero): the
 // SVD's answer, a finite null vector.
 TEST(NullVector, AnExactlySingularFactorFallsBackToTheSvd) {
-  MatrixXd R = triangular_factor(40, 6, 7);
+  MatrixXd R = graded_triangular_factor(40, 6, 7, 4);
   R(2, 2) = 0;
   R.row(2).setZero();
   const VectorXd x = smallest_right_singular_vector(R);

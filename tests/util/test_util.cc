@@ -168,4 +168,22 @@ double wrap_deg(double d) {
   return d;
 }
 
+Eigen::MatrixXd graded_triangular_factor(int rows, int k, unsigned seed, double decades,
+                                         bool dependent, double perturb) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  Eigen::MatrixXd A(rows, k);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < k; ++j) A(i, j) = n01(rng);
+  if (dependent) {
+    Eigen::VectorXd c(k - 1);
+    for (int j = 0; j < k - 1; ++j) c(j) = n01(rng);
+    A.col(k - 1) = A.leftCols(k - 1) * c;
+    for (int i = 0; i < rows; ++i) A(i, k - 1) += perturb * n01(rng);
+  }
+  for (int j = 0; j < k; ++j) A.col(j) *= std::pow(10.0, -decades * j / std::max(1, k - 1));
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  return qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+}
+
 }  // namespace fralab::testing

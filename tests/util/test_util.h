@@ -2,6 +2,7 @@
 // least-squares sinusoid fit (deliberately not the analyser's code), and model fixtures.
 #pragma once
 
+#include <Eigen/Dense>
 #include <complex>
 #include <string>
 #include <vector>
@@ -62,5 +63,13 @@ double worst_root_error(const std::vector<Root>& truth, const std::vector<Root>&
 
 /// Phase difference in degrees wrapped to (-180, 180].
 double wrap_deg(double d);
+
+/// The upper-triangular factor R (k x k, zeros below the diagonal) of a rows x k matrix with N(0,
+/// 1) entries, column j scaled by 10^(-decades j / (k - 1)): R's condition is then that of a
+/// weighted polynomial basis, as in an SK iteration (null_vector.h). With `dependent`, the last
+/// column (before scaling) is a combination of the others plus `perturb` times N(0, 1) noise: a
+/// null direction to s_min ~ perturb (noise-free SK data make such R at s_min ~ eps s_max).
+Eigen::MatrixXd graded_triangular_factor(int rows, int k, unsigned seed, double decades,
+                                         bool dependent = false, double perturb = 0);
 
 }  // namespace fralab::testing
