@@ -198,11 +198,11 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     // N's range exactly, and N is eliminated without a factorisation.
     const MatR Q1tAD = Q1.transpose().lazyProduct(AD);
     MatR ADp = AD - Q1.lazyProduct(Q1tAD);
-    // The smallest right singular vector of ADp is that of its small triangular factor R
-    // (null_vector.h; JacobiSVD before: 1.6x the time at n = 10, 2x at n = 14, BM_NullVector*).
+    // The smallest right singular vector of ADp is that of its small triangular factor R, the
+    // upper triangle of the QR's top rows (null_vector.h reads only that; JacobiSVD before: 1.6x
+    // the time at n = 10, 2x at n = 14, BM_NullVector*).
     Eigen::HouseholderQR<MatR> qd(ADp);
-    MatR R = qd.matrixQR().topRows(n + 1).triangularView<Eigen::Upper>();
-    VecR a = smallest_right_singular_vector(R);
+    VecR a = smallest_right_singular_vector(qd.matrixQR().topRows(n + 1));
     VecR bb = -std::sqrt(2.0) * (Q1tAD * a);  // the least-squares N for this D: AN^+ = 2 AN^T
     const C d0 = poly_at(b, a, 0.0), n0 = poly_at(b, bb, 0.0);
     if (std::abs(d0) == 0.0 || !std::isfinite(std::abs(d0))) break;  // the best so far, if any
