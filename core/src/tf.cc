@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "fralab/core/numerics.h"
+
 namespace fralab {
 
 Complex Root::factor(Complex s) const {
@@ -55,7 +57,7 @@ Complex rational_with(const Tf& t, Factor factor) {
     den *= factor(p);
     keep_in_range(den, -1);
   }
-  const Complex q = num / den;
+  const Complex q = detail::quotient(num, den);
   return exponent == 0 ? q
                        : Complex(std::ldexp(q.real(), exponent), std::ldexp(q.imag(), exponent));
 }

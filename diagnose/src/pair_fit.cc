@@ -46,7 +46,7 @@ double minimise_1d(const std::function<double(double)>& f, double lo, double hi,
     if (v < fb) fb = v, best = x;
   }
   const double step = (hi - lo) / grid;
-  return detail::golden(f, std::max(lo, best - step), std::min(hi, best + step));
+  return detail::brent_minimum(f, std::max(lo, best - step), std::min(hi, best + step));
 }
 
 std::string fmt(double v, int prec) {

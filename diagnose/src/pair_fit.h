@@ -53,7 +53,7 @@ double chi2(const PairFit& p, const std::vector<C>& F);
 /// f(j w_i) at every w_i.
 std::vector<C> factor_of(const std::vector<double>& w, const std::function<C(C)>& f);
 
-/// 1-D minimisation on [lo, hi]: a grid of `grid` + 1 points, then golden section around the best.
+/// 1-D minimisation on [lo, hi]: a grid of `grid` + 1 points, then Brent's method around the best.
 double minimise_1d(const std::function<double(double)>& f, double lo, double hi, int grid = 60);
 
 /// `v` with `prec` significant digits.

@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
     FitOptions o;
     parse_delay_option(delay, &o);
     lcm::LCM lcm(resolve_lcm_url(url));
-    if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
+    require_lcm(lcm, "LCM", resolve_lcm_url(url));
     Collector c{run_id, &lcm, {}, ""};
     lcm.subscribe(kFrdChannel, &Collector::on_frd, &c)->setQueueCapacity(100000);
     const auto t0 = std::chrono::steady_clock::now();

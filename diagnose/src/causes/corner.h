@@ -1,6 +1,6 @@
 // Internal: the real-corner fit shared by missing_lag (F = 1/(1 + s/a)) and missing_lead
 // (F = 1 + s/a): log-spaced corner a over the measured band widened by
-// DiagnoseOptions::corner_decades_beyond on each side, grid then golden section.
+// DiagnoseOptions::corner_decades_beyond on each side, grid then Brent's method.
 #pragma once
 
 #include "cause.h"

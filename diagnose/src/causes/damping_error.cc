@@ -1,6 +1,6 @@
 // damping_error: a pole pair of the simulated chain at the right frequency with the wrong damping,
 // F = D_sim(s) / D(s; wn, to_zeta) with D = s^2/wn^2 + 2 zeta s/wn + 1; parameters wn_rad_s,
-// from_zeta, to_zeta. Search: ln zeta over [ln 0.002, ln 2] (grid then golden section), one
+// from_zeta, to_zeta. Search: ln zeta over [ln 0.002, ln 2] (grid then Brent's method), one
 // candidate per simulated pair. Consistent across pairs: wn and to_zeta within
 // DiagnoseOptions::consistent_rel. Extension: the pair nearest wn takes to_zeta.
 #include <cmath>

@@ -1,7 +1,7 @@
 // missing_resonance: a peak F = 1/(s^2/wn^2 + 2 zeta s/wn + 1) (a pole pair the simulation lacks)
 // or a notch F = s^2/wn^2 + 2 zeta s/wn + 1 (an antiresonance: a zero pair), wn_rad_s and zeta.
 // Search: wn log-spaced over the measured band (41 points) times zeta in {0.02 ... 0.7}, then four
-// alternating golden sections (ln wn +-0.1; zeta within [max(0.002, zeta/2), min(1, 2 zeta)]).
+// alternating Brent searches (ln wn +-0.1; zeta within [max(0.002, zeta/2), min(1, 2 zeta)]).
 // A notch is reported with "shape": "notch". Consistent across pairs: same shape, wn within
 // DiagnoseOptions::consistent_rel.
 #include <cmath>
@@ -35,9 +35,10 @@ class MissingResonance final : public LinearCause {
         }
       }
       for (int it = 0; it < 4; ++it) {
-        blw = detail::golden([&](double x) { return chi2(p, F(x, bz)); }, blw - 0.1, blw + 0.1, 30);
-        bz = detail::golden([&](double z) { return chi2(p, F(blw, z)); }, std::max(0.002, bz * 0.5),
-                            std::min(1.0, bz * 2), 30);
+        blw = detail::brent_minimum([&](double x) { return chi2(p, F(x, bz)); }, blw - 0.1,
+                                    blw + 0.1, 24);
+        bz = detail::brent_minimum([&](double z) { return chi2(p, F(blw, z)); },
+                                   std::max(0.002, bz * 0.5), std::min(1.0, bz * 2), 24);
       }
       Cause c{kind(),     {{"wn_rad_s", std::exp(blw)}, {"zeta", bz}},
               F(blw, bz), 0,

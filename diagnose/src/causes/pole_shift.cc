@@ -1,7 +1,7 @@
 // pole_shift: F = D_from(s) / D_to(s): one real pole or pair of the simulated chain (actuator for
 // u_X:X; path and sensor for X:O) moved from `from` to `to` (pairs keep their damping, reported as
 // zeta), from_rad_s and to_rad_s. Search: ln to over [from / r, from * r] with
-// r = DiagnoseOptions::pole_shift_range, grid then golden section; one candidate per simulated
+// r = DiagnoseOptions::pole_shift_range, grid then Brent's method; one candidate per simulated
 // pole. Consistent across pairs: from and to within DiagnoseOptions::consistent_rel.
 #include <cmath>
 

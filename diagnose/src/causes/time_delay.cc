@@ -1,5 +1,5 @@
 // time_delay: F = e^{-s tau}, delay_s = tau, searched over DiagnoseOptions' delay range (a grid
-// then golden section). Consistent across pairs within max(consistent_delay_s, consistent_rel).
+// then Brent's method). Consistent across pairs within max(consistent_delay_s, consistent_rel).
 #include <algorithm>
 #include <cmath>
 
@@ -8,7 +8,7 @@
 namespace fralab::diag {
 namespace {
 
-constexpr double kGridStepS = 0.25e-3;  // the grid before the golden section (9 deg at 100 Hz)
+constexpr double kGridStepS = 0.25e-3;  // the grid before Brent's method (9 deg at 100 Hz)
 
 class TimeDelay final : public LinearCause {
  public:

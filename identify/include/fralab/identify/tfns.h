@@ -24,7 +24,7 @@
 // 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
 //    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
 //    model wins only with no more parameters and a lower criterion (5). The search: a grid over
-//    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then a golden section
+//    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then Brent's method
 //    around its best; per order, the delay starts are the best separated points of an SK (n, n)
 //    grid +-10 windows around that best, and around the grid's runner-up local minimum when it is
 //    within 10 % of the best (a high relative degree makes the (2, 2) grid nearly flat).
