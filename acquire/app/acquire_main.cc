@@ -71,10 +71,11 @@ int main(int argc, char** argv) {
     const Campaign& camp = *campaign;
 
     lcm::LCM lcm(resolve_lcm_url(url));
-    if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
-                                 : resolve_lcm_url(ctl_url));
-    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    require_lcm(lcm, "LCM", resolve_lcm_url(url));
+    const std::string control =
+        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
+    lcm::LCM ctl(control);
+    require_lcm(ctl, "the control LCM URL", control);
     AcquisitionLoopOptions lo;
     lo.run_id = run_id;
     lo.consumers = split_list(consumers_csv);

@@ -54,10 +54,11 @@ int main(int argc, char** argv) {
       return 0;
     }
     lcm::LCM lcm(resolve_lcm_url(url));
-    if (!lcm.good()) throw InputError("cannot open LCM at " + resolve_lcm_url(url));
-    lcm::LCM ctl(ctl_url.empty() ? control_url_for(resolve_lcm_url(url))
-                                 : resolve_lcm_url(ctl_url));
-    if (!ctl.good()) throw InputError("cannot open the control LCM URL");
+    require_lcm(lcm, "LCM", resolve_lcm_url(url));
+    const std::string control =
+        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
+    lcm::LCM ctl(control);
+    require_lcm(ctl, "the control LCM URL", control);
     AnalyzerNode live(lcm, ctl, pairs, opt, name, run_id);
     using Clock = std::chrono::steady_clock;
     auto last_ready = Clock::now() - std::chrono::seconds(1);

@@ -76,7 +76,7 @@ void run(const MonitorCommand& c) {
     return;
   }
   lcm::LCM lcm(resolve_lcm_url(c.url));
-  if (!lcm.good()) throw InputError("cannot open LCM at " + c.url);
+  require_lcm(lcm, "LCM", resolve_lcm_url(c.url));
   struct Listener {
     const MonitorCommand* c;
     std::optional<Frd> latest;

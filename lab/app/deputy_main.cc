@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   try {
     lcm::LCM lcm(resolve_lcm_url(url));
-    if (!lcm.good()) throw InputError("cannot open LCM at " + url);
+    require_lcm(lcm, "LCM", url);
     DeputyNode deputy(lcm, name);
     while (!g_stop) {
       deputy.tick(100);

@@ -280,7 +280,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
     const std::string durl =
         resolve_lcm_url(o.deputy_url.empty() ? kDefaultDeputyUrl : o.deputy_url);
     deputy_lcm = std::make_unique<lcm::LCM>(durl);
-    if (!deputy_lcm->good()) throw InputError("cannot open the deputies' LCM URL " + durl);
+    require_lcm(*deputy_lcm, "the deputies' LCM URL", durl);
     deputies = std::make_unique<DeputyClient>(*deputy_lcm, r.run_id);
     for (const auto& [kind, host] : o.hosts) deputies->wait_for_deputy(host, 10);
   }

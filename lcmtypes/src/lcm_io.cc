@@ -266,14 +266,48 @@ std::string resolve_lcm_url(const std::string& flag) {
   return url;
 }
 
-std::string private_lcm_url(uint64_t salt) {
-  // Group 239.255.x.y (administratively scoped), an even port 20000-59998 (the control URL takes
-  // the odd one above it), ttl=0. Linux hands a multicast datagram to every socket bound to its
-  // port whatever the group, so the port is what separates two runs: 20000 of them.
-  unsigned x = 1 + (salt % 250), y = 1 + ((salt / 250) % 250);
-  unsigned port = 20000 + 2 * unsigned((salt / 62500) % 20000);
+std::pair<int, int> ephemeral_port_range() {
+  int lo = 32768, hi = 60999;  // Linux's default
+  if (std::FILE* f = std::fopen("/proc/sys/net/ipv4/ip_local_port_range", "r")) {
+    int a = 0, b = 0;
+    if (std::fscanf(f, "%d %d", &a, &b) == 2 && a > 0 && b >= a && b <= 65535) lo = a, hi = b;
+    std::fclose(f);
+  }
+  return {lo, hi};
+}
+
+std::string private_lcm_url(uint64_t salt) { return private_lcm_url(salt, ephemeral_port_range()); }
+
+std::string private_lcm_url(uint64_t salt, std::pair<int, int> ephemeral) {
+  // Group 239.255.x.y (administratively scoped), an even port P of 10000-65534 with P and P + 1
+  // (the control URL's) outside the kernel's ephemeral range, ttl=0. Linux hands a multicast
+  // datagram to every socket bound to its port whatever the group, so the port is what separates
+  // two runs. Outside the ephemeral range because LCM's send sockets are never bound: each takes an
+  // ephemeral port at its first datagram, without SO_REUSEADDR, and a receiver's bind to that port
+  // then fails ("bind: Address already in use"; seen once in a full test run, when the tape ports
+  // were 20000-59998).
+  const auto [lo, hi] = ephemeral;
+  const int a_end = std::min(lo - 2, 65534);  // segment A: even P in [10000, a_end], P + 1 < lo
+  const int b_begin = std::max(10000, (hi + 2) / 2 * 2);  // segment B: even P >= hi + 1
+  const int na = a_end >= 10000 ? (a_end - 10000) / 2 + 1 : 0;
+  const int nb = b_begin <= 65534 ? (65534 - b_begin) / 2 + 1 : 0;
+  const unsigned x = 1 + (salt % 250), y = 1 + ((salt / 250) % 250);
+  unsigned port;
+  if (na + nb == 0) {  // the whole range is ephemeral: nothing better than any even port
+    port = 10000 + 2 * unsigned((salt / 62500) % 27768);
+  } else {
+    const int k = int((salt / 62500) % uint64_t(na + nb));
+    port = unsigned(k < na ? 10000 + 2 * k : b_begin + 2 * (k - na));
+  }
   return "udpm://239.255." + std::to_string(x) + "." + std::to_string(y) + ":" +
          std::to_string(port) + "?ttl=0&recv_buf_size=2097152";
+}
+
+void require_lcm(lcm::LCM& lcm, const std::string& what, const std::string& url) {
+  if (!lcm.good()) throw InputError("cannot open " + what + " at " + url);
+  if (lcm.getFileno() < 0)
+    throw InputError("cannot receive on " + what + " at " + url +
+                     ": its port is held by another socket (bind failed; see the line above)");
 }
 
 std::string control_url_for(const std::string& url) {

@@ -635,11 +635,12 @@ TEST(Lab, FreeRunningPlantRepeatsTheStepsItsBufferRanDryIn) {
   const std::string d = tmpdir("free_dry"), run = kFreeRun;
   measure_lockstep(d);
   // Stopped once the plant has played about a second (the tape past 100 kB), for 2 s: 20 times
-  // the lead.
+  // the lead. The wait is bounded (60 s): a run that fails before its tape grows (it once did, its
+  // acquire unable to bind its port) must fail the test, not hang it until ctest's timeout.
   const std::string tape = d + "/dry/tape.lcmlog";
-  Cmd free = sh("(while [ $(stat -c %s " + tape +
-                " 2>/dev/null || echo 0) -lt 100000 ]; do sleep "
-                "0.02; done; pkill -STOP -f '^[^ ]*fralab-acquire .*" +
+  Cmd free = sh("(i=0; while [ $(stat -c %s " + tape +
+                " 2>/dev/null || echo 0) -lt 100000 ] && [ $i -lt 3000 ]; do sleep "
+                "0.02; i=$((i+1)); done; pkill -STOP -f '^[^ ]*fralab-acquire .*" +
                 d +
                 "/dry'; sleep 2; pkill -CONT -f "
                 "'^[^ ]*fralab-acquire .*" +

@@ -1,8 +1,11 @@
 // Tape files: reading whole, detecting truncation, and following a tape still being written.
 #include "fralab/lcm_io.h"
 
+#include <arpa/inet.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -301,19 +304,31 @@ TEST(LcmUrl, TtlIsParsedAndLeavingTheHostIsAnOptIn) {
   unsetenv("FRALAB_NETWORK");
 }
 
-TEST(LcmUrl, PrivateUrlsUseAnEvenPortAndThePeekFindsTheRunId) {
-  std::set<std::string> ports;
-  for (uint64_t s = 0; s < 20000; ++s) {
-    const std::string u = private_lcm_url(s * 62500);
+// Every port even, P and P + 1 outside the ephemeral range (Linux's default, a custom one, and
+// the range this kernel reports), each used once over as many salts as there are ports.
+TEST(LcmUrl, PrivateUrlsUseAnEvenPortOutsideTheEphemeralRangeAndThePeekFindsTheRunId) {
+  auto port_of = [](const std::string& u) {
     const auto colon = u.rfind(':'), q = u.find('?');
-    const int port = std::stoi(u.substr(colon + 1, q - colon - 1));
-    EXPECT_EQ(port % 2, 0);
-    EXPECT_GE(port, 20000);
-    EXPECT_LE(port, 59998);
-    ports.insert(u.substr(colon + 1, q - colon - 1));
-    EXPECT_NO_THROW(resolve_lcm_url(u));
+    return std::stoi(u.substr(colon + 1, q - colon - 1));
+  };
+  const std::pair<int, int> ranges[] = {{32768, 60999}, {20001, 40000}, ephemeral_port_range()};
+  for (const auto& [lo, hi] : ranges) {
+    const int expected = ((lo - 2) - 10000) / 2 + 1 + (65534 - (hi + 2) / 2 * 2) / 2 + 1;
+    std::set<int> ports;
+    for (uint64_t s = 0; s < uint64_t(expected); ++s) {
+      const std::string u = private_lcm_url(s * 62500, {lo, hi});
+      const int port = port_of(u);
+      EXPECT_EQ(port % 2, 0) << u;
+      EXPECT_GE(port, 10000) << u;
+      EXPECT_LE(port, 65534) << u;
+      EXPECT_TRUE(port + 1 < lo || port > hi) << u << " in the ephemeral range " << lo << "-" << hi;
+      ports.insert(port);
+      EXPECT_NO_THROW(resolve_lcm_url(u));
+    }
+    EXPECT_EQ(int(ports.size()), expected) << lo << "-" << hi;  // every port used once
   }
-  EXPECT_EQ(ports.size(), 20000u);  // every port used once
+  EXPECT_EQ(port_of(private_lcm_url(0, {32768, 60999})), 10000);
+  EXPECT_EQ(port_of(private_lcm_url(11384 * 62500, {32768, 60999})), 61000);
   ack_t a;
   a.run_id = "run-42";
   a.consumer = "c";
@@ -387,4 +402,31 @@ TEST(TapeFile, WrittenRunReadsBackWithItsBlocksAndEvents) {
   EXPECT_THAT([&] { read_tape_run(path); },
               testing::ThrowsMessage<InputError>(testing::HasSubstr("lacks tape block seq 1")));
   fs::remove(path);
+}
+
+// A port held by a socket without SO_REUSEADDR (as LCM's own send sockets hold their ephemeral
+// ports) cannot be bound by LCM's receiver: require_lcm says so, naming the URL, where LCM 1.3
+// printed "bind: Address already in use" and crashed the process at a later call. A memq:// LCM
+// passes (its "socket" is a pipe).
+TEST(RequireLcm, AReceivePortHeldByAnotherSocketIsAnErrorNamingTheUrl) {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_ANY);
+  a.sin_port = 0;  // an ephemeral port, like an LCM sender's
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ASSERT_EQ(getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len), 0);
+  const std::string url = "udpm://239.255.201.7:" + std::to_string(ntohs(a.sin_port)) + "?ttl=0";
+  lcm::LCM held(url);
+  try {
+    require_lcm(held, "the test's LCM", url);
+    ADD_FAILURE() << "no error for a held port";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("cannot receive on the test's LCM at " + url));
+  }
+  close(fd);
+  lcm::LCM memq("memq://");
+  EXPECT_NO_THROW(require_lcm(memq, "memq", "memq://"));
 }

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "fralab/ack_t.hpp"
@@ -109,10 +110,24 @@ Msg decode_checked(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
 /// hosts) is refused unless the environment says FRALAB_NETWORK=1 (the explicit opt-in).
 std::string resolve_lcm_url(const std::string& flag);
 
-/// A fresh private URL for one lab run: a multicast group and an even port 20000-59998 derived
-/// from `salt` (20000 ports: Linux separates runs by port, not group), ttl=0, and a 2 MB receive
-/// buffer request (granted up to net.core.rmem_max).
+/// The kernel's ephemeral port range, inclusive (/proc/sys/net/ipv4/ip_local_port_range; Linux's
+/// default 32768-60999 when it cannot be read).
+std::pair<int, int> ephemeral_port_range();
+
+/// A fresh private URL for one lab run: a multicast group and an even port P of 10000-65534 derived
+/// from `salt`, P and P + 1 (the control URL's) outside the ephemeral range (13652 ports with
+/// Linux's default; Linux separates runs by port, not group, and LCM's unbound send sockets take
+/// ephemeral ports a receiver could then not bind), ttl=0, and a 2 MB receive buffer request
+/// (granted up to net.core.rmem_max). The one-argument form reads the range from the kernel.
 std::string private_lcm_url(uint64_t salt);
+std::string private_lcm_url(uint64_t salt, std::pair<int, int> ephemeral);
+
+/// Throws InputError naming `what` and `url` unless `lcm` can publish and receive there. LCM opens
+/// its receive socket lazily (at the first subscription or getFileno()): a bind that fails there
+/// (the port held by a socket without SO_REUSEADDR: "bind: Address already in use") is only
+/// printed, and LCM 1.3 then crashed the process at a later call (fralab-acquire: signal 11). The
+/// socket is opened here, once, and its failure is an error.
+void require_lcm(lcm::LCM& lcm, const std::string& what, const std::string& url);
 
 /// The control URL of a lab run: flow-control acknowledgements travel there, away from the tape
 /// URL, so lcm-logger (whose subscription queue holds 30 messages) hears only the tape traffic.
