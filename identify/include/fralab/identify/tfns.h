@@ -26,8 +26,9 @@
 //    model wins only with no more parameters and a lower criterion (5). The search: a grid over
 //    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then Brent's method
 //    around its best; per order, the delay starts are the best separated points of an SK (n, n)
-//    grid +-10 windows around that best, and around the grid's runner-up local minimum when it is
-//    within 10 % of the best (a high relative degree makes the (2, 2) grid nearly flat).
+//    grid +-10 windows (on multiples of the window) around that best, and around the grid's
+//    runner-up local minimum when it is within 10 % of the best (a high relative degree makes the
+//    (2, 2) grid nearly flat).
 //    Output-error refinement (MINPACK's Levenberg-Marquardt, steps from the normal equations by
 //    Cholesky, a converged optimum polished by one QR-solved Gauss-Newton step) of sum_i W_i |G_i -
 //    G_a(j w_i)|^2 over the factored parameters (real poles -exp(t), pairs wn = exp(a), zeta =
