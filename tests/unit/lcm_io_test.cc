@@ -313,7 +313,9 @@ TEST(LcmUrl, PrivateUrlsUseAnEvenPortOutsideTheEphemeralRangeAndThePeekFindsTheR
   };
   const std::pair<int, int> ranges[] = {{32768, 60999}, {20001, 40000}, ephemeral_port_range()};
   for (const auto& [lo, hi] : ranges) {
-    const int expected = ((lo - 2) - 10000) / 2 + 1 + (65534 - (hi + 2) / 2 * 2) / 2 + 1;
+    int expected = 0;  // counted directly, not by the implementation's segment arithmetic
+    for (int p = 10000; p <= 65534; p += 2) expected += (p + 1 < lo || p > hi) ? 1 : 0;
+    if (expected == 0) continue;  // a kernel range covering every port: nothing to keep clear of
     std::set<int> ports;
     for (uint64_t s = 0; s < uint64_t(expected); ++s) {
       const std::string u = private_lcm_url(s * 62500, {lo, hi});
