@@ -504,6 +504,32 @@ TEST(Tfns, TheCriterionChoosesATruthThatMissesTheAdequacyTestByChance) {
   }
 }
 
+// Past an adequate order the next one also starts nested in the adequate fit (a real pole far
+// above the band, or a cancelling couple where the residual is largest): SK's and vector fitting's
+// starts at that order can all refine into poorer basins than the lower order's optimum. Two draws
+// of the random benchmark came back one pole short (4/5 as 4/4 at 10 % noise, criterion 86.2
+// against the truth's 83.4; 1/3 as 2/2 at 5 %); both now at their orders and the oracle's chi2.
+TEST(Tfns, TheOrderAboveAnAdequateFitStartsNestedInIt) {
+  constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
+  struct Draw {
+    int index;
+    double noise;
+    uint64_t seed;
+  };
+  for (const Draw k : {Draw{3, 0.10, 3}, Draw{12, 0.05, 10}}) {
+    const auto c = fralab::testing::random_frd_case(k.index, k.noise, true, k.seed);
+    FitOptions oracle;
+    oracle.delay = c.truth.delay_s > 0 ? FitOptions::Delay::kAuto : FitOptions::Delay::kNone;
+    const FitResult o = refine_tf(c.points, c.truth, oracle);
+    const FitResult r = fit_tf(c.points, FitOptions{});
+    const std::string name = c.category + " " + std::to_string(k.index) + ": " + r.message;
+    EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
+    EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
+    EXPECT_EQ(r.status, FitResult::Status::kConverged) << name;
+    EXPECT_LE(r.chi2_per_dof, o.chi2_per_dof * (1 + kChi2Tol)) << name;
+  }
+}
+
 // Data that scatter more than their sigma says (the random benchmark's cases at 2 % noise with
 // sigma halved, as a multisine BLA's sigma below a weak path's scatter): no order is adequate, and
 // chosen by the smallest error every fit went to the highest order tried (0 of 32 at their orders).

@@ -47,10 +47,13 @@
 //    candidates the lowest criterion chi^2 + ln(2N) p wins (twice BIC's penalty: an added root's
 //    location is searched), and the order is raised past the first adequate one while the
 //    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
-//    raising stops when two successive orders improve the error by less than 5 %. The choice is
-//    then that of the criterion over every candidate tried with fewer parameters that passes the
-//    test at 4 sigma, chi^2/dof <= 1 + 4 / sqrt(N) (the true orders miss 3 sigma by chance in
-//    ~0.5 % of fits): such a fit is kConverged, its message says it was chosen by the criterion.
+//    raising stops when two successive orders improve the error by less than 5 %. With sigma
+//    given, past an adequate fit (n, m), when every start of (n + 1, m) or (n + 1, m + 1) fits
+//    worse than it, that order also starts nested in it: a real pole at -100 w_max, or a real
+//    pole-zero couple at the frequency of its largest weighted residual. The choice is then that
+//    of the criterion over every candidate tried with fewer parameters that passes the test at
+//    4 sigma, chi^2/dof <= 1 + 4 / sqrt(N) (the true orders miss 3 sigma by chance in ~0.5 % of
+//    fits): such a fit is kConverged, its message says it was chosen by the criterion.
 // 6. With sigma and no order adequate (the data scatter more than their sigma says), steps 2-5 run
 //    again with sigma scaled by sqrt of the lowest chi^2/dof any physical candidate reached; the
 //    status stays kMaxOrderReached, chi2_per_dof against the sigma given, sigma_scale the scale.
