@@ -70,12 +70,9 @@ int main(int argc, char** argv) {
     const std::unique_ptr<Campaign> campaign = make_campaign(model, o, run_id);
     const Campaign& camp = *campaign;
 
-    lcm::LCM lcm(resolve_lcm_url(url));
-    require_lcm(lcm, "LCM", resolve_lcm_url(url));
-    const std::string control =
-        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
-    lcm::LCM ctl(control);
-    require_lcm(ctl, "the control LCM URL", control);
+    LabLcm io(url, ctl_url);
+    lcm::LCM& lcm = io.data;
+    lcm::LCM& ctl = io.control;
     AcquisitionLoopOptions lo;
     lo.run_id = run_id;
     lo.consumers = split_list(consumers_csv);

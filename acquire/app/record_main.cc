@@ -36,12 +36,9 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
-    lcm::LCM lcm(resolve_lcm_url(url));
-    require_lcm(lcm, "LCM", resolve_lcm_url(url));
-    const std::string control =
-        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
-    lcm::LCM ctl(control);
-    require_lcm(ctl, "the control LCM URL", control);
+    LabLcm io(url, ctl_url);
+    lcm::LCM& lcm = io.data;
+    lcm::LCM& ctl = io.control;
     RecorderNode rec(lcm, ctl, out, run_id, name, append, first_block, first_status);
     auto last_ready = std::chrono::steady_clock::now() - std::chrono::seconds(1);
     while (!g_stop) {

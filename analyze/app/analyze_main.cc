@@ -53,12 +53,9 @@ int main(int argc, char** argv) {
       for (const Frd& f : frds) std::cout << frd_to_json(f).dump() << "\n";
       return 0;
     }
-    lcm::LCM lcm(resolve_lcm_url(url));
-    require_lcm(lcm, "LCM", resolve_lcm_url(url));
-    const std::string control =
-        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
-    lcm::LCM ctl(control);
-    require_lcm(ctl, "the control LCM URL", control);
+    LabLcm io(url, ctl_url);
+    lcm::LCM& lcm = io.data;
+    lcm::LCM& ctl = io.control;
     AnalyzerNode live(lcm, ctl, pairs, opt, name, run_id);
     using Clock = std::chrono::steady_clock;
     auto last_ready = Clock::now() - std::chrono::seconds(1);

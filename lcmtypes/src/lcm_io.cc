@@ -310,6 +310,15 @@ void require_lcm(lcm::LCM& lcm, const std::string& what, const std::string& url)
                      ": its port is held by another socket (bind failed; see the line above)");
 }
 
+LabLcm::LabLcm(const std::string& url, const std::string& ctl_url)
+    : data_url(resolve_lcm_url(url)),
+      control_url(ctl_url.empty() ? control_url_for(data_url) : resolve_lcm_url(ctl_url)),
+      data(data_url),
+      control(control_url) {
+  require_lcm(data, "LCM", data_url);
+  require_lcm(control, "the control LCM URL", control_url);
+}
+
 std::string control_url_for(const std::string& url) {
   // udpm://GROUP:PORT?opts -> udpm://GROUP:PORT+1?opts
   auto colon = url.rfind(':');

@@ -57,12 +57,9 @@ int main(int argc, char** argv) {
   try {
     Model model = load_model_or_embedded(model_file);
     for (const auto& w : model.warnings) std::cerr << "fralab-plant: warning: " << w << "\n";
-    lcm::LCM lcm(resolve_lcm_url(url));
-    require_lcm(lcm, "LCM", resolve_lcm_url(url));
-    const std::string control =
-        ctl_url.empty() ? control_url_for(resolve_lcm_url(url)) : resolve_lcm_url(ctl_url);
-    lcm::LCM ctl(control);
-    require_lcm(ctl, "the control LCM URL", control);
+    LabLcm io(url, ctl_url);
+    lcm::LCM& lcm = io.data;
+    lcm::LCM& ctl = io.control;
     LockstepPlant lockstep(model, opt, run_id);
     if (!replay.empty()) {  // resume: back to the exact state where the recorded run stands
       if (run_id.empty()) throw InputError("--replay needs --run-id");

@@ -432,3 +432,37 @@ TEST(RequireLcm, AReceivePortHeldByAnotherSocketIsAnErrorNamingTheUrl) {
   lcm::LCM memq("memq://");
   EXPECT_NO_THROW(require_lcm(memq, "memq", "memq://"));
 }
+
+// A lab process's two instances: the control URL is the data URL's port + 1 unless given, and a
+// held control port is an error naming the control URL (not the data URL).
+TEST(LabLcm, TheControlUrlIsTheNextPortUnlessGivenAndAHeldOneIsNamed) {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_ANY);
+  a.sin_port = 0;
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ASSERT_EQ(getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len), 0);
+  const int held = ntohs(a.sin_port);
+  ASSERT_GT(held, 1);
+  auto url = [](int port) { return "udpm://239.255.201.8:" + std::to_string(port) + "?ttl=0"; };
+  {
+    const LabLcm io(url(held + 2), "");
+    EXPECT_EQ(io.data_url, url(held + 2));
+    EXPECT_EQ(io.control_url, url(held + 3));
+  }
+  {
+    const LabLcm io(url(held + 2), url(held + 6));
+    EXPECT_EQ(io.control_url, url(held + 6));
+  }
+  try {
+    const LabLcm io(url(held - 1), "");  // its control port is the held one
+    ADD_FAILURE() << "no error for a held control port";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(),
+                ::testing::HasSubstr("cannot receive on the control LCM URL at " + url(held)));
+  }
+  close(fd);
+}

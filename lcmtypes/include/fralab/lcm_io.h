@@ -134,6 +134,15 @@ void require_lcm(lcm::LCM& lcm, const std::string& what, const std::string& url)
 /// Derived from the tape URL by adding 1 to its port ("" stays "").
 std::string control_url_for(const std::string& tape_url);
 
+/// The two LCM instances of a lab process: the tape's (data) and the control URL's, each opened
+/// and checked with require_lcm. data_url: resolve_lcm_url(url); control_url: ctl_url resolved
+/// when given, else control_url_for(data_url). Throws InputError naming the URL that fails.
+struct LabLcm {
+  LabLcm(const std::string& url, const std::string& ctl_url);
+  std::string data_url, control_url;
+  lcm::LCM data, control;
+};
+
 /// Waits up to timeout_ms for traffic on either instance and dispatches what arrived (a and b may
 /// be the same instance).
 void handle_either(lcm::LCM& a, lcm::LCM& b, int timeout_ms);
