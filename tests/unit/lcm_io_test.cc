@@ -33,6 +33,28 @@ std::vector<int64_t> write_log(const std::string& path, int n) {
   return ends;
 }
 
+// A UDP socket bound to an ephemeral port without SO_REUSEADDR, as LCM's own send sockets hold
+// theirs (port 0: the bind failed). Closed at the end of the scope.
+struct HeldPort {
+  int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  int port = 0;
+  HeldPort() {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_ANY);
+    a.sin_port = 0;
+    socklen_t len = sizeof a;
+    if (fd >= 0 && bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+        getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
+      port = ntohs(a.sin_port);
+  }
+  ~HeldPort() {
+    if (fd >= 0) close(fd);
+  }
+  HeldPort(const HeldPort&) = delete;
+  HeldPort& operator=(const HeldPort&) = delete;
+};
+
 std::string tmp(const std::string& name) {
   return (fs::temp_directory_path() / ("fralab_lcm_io_" + std::to_string(::getpid()) + "_" + name))
       .string();
@@ -411,16 +433,9 @@ TEST(TapeFile, WrittenRunReadsBackWithItsBlocksAndEvents) {
 // printed "bind: Address already in use" and crashed the process at a later call. A memq:// LCM
 // passes (its "socket" is a pipe).
 TEST(RequireLcm, AReceivePortHeldByAnotherSocketIsAnErrorNamingTheUrl) {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_ANY);
-  a.sin_port = 0;  // an ephemeral port, like an LCM sender's
-  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  socklen_t len = sizeof a;
-  ASSERT_EQ(getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len), 0);
-  const std::string url = "udpm://239.255.201.7:" + std::to_string(ntohs(a.sin_port)) + "?ttl=0";
+  const HeldPort held_port;
+  ASSERT_GT(held_port.port, 0);
+  const std::string url = "udpm://239.255.201.7:" + std::to_string(held_port.port) + "?ttl=0";
   lcm::LCM held(url);
   try {
     require_lcm(held, "the test's LCM", url);
@@ -428,7 +443,6 @@ TEST(RequireLcm, AReceivePortHeldByAnotherSocketIsAnErrorNamingTheUrl) {
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), ::testing::HasSubstr("cannot receive on the test's LCM at " + url));
   }
-  close(fd);
   lcm::LCM memq("memq://");
   EXPECT_NO_THROW(require_lcm(memq, "memq", "memq://"));
 }
@@ -436,16 +450,8 @@ TEST(RequireLcm, AReceivePortHeldByAnotherSocketIsAnErrorNamingTheUrl) {
 // A lab process's two instances: the control URL is the data URL's port + 1 unless given, and a
 // held control port is an error naming the control URL (not the data URL).
 TEST(LabLcm, TheControlUrlIsTheNextPortUnlessGivenAndAHeldOneIsNamed) {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_ANY);
-  a.sin_port = 0;
-  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  socklen_t len = sizeof a;
-  ASSERT_EQ(getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len), 0);
-  const int held = ntohs(a.sin_port);
+  const HeldPort held_port;
+  const int held = held_port.port;
   ASSERT_GT(held, 1);
   auto url = [](int port) { return "udpm://239.255.201.8:" + std::to_string(port) + "?ttl=0"; };
   {
@@ -464,5 +470,4 @@ TEST(LabLcm, TheControlUrlIsTheNextPortUnlessGivenAndAHeldOneIsNamed) {
     EXPECT_THAT(e.what(),
                 ::testing::HasSubstr("cannot receive on the control LCM URL at " + url(held)));
   }
-  close(fd);
 }

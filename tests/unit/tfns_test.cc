@@ -101,6 +101,28 @@ void check_recovery(double noise, double root_tol, uint64_t seed, double max_bey
   EXPECT_GE(double(within) / total, min_within) << within << " of " << total;
 }
 
+// A draw of the random benchmark (tests/util/random_frd.h, sigma given), fitted by fit_tf, and its
+// truth refined on the same data (the oracle; its delay free when the truth has one, as the fit's).
+struct Draw {
+  int index;
+  double noise;
+  uint64_t seed;
+};
+struct DrawFit {
+  fralab::testing::RandomFrdCase c;
+  FitResult fit, oracle;
+  std::string name;  // for the test's messages
+};
+DrawFit fit_draw(const Draw& k) {
+  DrawFit f{fralab::testing::random_frd_case(k.index, k.noise, true, k.seed), {}, {}, {}};
+  FitOptions oracle;
+  oracle.delay = f.c.truth.delay_s > 0 ? FitOptions::Delay::kAuto : FitOptions::Delay::kNone;
+  f.oracle = refine_tf(f.c.points, f.c.truth, oracle);
+  f.fit = fit_tf(f.c.points, FitOptions{});
+  f.name = f.c.category + " " + std::to_string(k.index) + ": " + f.fit.message;
+  return f;
+}
+
 }  // namespace
 
 TEST(Tfns, NoiseFreeRecoversEveryReportTransferFunctionTo0_1Percent) {
@@ -448,18 +470,8 @@ TEST(Tfns, RootsTheDataDoNotDetermineArePruned) {
   // the first truth's own antiresonance lies 3 % from its poles.
   constexpr double kCoupleTol = 0.01;
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
-  struct Draw {
-    int index;
-    double noise;
-    uint64_t seed;
-  };
   for (const Draw k : {Draw{25, 0.02, 3}, Draw{10, 0.05, 2}}) {
-    const auto c = fralab::testing::random_frd_case(k.index, k.noise, true, k.seed);
-    const FitResult r = fit_tf(c.points, FitOptions{});
-    FitOptions oracle;
-    oracle.delay = FitOptions::Delay::kNone;
-    const FitResult o = refine_tf(c.points, c.truth, oracle);
-    const std::string name = c.category + " " + std::to_string(k.index) + ": " + r.message;
+    const auto [c, r, o, name] = fit_draw(k);
     EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
     EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
     EXPECT_LE(r.chi2_per_dof, o.chi2_per_dof * (1 + kChi2Tol)) << name;
@@ -482,20 +494,10 @@ TEST(Tfns, RootsTheDataDoNotDetermineArePruned) {
 // them, converged, with the criterion's choice in the message.
 TEST(Tfns, TheCriterionChoosesATruthThatMissesTheAdequacyTestByChance) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
-  struct Draw {
-    int index;
-    uint64_t seed;
-  };
-  for (const Draw k : {Draw{1, 3}, Draw{14, 3}}) {
-    const auto c = fralab::testing::random_frd_case(k.index, 0.02, true, k.seed);
-    FitOptions oracle;  // the truth refined, its delay too when it has one (as the fit's)
-    oracle.delay = c.truth.delay_s > 0 ? FitOptions::Delay::kAuto : FitOptions::Delay::kNone;
-    const FitResult o = refine_tf(c.points, c.truth, oracle);
-    const double N = double(c.points.size());
+  for (const Draw k : {Draw{1, 0.02, 3}, Draw{14, 0.02, 3}}) {
+    const auto [c, r, o, name] = fit_draw(k);
     // The premise: the truth at its optimum fails the 3-sigma test.
-    ASSERT_GT(o.chi2_per_dof, 1 + 3 / std::sqrt(N)) << "draw " << k.index << ": " << o.message;
-    const FitResult r = fit_tf(c.points, FitOptions{});
-    const std::string name = c.category + " " + std::to_string(k.index) + ": " + r.message;
+    ASSERT_GT(o.chi2_per_dof, 1 + 3 / std::sqrt(double(c.points.size()))) << o.message;
     EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
     EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
     EXPECT_EQ(r.status, FitResult::Status::kConverged) << name;
@@ -511,18 +513,8 @@ TEST(Tfns, TheCriterionChoosesATruthThatMissesTheAdequacyTestByChance) {
 // against the truth's 83.4; 1/3 as 2/2 at 5 %); both now at their orders and the oracle's chi2.
 TEST(Tfns, TheOrderAboveAnAdequateFitStartsNestedInIt) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
-  struct Draw {
-    int index;
-    double noise;
-    uint64_t seed;
-  };
   for (const Draw k : {Draw{3, 0.10, 3}, Draw{12, 0.05, 10}}) {
-    const auto c = fralab::testing::random_frd_case(k.index, k.noise, true, k.seed);
-    FitOptions oracle;
-    oracle.delay = c.truth.delay_s > 0 ? FitOptions::Delay::kAuto : FitOptions::Delay::kNone;
-    const FitResult o = refine_tf(c.points, c.truth, oracle);
-    const FitResult r = fit_tf(c.points, FitOptions{});
-    const std::string name = c.category + " " + std::to_string(k.index) + ": " + r.message;
+    const auto [c, r, o, name] = fit_draw(k);
     EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
     EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
     EXPECT_EQ(r.status, FitResult::Status::kConverged) << name;
