@@ -611,3 +611,40 @@ TEST(Tfns, AnOverdampedPairSplitsBackIntoItsRealPolesExactly) {
   EXPECT_NEAR(reals[1] / -1e-8, 1.0, 1e-6);  // the cancelling form gave 0.745 or 0
   for (const FrdPoint& p : pts) EXPECT_TRUE(std::isfinite(std::abs(r.tf.at(p.w))));
 }
+
+// A real right-half-plane zero above the band imitates there the lag of a pole at its frequency
+// (the same phase, magnitudes (w/z)^2 / 2 apart). Draws of the random benchmark whose pole lies
+// 2-10x above the band came back with such a zero instead, each at a criterion within 0.4 of the
+// truth's: they now come back at their orders and the oracle's chi^2, and the message says what
+// was replaced. A zero the data do support is kept: at w_max / z = 0.63 (18 % of magnitude at the
+// top of the band, 1 % noise) the lag does not fit; at w_max / z = 0.25 (3 %, 2 % noise) the lag
+// is adequate but the zero's criterion is lower by 5.1 (measured), beyond the 1 the rule asks.
+TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
+  constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
+  for (const Draw k : {Draw{12, 0.10, 1}, Draw{4, 0.05, 2}, Draw{20, 0.05, 2}, Draw{28, 0.05, 3},
+                       Draw{12, 0.05, 4}, Draw{20, 0.05, 5}}) {
+    const auto [c, r, o, name] = fit_draw(k);
+    ASSERT_EQ(c.category, "pole outside");
+    EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
+    EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
+    EXPECT_LE(r.chi2_per_dof, o.chi2_per_dof * (1 + kChi2Tol)) << name;
+    EXPECT_THAT(r.message, ::testing::HasSubstr("is the lag it imitates")) << name;
+  }
+  struct Supported {
+    double z, noise;
+    uint64_t seed;
+  };
+  for (const Supported k : {Supported{1000, 0.01, 3}, Supported{2500, 0.02, 2}}) {
+    Tf t;
+    t.gain = 2.0;
+    t.poles = {Root::Real(-3.0), Root::Pair(60.0, 0.4)};
+    t.zeros = {Root::Real(k.z)};  // the band's top: 2 pi 100 = 628 rad/s
+    const FitResult r = fit_tf(tf_points(t, 0.05, 100, 10, k.noise, k.seed), FitOptions{});
+    const std::string name = "zero at " + std::to_string(k.z) + ": " + r.message;
+    EXPECT_EQ(r.num_order, 1) << name;
+    EXPECT_EQ(r.den_order, 3) << name;
+    ASSERT_EQ(r.tf.zeros.size(), 1u) << name;
+    EXPECT_NEAR(r.tf.zeros[0].real, k.z, 3 * r.zero_info[0].rel_sigma * k.z) << name;
+    EXPECT_THAT(r.message, ::testing::Not(::testing::HasSubstr("lag it imitates"))) << name;
+  }
+}

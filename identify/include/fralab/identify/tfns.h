@@ -61,6 +61,10 @@
 //    pole's modulus, and each root whose relative sigma is >= 0.5, is removed in turn and the rest
 //    refined; the best (adequate first, then the criterion of 5) replaces the fit while better,
 //    never below min_num_order / den_order_start nor to more zeros than poles.
+// 8. A real right-half-plane zero above the band (z > w_max) is the lag 1 / (1 + s/z) there to
+//    first order (the same phase, magnitudes (w/z)^2 / 2 apart): it is replaced by that pole and
+//    the rest refined, and kept only when its criterion (5) is lower than the lag's by 1 or more
+//    (a likelihood ratio of e; with a sigma given or estimated). The message says so.
 // Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
 // on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
 // Units: w rad/s, tau seconds, phases radians inside, degrees in files.
