@@ -557,10 +557,13 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     Cand found;
     int more = 0;  // orders tried after `found`
     Cand sel;      // without one_more: the adequate order's best by the criterion so far
+    std::vector<double> prev_rank;  // the previous order's candidates' rank by numerator order
+                                    // (+inf: not tried)
     for (int n = std::max(o.den_order_start, 0); n <= std::min(max_n, top_n); ++n) {
       if (found.ok) max_params = std::min(max_params, found.params + 1);
       if (n + std::max(0, o.min_num_order) + 1 + (free_delay ? 1 : 0) >= max_params) break;
       Cand best_n;
+      std::vector<double> cur_rank(size_t(n) + 1, INFINITY);
       bool vf_won = false;  // a candidate from VF's start was this order's best at a higher m
       // Delay starts: tau0 itself, or with a free delay the n_starts best separated points of a
       // grid of SK errors at (n, n) over tau0 +- 10 windows (the SK error is spiky in tau; the
@@ -731,9 +734,19 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         }
         // Lower numerator orders have fewer parameters: continue while they may still pass; stop
         // when one misses clearly (chi^2 10x the threshold, its refinement finished) with an error
-        // 10x this order's best.
-        if (c.misfit > 10 && c.rank > 10 * best_n.rank && !c.unfinished) break;
+        // 10x this order's best. Unless it is a failed fit: (n, m) holds every (n - 1, k <= m) (a
+        // pole at infinity, zeros at infinity), so an error above the best of those says its
+        // starts missed, not that fewer zeros cannot fit (a 1/7 truth at 10 % noise came back 0/6:
+        // at n = 7 every start of m = 6 refined to chi^2/dof 466 against 1.31 at m = 7 and the
+        // loop stopped there; m = 1 is the truth at 1.11).
+        cur_rank[size_t(m)] = c.rank;
+        double nested = INFINITY;
+        for (size_t k = 0; k < prev_rank.size() && k <= size_t(m); ++k)
+          nested = std::min(nested, prev_rank[k]);
+        const bool failed = c.rank > nested;
+        if (c.misfit > 10 && c.rank > 10 * best_n.rank && !c.unfinished && !failed) break;
       }
+      prev_rank = cur_rank;
       if (found.ok) {  // the more orders: adequate, no more parameters, and a lower criterion
         if (best_n.ok && best_n.adequate) {
           if (o.refine && best_n.unfinished) refine_cand(best_n, 0);

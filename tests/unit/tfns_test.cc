@@ -622,7 +622,7 @@ TEST(Tfns, AnOverdampedPairSplitsBackIntoItsRealPolesExactly) {
 TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
   for (const Draw k : {Draw{12, 0.10, 1}, Draw{4, 0.05, 2}, Draw{20, 0.05, 2}, Draw{28, 0.05, 3},
-                       Draw{12, 0.05, 4}, Draw{20, 0.05, 5}}) {
+                       Draw{12, 0.05, 4}}) {
     const auto [c, r, o, name] = fit_draw(k);
     ASSERT_EQ(c.category, "pole outside");
     EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
@@ -646,5 +646,21 @@ TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
     ASSERT_EQ(r.tf.zeros.size(), 1u) << name;
     EXPECT_NEAR(r.tf.zeros[0].real, k.z, 3 * r.zero_info[0].rel_sigma * k.z) << name;
     EXPECT_THAT(r.message, ::testing::Not(::testing::HasSubstr("lag it imitates"))) << name;
+  }
+}
+
+// Lower numerator orders are abandoned once one misses clearly, but not on a failed fit: (n, m)
+// holds every (n - 1, k <= m), so an error above theirs says its starts missed. Three draws of the
+// random benchmark came back one order short or above because the loop stopped at such a fit (a
+// 1/7 at 10 % noise as 0/6: every start of (7, 6) refined to chi^2/dof 466; a 3/6 at 5 % as 4/4; a
+// 1/6 at 0.5 % as 4/5): each now at its orders and the oracle's chi^2.
+TEST(Tfns, AFailedFitDoesNotEndTheLowerNumeratorOrders) {
+  constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
+  for (const Draw k : {Draw{0, 0.10, 6}, Draw{3, 0.05, 2}, Draw{19, 0.005, 8}}) {
+    const auto [c, r, o, name] = fit_draw(k);
+    EXPECT_EQ(r.num_order, c.truth.num_order()) << name;
+    EXPECT_EQ(r.den_order, c.truth.den_order()) << name;
+    EXPECT_EQ(r.status, FitResult::Status::kConverged) << name;
+    EXPECT_LE(r.chi2_per_dof, o.chi2_per_dof * (1 + kChi2Tol)) << name;
   }
 }
