@@ -650,8 +650,8 @@ TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
 }
 
 // Lower numerator orders are abandoned once one misses clearly, but not on a failed fit: (n, m)
-// holds every (n - 1, k <= m), so an error above theirs says its starts missed. Three draws of the
-// random benchmark came back one order short or above because the loop stopped at such a fit (a
+// holds every (n - 1, k <= m), so an error 10x above theirs says its starts missed. Three draws of
+// the random benchmark came back one order short or above because the loop stopped at such a fit (a
 // 1/7 at 10 % noise as 0/6: every start of (7, 6) refined to chi^2/dof 466; a 3/6 at 5 % as 4/4; a
 // 1/6 at 0.5 % as 4/5): each now at its orders and the oracle's chi^2.
 TEST(Tfns, AFailedFitDoesNotEndTheLowerNumeratorOrders) {

@@ -44,10 +44,10 @@
 //    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
 //    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
 //    c_n. At each n, numerator orders n down to min_num_order are tried, until one misses clearly
-//    (10x the threshold and 10x the order's best error) while fitting no worse than the previous
-//    order's candidates it contains (n - 1, k <= m): worse, it is a failed fit. Among adequate
-//    candidates the lowest criterion chi^2 + ln(2N) p wins (twice BIC's penalty: an added root's
-//    location is searched), and the order is raised past the first adequate one while the
+//    (10x the threshold and 10x the order's best error) while fitting less than 10x worse than the
+//    previous order's candidates it contains (n - 1, k <= m): worse, it is a failed fit. Among
+//    adequate candidates the lowest criterion chi^2 + ln(2N) p wins (twice BIC's penalty: an added
+//    root's location is searched), and the order is raised past the first adequate one while the
 //    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
 //    raising stops when two successive orders improve the error by less than 5 %. With sigma
 //    given, past an adequate fit (n, m), when every start of (n + 1, m) or (n + 1, m + 1) fits
