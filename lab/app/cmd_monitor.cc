@@ -78,7 +78,7 @@ void run(const MonitorCommand& c) {
   lcm::LCM lcm(resolve_lcm_url(c.url));
   require_lcm(lcm, "LCM", resolve_lcm_url(c.url));
   struct Listener {
-    const MonitorCommand* c;
+    const MonitorCommand* c = nullptr;
     std::optional<Frd> latest;
     bool complete = false;
     void on_frd(const lcm::ReceiveBuffer* rb, const std::string& ch) {
@@ -87,7 +87,8 @@ void run(const MonitorCommand& c) {
       latest = from_frd_msg(m);
       complete |= m.complete;
     }
-  } listener{&c};
+  } listener;
+  listener.c = &c;
   lcm.subscribe(kFrdChannel, &Listener::on_frd, &listener)->setQueueCapacity(10000);
   while (!listener.complete && !idle()) {
     if (lcm.handleTimeout(100) > 0 && listener.latest) {

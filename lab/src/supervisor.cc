@@ -49,7 +49,8 @@ void Supervisor::start(const ProcessSpec& spec) {
     if (!remote_)
       throw InputError(spec.name + ": host \"" + spec.host + "\" given but no deputies in use");
     remote_->start(spec);
-    Proc p{spec, -1, false, 0};
+    Proc p;
+    p.spec = spec;
     p.remote = true;
     procs_[spec.name] = p;
     return;
@@ -71,7 +72,10 @@ void Supervisor::start(const ProcessSpec& spec) {
   if (rc != 0) {
     throw InputError("cannot start " + spec.name + " (" + spec.argv[0] + "): " + std::strerror(rc));
   }
-  procs_[spec.name] = Proc{spec, pid, false, 0};
+  Proc p;
+  p.spec = spec;
+  p.pid = pid;
+  procs_[spec.name] = p;
 }
 
 void Supervisor::reap(bool block) {

@@ -721,7 +721,7 @@ void write_tape_file(const std::string& path, const std::vector<Block>& blocks,
   for (const Block& b : blocks) {
     const int64_t last = b.start_sample + b.n_samples - 1;
     while (next < events.size() &&
-           (events[next].seq < 0 && events[next].state == RunState::kStart ||
+           ((events[next].seq < 0 && events[next].state == RunState::kStart) ||
             events[next].sample <= last)) {
       put(kStatusChannel, to_status_msg(events[next]), time_of(events[next]));
       ++next;

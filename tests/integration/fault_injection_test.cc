@@ -86,7 +86,9 @@ TEST_P(Loss, EveryDatagramLostIsRetransmittedAndTheRunIsIdentical) {
             << run["retransmissions"] << " retransmissions of " << run["items_retransmitted"]
             << " blocks/events, wall " << run["wall_time_s"] << " s, engine time added 0 s\n"
             << c.output;
-  if (per_mille >= 10) EXPECT_GT(run["retransmissions"].get<int>(), 0);
+  if (per_mille >= 10) {
+    EXPECT_GT(run["retransmissions"].get<int>(), 0);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, Loss, ::testing::Values(1, 10, 50));

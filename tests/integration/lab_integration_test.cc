@@ -247,7 +247,9 @@ TEST(Lab, TruncatedTapeAndWrongMessageTypeAreNamed) {
   const Frd whole = load_frd(d + "/frd/Wf_P3.json"), cut = load_frd(t + "/frd/Wf_P3.json");
   ASSERT_EQ(cut.points.size(), whole.points.size());
   for (size_t i = 0; i < cut.points.size(); ++i)
-    if (cut.points[i].valid) EXPECT_EQ(cut.points[i].mag, whole.points[i].mag);
+    if (cut.points[i].valid) {
+      EXPECT_EQ(cut.points[i].mag, whole.points[i].mag);
+    }
   EXPECT_TRUE(cut.points.front().valid);
   {
     lcm::LogFile log(t + "/wrong.lcmlog", "w");

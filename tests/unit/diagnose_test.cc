@@ -244,8 +244,11 @@ TEST(Diagnose, MissingResonanceNotch) {
   EXPECT_NEAR(f.parameters.at("wn_rad_s"), 12, 0.03 * 12);
   // The notch extends the path's zeros, not its poles.
   const Model& ext = d.extended;
-  for (const auto& p : ext.paths)
-    if (p.output == "y") EXPECT_EQ(p.tf.zeros.size(), 1u);
+  for (const auto& p : ext.paths) {
+    if (p.output == "y") {
+      EXPECT_EQ(p.tf.zeros.size(), 1u);
+    }
+  }
 }
 
 TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
@@ -337,8 +340,11 @@ TEST(Diagnose, DampingErrorOfASimulatedPair) {
   EXPECT_EQ(f.output, "z");
   EXPECT_NEAR(f.parameters.at("wn_rad_s"), 30, 1e-12);
   EXPECT_NEAR(f.parameters.at("to_zeta"), 0.08, 0.1 * 0.08);
-  for (const auto& p : d.extended.paths)
-    if (p.output == "z") EXPECT_NEAR(p.tf.poles[1].zeta, 0.08, 0.1 * 0.08);
+  for (const auto& p : d.extended.paths) {
+    if (p.output == "z") {
+      EXPECT_NEAR(p.tf.poles[1].zeta, 0.08, 0.1 * 0.08);
+    }
+  }
 }
 
 TEST(Diagnose, SignError) {

@@ -19,7 +19,7 @@ std::string log_file(const std::string& name) {
 }
 
 ProcessSpec sh(const std::string& name, const std::string& script) {
-  return {name, {"sh", "-c", script}, log_file(name)};
+  return {name, {"sh", "-c", script}, log_file(name), ""};
 }
 
 TEST(Supervisor, WaitsForProcessesThatSucceed) {
