@@ -30,12 +30,23 @@ using fralab::testing::RandomFrdCase;
 
 namespace {
 
+using fralab::testing::NoiseKind;
+
 struct Condition {
   double noise;
   bool sigma;
+  NoiseKind kind = NoiseKind::kRelative;
 };
-const Condition kConditions[] = {{0.0, false}, {0.005, true}, {0.02, true},
-                                 {0.05, true}, {0.10, true},  {0.02, false}};
+// The last two: additive noise (0.5 % of the peak |G| at every point, a measured path's output
+// noise), with sigma and without.
+const Condition kConditions[] = {{0.0, false},
+                                 {0.005, true},
+                                 {0.02, true},
+                                 {0.05, true},
+                                 {0.10, true},
+                                 {0.02, false},
+                                 {0.005, true, NoiseKind::kAdditive},
+                                 {0.005, false, NoiseKind::kAdditive}};
 
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
@@ -106,20 +117,32 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "| noise | sigma | fralab median / p90 | oracle median / p90 | ratio median / p90 | orders "
-      "right | search losses | roots within 2 %% (fralab / oracle) | 3-sigma coverage | coverage, "
-      "orders right | ms per fit median / p90 |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "right (as with sigma) | search losses | roots within 2 %% (fralab / oracle) | 3-sigma "
+      "coverage | coverage, orders right | ms per fit median / p90 "
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Condition& k : kConditions) {
-    std::vector<double> ef, eo, ms;
+    std::vector<double> ef, eo, ms, es;  // es: the fits with sigma (additive, no sigma)
     int right = 0, tot = 0, within = 0, covered = 0, tot_o = 0, within_o = 0, covered_o = 0;
-    int losses = 0;
+    int losses = 0, as_sigma = 0;
     int tot_r = 0, covered_r = 0;  // in the cases whose orders are right
+    const bool additive = k.kind == NoiseKind::kAdditive;
     for (int i = 0; i < n_cases; ++i) {
-      const RandomFrdCase c = random_frd_case(i, k.noise, k.sigma, seed);
+      const RandomFrdCase c = random_frd_case(i, k.noise, k.sigma, seed, k.kind);
       const auto t0 = std::chrono::steady_clock::now();
       const FitResult r = fit_tf(c.points, FitOptions{});
       ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-      const FitResult o = refine_tf(c.points, c.truth, oracle_options(c));
+      // Additive noise without sigma: the oracle is told the noise too (its weights 1 / sigma^2,
+      // the same draw with sigma), and fralab's fit with that sigma is the orders' reference.
+      const RandomFrdCase cs =
+          additive && !k.sigma && k.noise > 0 ? random_frd_case(i, k.noise, true, seed, k.kind) : c;
+      const FitResult o = refine_tf(cs.points, c.truth, oracle_options(c));
+      FitResult rs;  // additive without sigma: the fit with the sigma withheld
+      if (additive && !k.sigma && k.noise > 0) {
+        rs = fit_tf(cs.points, FitOptions{});
+        as_sigma += rs.num_order == r.num_order && rs.den_order == r.den_order;
+        es.push_back(model_error(rs.tf, c.truth, c.w_lo, c.w_hi));
+      }
       ef.push_back(model_error(r.tf, c.truth, c.w_lo, c.w_hi));
       eo.push_back(model_error(o.tf, c.truth, c.w_lo, c.w_hi));
       const bool ok = r.num_order == c.truth.num_order() && r.den_order == c.truth.den_order();
@@ -158,20 +181,28 @@ int main(int argc, char** argv) {
       if (verbose)
         std::printf(
             "  %2d %-20s N=%2zu truth %d/%d tau %.3f | fit %d/%d tau %.4f %-18s err %.2e oracle "
-            "%.2e %.1f ms chi2 %.3f oracle %.3f crit %.1f truth %.1f%s\n",
+            "%.2e %.1f ms chi2 %.3f oracle %.3f crit %.1f truth %.1f noise %.3g / %.3g%s\n",
             i, c.category.c_str(), c.points.size(), c.truth.num_order(), c.truth.den_order(),
             c.truth.delay_s, r.num_order, r.den_order, r.tf.delay_s, r.status_str().c_str(),
             ef.back(), eo.back(), ms.back(), r.chi2_per_dof, o.chi2_per_dof, crit_fit, crit_truth,
-            ok ? "" : "  WRONG");
+            r.noise_rel, r.noise_abs, ok ? "" : "  WRONG");
+      if (verbose && !es.empty())
+        std::printf("       with sigma %d/%d err %.2e%s\n", rs.num_order, rs.den_order, es.back(),
+                    rs.num_order == r.num_order && rs.den_order == r.den_order ? "" : "  DIFFERS");
     }
     const double mf = quantile(ef, 0.5), pf = quantile(ef, 0.9), mo = quantile(eo, 0.5),
                  po = quantile(eo, 0.9);
+    char as[64] = "";
+    if (additive && !k.sigma)
+      std::snprintf(as, sizeof as, " (%.0f %%; error %.2f / %.2f of it)",
+                    100.0 * as_sigma / n_cases, mf / quantile(es, 0.5), pf / quantile(es, 0.9));
     std::printf(
-        "| %.1f %% | %s | %.2g / %.2g | %.2g / %.2g | %.2f / %.2f | %.0f %% | %s | %d / %d of %d "
-        "(%.0f %%) | %.0f %% (oracle %.0f %%) | %.0f %% | %.1f / %.1f |\n",
-        100 * k.noise, k.sigma ? "yes" : "no", mf, pf, mo, po, mf / mo, pf / po,
-        100.0 * right / n_cases, k.sigma ? std::to_string(losses).c_str() : "-", within, within_o,
-        tot, 100.0 * within / std::max(1, within_o), 100.0 * covered / std::max(1, tot),
+        "| %.1f %%%s | %s | %.2g / %.2g | %.2g / %.2g | %.2f / %.2f | %.0f %%%s | %s | %d / %d of "
+        "%d (%.0f %%) | %.0f %% (oracle %.0f %%) | %.0f %% | %.1f / %.1f |\n",
+        100 * k.noise, additive ? " of the peak, additive" : "", k.sigma ? "yes" : "no", mf, pf, mo,
+        po, mf / mo, pf / po, 100.0 * right / n_cases, as,
+        k.sigma ? std::to_string(losses).c_str() : "-", within, within_o, tot,
+        100.0 * within / std::max(1, within_o), 100.0 * covered / std::max(1, tot),
         100.0 * covered_o / std::max(1, tot_o), 100.0 * covered_r / std::max(1, tot_r),
         quantile(ms, 0.5), quantile(ms, 0.9));
     std::fflush(stdout);

@@ -1,5 +1,6 @@
 #include "random_frd.h"
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -44,10 +45,12 @@ std::vector<Root> draw_roots(Rng& g, int count, double lo, double hi, double z_l
 
 }  // namespace
 
-RandomFrdCase random_frd_case(int index, double noise, bool sigma_given, uint64_t seed) {
+RandomFrdCase random_frd_case(int index, double noise, bool sigma_given, uint64_t seed,
+                              NoiseKind kind) {
   Rng g(seed * 1000003u + uint64_t(index) * 7919u);
   RandomFrdCase c;
   c.noise = noise;
+  c.kind = kind;
   c.sigma_given = sigma_given && noise > 0;
   c.w_lo = 2 * std::numbers::pi * 0.05;  // the lab's band: 0.05-100 Hz
   c.w_hi = 2 * std::numbers::pi * 100;
@@ -120,10 +123,13 @@ RandomFrdCase random_frd_case(int index, double noise, bool sigma_given, uint64_
   // Noise: its own stream (the truth above does not depend on it).
   Rng gn(seed * 31u + uint64_t(index) * 104729u + uint64_t(std::llround(noise * 1e6)));
   std::normal_distribution<double> nd(0.0, std::sqrt(0.5));
+  auto w_at = [&](int i) { return c.w_lo * std::pow(c.w_hi / c.w_lo, double(i) / (points - 1)); };
+  double peak = 0;
+  for (int i = 0; i < points; ++i) peak = std::max(peak, std::abs(t.at(w_at(i))));
   for (int i = 0; i < points; ++i) {
-    const double w = c.w_lo * std::pow(c.w_hi / c.w_lo, double(i) / (points - 1));
+    const double w = w_at(i);
     std::complex<double> v = t.at(w);
-    const double s = noise * std::abs(v);
+    const double s = noise * (kind == NoiseKind::kAdditive ? peak : std::abs(v));
     if (noise > 0) v += std::complex<double>(nd(gn), nd(gn)) * s;
     FrdPoint p;
     p.w = w;

@@ -67,8 +67,9 @@
 //    first order (the same phase, magnitudes (w/z)^2 / 2 apart): it is replaced by that pole and
 //    the rest refined, and kept only when its criterion (5) is lower than the lag's by 1 or more
 //    (a likelihood ratio of e; with a sigma given or estimated). The message says so.
-// Weights W_i: 1 / sigma_i^2 when the data carry sigma, else 1 / |G_i|^2 (relative error, uniform
-// on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
+// Weights W_i: 1 / sigma_i^2 when the data carry sigma (or when the noise is estimated: sigma_i from
+// the estimated level, FitOptions::estimate_noise), else 1 / |G_i|^2 (relative error, uniform on the
+// log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
 // Units: w rad/s, tau seconds, phases radians inside, degrees in files.
 #pragma once
 
@@ -95,7 +96,10 @@ struct FitOptions {
   // data's relative noise level: `tolerance` when > 0, else estimated from the data (the residual
   // of deliberately over-fitted models, delay removed: of the over-fit as a model of roots, or of
   // its polynomials when rooting a degenerate over-fit lost more than 100x), never below
-  // noise_floor. false: TFNS's E_N <= c_n.
+  // noise_floor. Estimated, the noise may have an absolute part: sigma_i^2 = a^2 |G_i|^2 + b^2
+  // when the over-fit's residuals support it (noise_model.h: a measured path's output noise), and
+  // then, as with a sigma given, a path with fewer than 3 points above 0.3 sigma is no_response.
+  // false: TFNS's E_N <= c_n.
   bool estimate_noise = true;
   double tolerance = 0;       // assumed relative noise (rms |G - G_a| / |G| accepted); 0: estimate
   double noise_floor = 1e-9;  // lowest estimated relative noise (noise-free data fit to ~this)
@@ -144,6 +148,9 @@ struct FitResult {
   double gain_rel_sigma = -1;                  // relative standard deviation of the DC gain
   double delay_sigma_s = -1;                   // standard deviation of a fitted delay
   double noise_rel = -1;  // without sigma: the relative noise level the stop rule used (< 0: c_n)
+  // Without sigma, when the data's noise has an absolute part (noise_model.h): b of sigma_i^2 =
+  // noise_rel^2 |G_i|^2 + b^2, in the ratio's units (< 0: relative only).
+  double noise_abs = -1;
   // With sigma and no order adequate: the factor sigma was scaled by to choose the order (sqrt of
   // the lowest chi^2/dof reached); 1: not scaled. chi2_per_dof stays against the sigma given.
   double sigma_scale = 1;
