@@ -668,9 +668,10 @@ TEST(Tfns, AFailedFitDoesNotEndTheLowerNumeratorOrders) {
 // Data without sigma whose noise is additive (a measured path's output noise: 0.5 % of the peak
 // |G| at every point, so sigma / |G| grows where |G| falls), the random benchmark's draws of seed
 // 2: the absolute part is found and the orders are those the same data give with their sigma.
-// Measured on cases 0-15: 14 of 16 as with sigma (with the relative level alone, before the
-// absolute part: BASELINE of 16), found in 15, b 0.55-1.67x the level drawn (median 1.19: the
-// over-fits are SK's, near the least-squares optimum, not at it).
+// Measured on cases 0-15: 14 of 16 as with sigma (5 of 16 before the absolute part; with it
+// turned off now, 1: the relative level reaches 30 % and the path is called no_response), found
+// in 15, b 0.55-1.67x the level drawn (median 1.19: the over-fits are SK's, near the
+// least-squares optimum, not at it).
 TEST(Tfns, AdditiveNoiseWithoutSigmaIsFoundAndFittedAsWithItsSigma) {
   using fralab::testing::NoiseKind;
   constexpr int kCases = 16;
