@@ -1,7 +1,9 @@
 // Issue 14: the identifier on randomised frequency responses it has never seen (tests/util/
 // random_frd.h: orders 1-8 with 0..n zeros, close light resonances, right-half-plane zeros, poles
-// over four decades, a pole outside the band, sparse grids, delays), at six noise conditions,
-// against an oracle told the true orders and delay (refine_tf from the truth: weighted
+// over four decades, a pole outside the band, sparse grids, delays), at six noise conditions
+// relative to |G| and two of additive noise (0.5 % of the peak |G|, with sigma and without:
+// without, the oracle is told the sigma and the orders are also compared with fralab's fit given
+// it), against an oracle told the true orders and delay (refine_tf from the truth: weighted
 // Levenberg-Marquardt on the same data). Prints per condition: model error rms |G_fit - G_true| /
 // |G_true| over the band (median / p90, fralab and oracle), both orders right, search losses (wrong
 // orders whose truth the criterion prefers: the search missed it; the other wrong orders are ones
