@@ -1027,6 +1027,14 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
     res.message = buf;
   }
   res.message += lag_note;
+  if (res.noise_abs > 0) {  // the noise's shape, where it is not the relative one alone
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "; noise estimated without sigma: %.3g relative, %.3g absolute (the ratio's "
+                  "units)",
+                  res.noise_rel, res.noise_abs);
+    res.message += buf;
+  }
   return res;
 }
 

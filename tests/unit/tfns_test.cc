@@ -691,6 +691,8 @@ TEST(Tfns, AdditiveNoiseWithoutSigmaIsFoundAndFittedAsWithItsSigma) {
                 r.noise_abs, b);
     if (r.noise_abs > 0) {
       ++found;
+      EXPECT_THAT(r.message, ::testing::HasSubstr("noise estimated without sigma"));
+      EXPECT_EQ(fit_to_json(r, "")["fit"]["noise_abs"].get<double>(), r.noise_abs);
       EXPECT_GT(r.noise_abs, kLevelLo * b) << i << ": " << r.message;
       EXPECT_LT(r.noise_abs, kLevelHi * b) << i << ": " << r.message;
     }
