@@ -5,8 +5,8 @@
 //   v_i = a^2 |G_i|^2 + b^2,
 // a relative part a (noise proportional to the response: a noisy input's, or the random
 // benchmark's draw) and an absolute part b in the ratio's own units (a measured path's output
-// noise over a constant input amplitude: the J85 lab's Wf:N has sigma / |G| from 0.13 % at 0.25
-// rad/s to 150 % at 310 rad/s, sigma itself within 30 % over the band).
+// noise over the input's amplitude: the J85 lab's Wf:N has sigma / |G| from 0.13 % at 0.25 rad/s
+// to 150 % at 310 rad/s while |G| falls 700x, sigma itself within 10x over the band).
 //
 // Estimated from the residuals e_i of a model deliberately fitted above the data's order (fit_tf's
 // over-fits), by maximum likelihood with each point's residual given the variance the fit leaves
@@ -14,18 +14,21 @@
 // imaginary parts as rows) leaves e = (I - H) n, H = A (A^T W A)^-1 A^T W, so
 //   E|e_i|^2 = a^2 r_i + b^2 q_i,   r_i, q_i = (1 / W_i) sum_{j of i} sum_l P_jl^2 W_l c_l / 2,
 // P = I - Q Q^T (Q an orthonormal basis of W^1/2 A), c_l = |G_l|^2 for r, 1 for q: exact for any
-// weights (with W_i = 1 / v_i, r_i a^2 + q_i b^2 = v_i (1 - h_i / 2), h_i point i's leverage; with
-// the relative weights of an over-fit on additive noise the points where |G| is small are fitted
-// closely and the others carry the error of a poorly weighted fit: counted as whole points, b came
-// out 1.3x too high on average in noise_model_test). The working negative log-likelihood (per-point
-// constants dropped; the residuals' correlation ignored, which keeps its estimating equations
-// unbiased) is
+// weights to first order (with W_i = 1 / v_i, r_i a^2 + q_i b^2 = v_i (1 - h_i / 2), h_i point i's
+// leverage; counted as whole points, the level of a flat fit of additive noise came out 0.87 of
+// the level drawn in noise_model_test, about 1 - p / 2N). A fit far from linear breaks it: weighted
+// relatively, an over-fit of additive noise fits the points where |G| is small closely and the
+// others carry the error of a poorly weighted fit (estimates 0.35-1.3x the level on such draws);
+// fit_tf therefore judges each hypothesis with its own over-fit (restricted_likelihood). The
+// working negative log-likelihood (per-point constants dropped; the residuals' correlation
+// ignored, which keeps its estimating equations unbiased) is
 //   L(a, b) = sum_i [ |e_i|^2 / vhat_i + ln vhat_i ],   vhat_i = a^2 r_i + b^2 q_i,
 // profiled over the scale (vhat = s u: s = mean_i |e_i|^2 / u_i) and minimised over the shape
 // u_i = cos(phi) r_i / m + sin(phi) q_i, m the geometric mean of |G_i|^2, phi in [0, pi/2] (0:
-// relative only, pi/2: absolute only): a grid over tan(phi) = 10^x, then Brent's method. The
-// relative model alone (phi = 0) with W_i = 1 / |G_i|^2 and full rank is a^2 = sse / (N - p / 2),
-// fit_tf's estimate before the absolute part.
+// relative only, pi/2: absolute only): a grid over tan(phi) = 10^x, then Brent's method. Points the
+// fit left less than 0.2 of their degrees of freedom are not counted. The relative model alone
+// (phi = 0) over whole points is a^2 = mean_i |e_i|^2 / |G_i|^2 (fit_tf keeps its own relative
+// level, sse / (N - p / 2) of the over-fits).
 // Units: w rad/s; a dimensionless; b and |G| in the ratio's units.
 #pragma once
 
