@@ -48,8 +48,10 @@ struct NoiseModel {
 struct NoiseFitOptions {
   // The log-likelihood gain (L units: half the likelihood-ratio statistic) the model with an
   // absolute part needs over the relative one to be chosen. 5: a likelihood-ratio statistic of 10,
-  // p ~ 1e-3 for a chi^2 with one degree of freedom (relative noise mistaken for additive in about
-  // 1 in 1000 estimates).
+  // p ~ 1e-3 for a chi^2 with one degree of freedom (independent residuals of relative noise read
+  // as additive in about 1 in 1000 estimates; an over-fit's residuals are not independent, and
+  // fit_tf uses this test only to propose the mixed shape, which restricted_likelihood then judges
+  // with the same margin, 2 x evidence in -2 l).
   double evidence = 5;
   /// Throws InputError naming the bad option.
   void validate() const;
