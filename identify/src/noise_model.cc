@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "fralab/core/error.h"
 #include "fralab/core/numerics.h"

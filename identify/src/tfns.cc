@@ -553,6 +553,12 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
         for (size_t i = 0; i < d.w.size(); ++i) mag2[i] = std::max(std::norm(d.g[i]), 1e-300);
         FitOptions oo = o;
         oo.max_iterations = 12;  // as the over-fits'
+        // |g_i - fit(j w_i)|^2 at every point.
+        auto residuals = [&](const Tf& fit) {
+          std::vector<double> e2(d.w.size());
+          for (size_t i = 0; i < d.w.size(); ++i) e2[i] = std::norm(d.g[i] - fit.at(d.w[i]));
+          return e2;
+        };
         // The over-fit with weights W, its residuals and their noise model (not ok: no fit).
         struct OverFit {
           bool ok = false;
@@ -569,15 +575,12 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
           r.fit = sk.tf;
           r.fit.delay_s = over.delay_s;
           if (!(score(dw, r.fit).sse <= kRootedSlack * sk.sse)) return r;
-          r.e2.resize(d.w.size());
-          for (size_t i = 0; i < d.w.size(); ++i) r.e2[i] = std::norm(d.g[i] - r.fit.at(d.w[i]));
+          r.e2 = residuals(r.fit);
           r.nf = fit_noise_model(r.e2, mag2, residual_variance(dw.w, dw.W, mag2, r.fit));
           r.ok = r.nf.ok;
           return r;
         };
-        std::vector<double> e2(d.w.size());
-        for (size_t i = 0; i < d.w.size(); ++i) e2[i] = std::norm(d.g[i] - over.at(d.w[i]));
-        const Restricted h_rel = restricted_likelihood(d.w, e2, mag2, over);
+        const Restricted h_rel = restricted_likelihood(d.w, residuals(over), mag2, over);
         const std::vector<double> ones(d.w.size(), 1.0);
         const OverFit flat = over_fit_at(ones);
         double best = h_rel.m2l - 2 * NoiseFitOptions{}.evidence;
