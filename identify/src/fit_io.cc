@@ -57,12 +57,7 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   json_save_file(dir + "/transfer_matrix.json", j);
   std::ofstream md(dir + "/transfer_matrix.md");
   md << transfer_matrix_markdown(m, title);
-  md << "\n## State model\n\nOrder " << sm.order
-     << " (one state per distinct real pole, two per pair; "
-     << "residue matrices reduced to rank one); error against the data (rms "
-        "|ln(G_model/G_measured)|): "
-     << sm.error << " in total.\n\n| path | error |\n|---|---|\n";
-  for (const auto& [k, e] : sm.path_error) md << "| " << k << " | " << e << " |\n";
+  md << state_model_markdown(sm);
   md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";
   for (const auto& a : actuators) {
     md << "| " << a["pair"].get<std::string>() << " | " << a["text"].get<std::string>() << " | "

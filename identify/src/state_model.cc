@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
 
 #include "fralab/core/numerics.h"
 
@@ -15,14 +16,40 @@ Cx location(const Root& r) {
   return l.imag() < 0 ? std::conj(l) : l;
 }
 
-double error_of(const std::vector<FrdPoint>& pts, const std::function<Cx(double)>& g) {
+// The check of one path's model `g` against its curve (state_model.h, 4.).
+StateModelPathCheck check_path(const std::vector<FrdPoint>& pts, const FitResult& fit,
+                               const std::function<Cx(double)>& g) {
+  StateModelPathCheck c;
+  c.fit_status = fit.status_str();
+  bool sigma = true;
+  for (const auto& p : pts)
+    if (p.valid && p.mag > 0) sigma = sigma && p.sigma > 0;
   std::vector<Cx> model, meas;
+  double chi2 = 0, fit_chi2 = 0;
+  const bool has_tf = fit.status == FitResult::Status::kConverged ||
+                      fit.status == FitResult::Status::kMaxOrderReached;
   for (const auto& p : pts) {
-    if (!p.valid || p.mag <= 0) continue;
-    model.push_back(g(p.w));
-    meas.push_back(p.value());
+    if (!p.valid || !(p.mag > 0)) continue;
+    ++c.points;
+    const Cx gm = g(p.w), gd = p.value();
+    if (sigma) {
+      chi2 += std::norm(gm - gd) / (p.sigma * p.sigma);
+      fit_chi2 += std::norm((has_tf ? fit.tf.at(p.w) : Cx(0)) - gd) / (p.sigma * p.sigma);
+    }
+    if (sigma && p.sigma > 0.3 * p.mag) continue;
+    ++c.clear;
+    model.push_back(gm);
+    meas.push_back(gd);
   }
-  return detail::rms_log_error(model, meas);
+  if (sigma && c.points > 0) {
+    c.chi2_per_point = chi2 / c.points;
+    c.fit_chi2_per_point = fit_chi2 / c.points;
+  }
+  // A model with no response at a clear point has an unbounded log error (rms_log_error alone
+  // would skip the point and read 0 for a model silent everywhere).
+  for (const Cx& v : model) c.model_silent = c.model_silent || std::abs(v) == 0;
+  if (c.clear > 0 && !c.model_silent) c.error = detail::rms_log_error(model, meas);
+  return c;
 }
 
 }  // namespace
@@ -38,105 +65,258 @@ Cx StateModel::at(int o, int i, double w) const {
   return g * std::polar(1.0, -w * delay_s(o, i));
 }
 
+namespace {
+
+// One path's data for the weighted fit of the rank-one factors: the path's delay removed, weights
+// 1/sigma (1/|G| without sigma), and at every point each cluster's 1/(s - p) and 1/(s - conj p).
+struct PathData {
+  int o = 0, i = 0;
+  bool has_d = false;  // a biproper fit: d_oi is fitted with the factors
+  std::vector<Cx> g;
+  std::vector<double> wt;
+  std::vector<Cx> hp, hm;  // point-major, nk per point
+};
+
+// Cluster k's term at point q for the residue r = c_ok b_ik: r/(s - p) + conj(r)/(s - conj p) for a
+// pair, r/(s - p) for a real pole (r real). Real-linear in r.
+Cx term(const PathData& pd, size_t q, int nk, int k, bool pair, Cx r) {
+  const size_t at = q * nk + k;
+  return pair ? r * pd.hp[at] + std::conj(r) * pd.hm[at] : r * pd.hp[at];
+}
+
+// sum over the paths and points of wt^2 |g - d - sum_k term|^2.
+double weighted_sse(const std::vector<PathData>& paths, const std::vector<bool>& pair,
+                    const Eigen::MatrixXcd& c, const Eigen::MatrixXcd& b,
+                    const Eigen::MatrixXd& D) {
+  const int nk = int(pair.size());
+  double sse = 0;
+  for (const PathData& pd : paths) {
+    for (size_t q = 0; q < pd.g.size(); ++q) {
+      Cx v = D(pd.o, pd.i);
+      for (int k = 0; k < nk; ++k) v += term(pd, q, nk, k, pair[k], c(pd.o, k) * b(pd.i, k));
+      sse += pd.wt[q] * pd.wt[q] * std::norm(pd.g[q] - v);
+    }
+  }
+  return sse;
+}
+
+// One half-step of the alternating least squares: with b fixed, each output's c (side 0), or with c
+// fixed, each input's b (side 1), with the d of its biproper paths: a linear weighted least-squares
+// problem per output (input), its unknowns Re (and Im, for a pair) of each factor.
+void solve_side(int side, const std::vector<PathData>& paths, const std::vector<bool>& pair,
+                Eigen::MatrixXcd& c, Eigen::MatrixXcd& b, Eigen::MatrixXd& D) {
+  const int nk = int(pair.size());
+  Eigen::MatrixXcd& own = side == 0 ? c : b;
+  const Eigen::MatrixXcd& other = side == 0 ? b : c;
+  for (int e = 0; e < own.rows(); ++e) {
+    std::vector<const PathData*> mine;
+    for (const PathData& pd : paths)
+      if ((side == 0 ? pd.o : pd.i) == e) mine.push_back(&pd);
+    if (mine.empty()) continue;
+    std::vector<int> col(nk);
+    int nu = 0;
+    for (int k = 0; k < nk; ++k) col[k] = nu, nu += pair[k] ? 2 : 1;
+    std::vector<int> dcol(mine.size(), -1);
+    size_t rows = 0;
+    for (size_t j = 0; j < mine.size(); ++j) {
+      if (mine[j]->has_d) dcol[j] = nu++;
+      rows += 2 * mine[j]->g.size();
+    }
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, nu);
+    Eigen::VectorXd y(rows);
+    size_t r0 = 0;
+    for (size_t j = 0; j < mine.size(); ++j) {
+      const PathData& pd = *mine[j];
+      const size_t np = pd.g.size();
+      const int oe = side == 0 ? pd.i : pd.o;  // the other factor's row
+      for (size_t q = 0; q < np; ++q) {
+        auto put = [&](int cc, Cx v) {
+          A(r0 + q, cc) = pd.wt[q] * v.real();
+          A(r0 + np + q, cc) = pd.wt[q] * v.imag();
+        };
+        for (int k = 0; k < nk; ++k) {
+          put(col[k], term(pd, q, nk, k, pair[k], other(oe, k)));  // d/d Re(own)
+          if (pair[k]) put(col[k] + 1, term(pd, q, nk, k, true, Cx(0, 1) * other(oe, k)));
+        }
+        if (dcol[j] >= 0) put(dcol[j], 1.0);
+        y(r0 + q) = pd.wt[q] * pd.g[q].real();
+        y(r0 + np + q) = pd.wt[q] * pd.g[q].imag();
+      }
+      r0 += 2 * np;
+    }
+    // Columns scaled to unit norm, then the minimum-norm solution: a factor the data do not
+    // determine stays 0.
+    Eigen::VectorXd scale = A.colwise().norm().transpose();
+    for (int j = 0; j < nu; ++j) scale(j) = scale(j) > 0 ? 1.0 / scale(j) : 0.0;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(A * scale.asDiagonal());
+    cod.setThreshold(1e-10);
+    const Eigen::VectorXd x = scale.asDiagonal() * cod.solve(y);
+    for (int k = 0; k < nk; ++k) own(e, k) = pair[k] ? Cx(x(col[k]), x(col[k] + 1)) : Cx(x(col[k]));
+    for (size_t j = 0; j < mine.size(); ++j)
+      if (dcol[j] >= 0) D(mine[j]->o, mine[j]->i) = x(dcol[j]);
+  }
+}
+
+}  // namespace
+
 StateModel build_state_model(const TransferMatrix& m,
-                             const std::map<std::string, std::vector<FrdPoint>>& data) {
+                             const std::map<std::string, std::vector<FrdPoint>>& data,
+                             const StateModelOptions& opt) {
+  opt.validate();
   StateModel s;
   s.inputs = m.inputs;
   s.outputs = m.outputs;
   const int no = int(m.outputs.size()), ni = int(m.inputs.size()), nk = int(m.clusters.size());
   s.delay_s = Eigen::MatrixXd::Zero(no, ni);
   s.D = Eigen::MatrixXd::Zero(no, ni);
+  std::vector<bool> pair(nk);
+  std::vector<Cx> pole(nk);
+  for (int k = 0; k < nk; ++k)
+    pair[k] = m.clusters[k].mean.pair, pole[k] = location(m.clusters[k].mean);
   std::vector<Eigen::MatrixXcd> R(nk, Eigen::MatrixXcd::Zero(no, ni));  // residues per cluster
+  std::vector<PathData> paths;  // the data the factors are fitted to
   for (int o = 0; o < no; ++o) {
     for (int i = 0; i < ni; ++i) {
       auto it = m.fits.find({m.outputs[o], m.inputs[i]});
       const std::string key = m.inputs[i] + ":" + m.outputs[o];
       auto dit = data.find(key);
-      if (it == m.fits.end() || it->second.status != FitResult::Status::kConverged ||
-          dit == data.end())
-        continue;
-      const Tf& tf = it->second.tf;
-      s.delay_s(o, i) = tf.delay_s;
-      // The clusters of this path's poles.
+      if (it == m.fits.end() || dit == data.end()) continue;
+      const FitResult& fit = it->second;
+      std::vector<FrdPoint> pts;
+      bool sigma = true;
+      for (const auto& p : dit->second) {
+        if (!p.valid || !(p.mag > 0)) continue;
+        pts.push_back(p);
+        sigma = sigma && p.sigma > 0;
+      }
+      const bool converged = fit.status == FitResult::Status::kConverged;
+      // The factors are fitted to every measured path but failed fits: the rank-one products put
+      // response into every path, so a path left out is predicted by factors nothing holds there
+      // (on the J85 lab's run, 1e22 chi2 per point on the P5 paths that reached the maximum
+      // order). A path with no response is fitted as zero within its noise when it has sigma.
+      const bool mor = fit.status == FitResult::Status::kMaxOrderReached;
+      const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
+      if (pts.empty() || !(converged || mor || zero)) continue;
+      const Tf& tf = fit.tf;
+      if (converged || mor) s.delay_s(o, i) = tf.delay_s;
+      PathData pd;
+      pd.o = o;
+      pd.i = i;
+      pd.has_d = converged && tf.num_order() >= tf.den_order();
+      for (const FrdPoint& p : pts) {
+        const Cx sj(0, p.w);
+        pd.g.push_back(p.value() * std::polar(1.0, p.w * s.delay_s(o, i)));  // delay removed
+        pd.wt.push_back(p.sigma > 0 ? 1.0 / p.sigma : 1.0 / p.mag);
+        for (int k = 0; k < nk; ++k) {
+          pd.hp.push_back(1.0 / (sj - pole[k]));
+          pd.hm.push_back(1.0 / (sj - std::conj(pole[k])));
+        }
+      }
+      paths.push_back(pd);
+      if (!converged) continue;
+      // The residues of this path's own clusters, alone (the start of the factors' fit).
       std::vector<int> ks;
       for (const Root& p : tf.poles) {
         int best = -1;
         double bd = INFINITY;
         for (int k = 0; k < nk; ++k) {
-          if (m.clusters[k].mean.pair != p.pair) continue;
-          double d = std::abs(location(m.clusters[k].mean) - location(p));
+          if (pair[k] != p.pair) continue;
+          double d = std::abs(pole[k] - location(p));
           if (d < bd) bd = d, best = k;
         }
         if (best >= 0 && std::find(ks.begin(), ks.end(), best) == ks.end()) ks.push_back(best);
       }
       // Unknowns: d (when the fit is biproper), a real residue per real pole, Re/Im per pair.
-      const bool has_d = tf.num_order() >= tf.den_order();
-      int nu = has_d ? 1 : 0;
-      for (int k : ks) nu += m.clusters[k].mean.pair ? 2 : 1;
-      std::vector<FrdPoint> pts;
-      for (const auto& p : dit->second)
-        if (p.valid && p.mag > 0) pts.push_back(p);
-      if (pts.empty() || nu == 0) continue;
-      Eigen::MatrixXd A(2 * pts.size(), nu);
-      Eigen::VectorXd b(2 * pts.size());
-      for (size_t q = 0; q < pts.size(); ++q) {
-        const double w = pts[q].w;
-        const double wt = pts[q].sigma > 0 ? 1.0 / pts[q].sigma : 1.0 / pts[q].mag;
-        const Cx sj(0, w);
-        const Cx g = pts[q].value() * std::polar(1.0, w * tf.delay_s);  // delay removed
+      int nu = pd.has_d ? 1 : 0;
+      for (int k : ks) nu += pair[k] ? 2 : 1;
+      if (nu == 0) continue;
+      const size_t np = pd.g.size();
+      Eigen::MatrixXd A(2 * np, nu);
+      Eigen::VectorXd y(2 * np);
+      for (size_t q = 0; q < np; ++q) {
         int c = 0;
         auto put = [&](Cx v) {
-          A(q, c) = wt * v.real();
-          A(pts.size() + q, c) = wt * v.imag();
+          A(q, c) = pd.wt[q] * v.real();
+          A(np + q, c) = pd.wt[q] * v.imag();
           ++c;
         };
-        if (has_d) put(1.0);
+        if (pd.has_d) put(1.0);
         for (int k : ks) {
-          const Cx p = location(m.clusters[k].mean);
-          if (m.clusters[k].mean.pair) {  // r/(s-p) + conj(r)/(s-conj p): basis for Re r and Im r
-            put(1.0 / (sj - p) + 1.0 / (sj - std::conj(p)));
-            put(Cx(0, 1) / (sj - p) - Cx(0, 1) / (sj - std::conj(p)));
-          } else {
-            put(1.0 / (sj - p.real()));
-          }
+          put(term(pd, q, nk, k, pair[k], 1.0));
+          if (pair[k]) put(term(pd, q, nk, k, true, Cx(0, 1)));
         }
-        b(q) = wt * g.real();
-        b(pts.size() + q) = wt * g.imag();
+        y(q) = pd.wt[q] * pd.g[q].real();
+        y(np + q) = pd.wt[q] * pd.g[q].imag();
       }
-      Eigen::VectorXd x = A.colPivHouseholderQr().solve(b);
+      Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
       int c = 0;
-      if (has_d) s.D(o, i) = x(c++);
+      if (pd.has_d) s.D(o, i) = x(c++);
       for (int k : ks) {
-        if (m.clusters[k].mean.pair) {
-          R[k](o, i) = Cx(x(c), x(c + 1));
-          c += 2;
-        } else {
-          R[k](o, i) = x(c++);
-        }
+        R[k](o, i) = pair[k] ? Cx(x(c), x(c + 1)) : Cx(x(c));
+        c += pair[k] ? 2 : 1;
       }
     }
   }
-  // Rank-one residue matrices -> states.
+  // The rank-one factors R_k ~ c_k b_k^T: the SVD's (real ones for a real pole) as the start...
+  Eigen::MatrixXcd c = Eigen::MatrixXcd::Zero(no, nk), b = Eigen::MatrixXcd::Zero(ni, nk);
+  for (int k = 0; k < nk; ++k) {
+    Eigen::JacobiSVD<Eigen::MatrixXcd> svd(R[k], Eigen::ComputeThinU | Eigen::ComputeThinV);
+    const auto sv = svd.singularValues();
+    const double total = sv.squaredNorm();
+    s.rank1_loss.push_back(total > 0 ? 1.0 - sv(0) * sv(0) / total : 0.0);
+    if (pair[k]) {
+      c.col(k) = svd.matrixU().col(0) * std::sqrt(sv(0));
+      b.col(k) = svd.matrixV().col(0).conjugate() * std::sqrt(sv(0));
+    } else {
+      Eigen::JacobiSVD<Eigen::MatrixXd> rs(R[k].real(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const double s1 = rs.singularValues()(0);
+      c.col(k) = (rs.matrixU().col(0) * std::sqrt(s1)).cast<Cx>();
+      b.col(k) = (rs.matrixV().col(0) * std::sqrt(s1)).cast<Cx>();
+    }
+  }
+  // ... then fitted to the data themselves by alternating weighted least squares (each half-step
+  // an exact minimum, so the misfit never rises), each sweep extrapolated along its step while
+  // that lowers the misfit further (alternating least squares crawls along flat valleys).
+  s.start_chi2 = s.fit_chi2 = weighted_sse(paths, pair, c, b, s.D);
+  for (s.sweeps = 0; s.sweeps < opt.max_sweeps && s.fit_chi2 > 0; ++s.sweeps) {
+    Eigen::MatrixXcd c1 = c, b1 = b;
+    Eigen::MatrixXd D1 = s.D;
+    solve_side(0, paths, pair, c1, b1, D1);
+    solve_side(1, paths, pair, c1, b1, D1);
+    double next = weighted_sse(paths, pair, c1, b1, D1);
+    if (!(next <= s.fit_chi2)) break;
+    for (double a = 2; a <= 64; a *= 2) {  // the sweep's step, doubled while it helps
+      Eigen::MatrixXcd c2 = c + a * (c1 - c), b2 = b + a * (b1 - b);
+      Eigen::MatrixXd D2 = s.D + a * (D1 - s.D);
+      const double e = weighted_sse(paths, pair, c2, b2, D2);
+      if (!(e < next)) break;
+      c1 = c2, b1 = b2, D1 = D2, next = e;
+    }
+    const double gain = s.fit_chi2 - next;
+    c = c1, b = b1, s.D = D1, s.fit_chi2 = next;
+    if (gain <= opt.rel_tol * next) break;
+  }
+  // Each factor pair scaled to equal norms (the product is what the data fix).
+  for (int k = 0; k < nk; ++k) {
+    const double nc = c.col(k).norm(), nb = b.col(k).norm();
+    if (nc > 0 && nb > 0) {
+      const double a = std::sqrt(nb / nc);
+      c.col(k) *= a;
+      b.col(k) /= a;
+    }
+  }
+  // States.
   for (int k = 0; k < nk; ++k) s.order += m.clusters[k].mean.order();
   s.A = Eigen::MatrixXd::Zero(s.order, s.order);
   s.B = Eigen::MatrixXd::Zero(s.order, ni);
   s.C = Eigen::MatrixXd::Zero(no, s.order);
   int x0 = 0;
   for (int k = 0; k < nk; ++k) {
-    const Cx p = location(m.clusters[k].mean);
-    Eigen::JacobiSVD<Eigen::MatrixXcd> svd(R[k], Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto sv = svd.singularValues();
-    const double total = sv.squaredNorm();
-    s.rank1_loss.push_back(total > 0 ? 1.0 - sv(0) * sv(0) / total : 0.0);
-    const Eigen::VectorXcd c = svd.matrixU().col(0) * std::sqrt(sv(0));
-    const Eigen::VectorXcd bb = svd.matrixV().col(0).conjugate() * std::sqrt(sv(0));  // R ~ c b^T
-    if (!m.clusters[k].mean.pair) {
-      // A real pole's residues are real: take the real rank-one factors.
-      Eigen::JacobiSVD<Eigen::MatrixXd> rs(R[k].real(), Eigen::ComputeThinU | Eigen::ComputeThinV);
-      const double s1 = rs.singularValues()(0);
+    const Cx p = pole[k];
+    if (!pair[k]) {
       s.A(x0, x0) = p.real();
-      s.B.row(x0) = (rs.matrixV().col(0) * std::sqrt(s1)).transpose();
-      s.C.col(x0) = rs.matrixU().col(0) * std::sqrt(s1);
+      s.B.row(x0) = b.col(k).real().transpose();
+      s.C.col(x0) = c.col(k).real();
       x0 += 1;
     } else {
       // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b; Im
@@ -145,10 +325,10 @@ StateModel build_state_model(const TransferMatrix& m,
       s.A(x0, x0 + 1) = -p.imag();
       s.A(x0 + 1, x0) = p.imag();
       s.A(x0 + 1, x0 + 1) = p.real();
-      s.B.row(x0) = bb.real().transpose();
-      s.B.row(x0 + 1) = bb.imag().transpose();
-      s.C.col(x0) = 2 * c.real();
-      s.C.col(x0 + 1) = -2 * c.imag();
+      s.B.row(x0) = b.col(k).real().transpose();
+      s.B.row(x0 + 1) = b.col(k).imag().transpose();
+      s.C.col(x0) = 2 * c.col(k).real();
+      s.C.col(x0 + 1) = -2 * c.col(k).imag();
       x0 += 2;
     }
   }
@@ -159,10 +339,15 @@ StateModel build_state_model(const TransferMatrix& m,
     for (int i = 0; i < ni; ++i) {
       const std::string key = m.inputs[i] + ":" + m.outputs[o];
       auto dit = data.find(key);
-      if (dit == data.end() || !m.fits.count({m.outputs[o], m.inputs[i]})) continue;
-      const double e = error_of(dit->second, [&](double w) { return s.at(o, i, w); });
-      s.path_error[key] = e;
-      sum += e * e;
+      auto fit = m.fits.find({m.outputs[o], m.inputs[i]});
+      if (dit == data.end() || fit == m.fits.end()) continue;
+      const StateModelPathCheck c =
+          check_path(dit->second, fit->second, [&](double w) { return s.at(o, i, w); });
+      s.path_check[key] = c;
+      if (c.error < 0) continue;
+      s.path_error[key] = c.error;
+      if (fit->second.status != FitResult::Status::kConverged) continue;
+      sum += c.error * c.error;
       ++n;
     }
   }
@@ -180,18 +365,59 @@ Json state_model_json(const StateModel& s) {
     }
     return a;
   };
-  return Json{{"order", s.order},
-              {"inputs", s.inputs},
-              {"outputs", s.outputs},
-              {"A", mat(s.A)},
-              {"B", mat(s.B)},
-              {"C", mat(s.C)},
-              {"D", mat(s.D)},
-              {"delay_s", mat(s.delay_s)},
-              {"path_error", s.path_error},
-              {"error", s.error},
-              {"rank1_loss", s.rank1_loss},
-              {"metric", "rms over points of |ln(G_model/G_measured)|"}};
+  Json checks = Json::object();
+  for (const auto& [k, c] : s.path_check)
+    checks[k] = Json{{"fit_status", c.fit_status},
+                     {"points", c.points},
+                     {"clear_points", c.clear},
+                     {"error", c.error},
+                     {"chi2_per_point", c.chi2_per_point},
+                     {"fit_chi2_per_point", c.fit_chi2_per_point},
+                     {"model_silent", c.model_silent}};
+  return Json{
+      {"order", s.order},
+      {"inputs", s.inputs},
+      {"outputs", s.outputs},
+      {"A", mat(s.A)},
+      {"B", mat(s.B)},
+      {"C", mat(s.C)},
+      {"D", mat(s.D)},
+      {"delay_s", mat(s.delay_s)},
+      {"path_error", s.path_error},
+      {"path_check", checks},
+      {"error", s.error},
+      {"rank1_loss", s.rank1_loss},
+      {"factor_fit", {{"start_chi2", s.start_chi2}, {"chi2", s.fit_chi2}, {"sweeps", s.sweeps}}},
+      {"metric",
+       "rms over the points measured to better than 30 % (sigma <= 0.3 |G|) of "
+       "|ln(G_model/G_measured)|; error: over the paths in the model"}};
+}
+
+std::string state_model_markdown(const StateModel& s) {
+  auto num = [](double v) {
+    if (v < 0) return std::string("-");
+    std::ostringstream t;
+    t.precision(3);
+    t << v;
+    return t.str();
+  };
+  int in_model = 0;
+  for (const auto& [k, c] : s.path_check) in_model += c.fit_status == "converged";
+  std::ostringstream md;
+  md << "\n## State model\n\nOrder " << s.order
+     << " (one state per distinct real pole, two per pair; residue matrices reduced to rank one); "
+        "error against the data (rms |ln(G_model/G_measured)| over the points measured to better "
+        "than 30 %): "
+     << num(s.error) << " over the " << in_model
+     << " paths in the model. chi2 per point: mean |G - G_measured|^2 / sigma^2 (about 1: as "
+        "good as the noise), the state model's beside the path's own fit's (0 for no response)."
+        "\n\n| path | fit | points (clear) | error | chi2 per point: model / fit |\n"
+        "|---|---|---|---|---|\n";
+  for (const auto& [k, c] : s.path_check)
+    md << "| " << k << " | " << c.fit_status << " | " << c.points << " (" << c.clear << ") | "
+       << (c.model_silent ? std::string("no response in the model") : num(c.error)) << " | "
+       << num(c.chi2_per_point) << " / " << num(c.fit_chi2_per_point) << " |\n";
+  return md.str();
 }
 
 }  // namespace fralab
