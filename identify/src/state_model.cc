@@ -193,7 +193,7 @@ StateModel build_state_model(const TransferMatrix& m,
       // The factors are fitted to every measured path but failed fits: the rank-one products put
       // response into every path, so a path left out is predicted by factors nothing holds there
       // (on the J85 lab's run, 1e22 chi2 per point on the P5 paths that reached the maximum
-      // order). A path with no response is fitted as zero within its noise when it has sigma.
+      // order). A path with no response is fitted too (its data, noise, by its sigma).
       const bool mor = fit.status == FitResult::Status::kMaxOrderReached;
       const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
       if (pts.empty() || !(converged || mor || zero)) continue;

@@ -17,10 +17,10 @@
 //    loses the small sensors' (DPP3 in psi, 1e-4 of P3's): on the J85 lab's multisine run the
 //    SVD's factors miss Wf:P3 by 9e4 chi2 per point, the fitted ones by 2.3. Every measured path
 //    but a failed fit is in the fit (those that reached the maximum order with their fit's delay,
-//    those with no response as zero within their sigma): the rank-one products put response into
-//    every path, and a path left out is predicted by factors nothing holds there. Each sweep's
-//    step is extrapolated (doubled) while that lowers the misfit further: alternating least
-//    squares crawls along flat valleys (the J85 run: 2.1e7 -> 2800 in 500 sweeps, 0.3 s; 3700
+//    those with no response on their data, noise, by their sigma): the rank-one products put
+//    response into every path, and a path left out is predicted by factors nothing holds there.
+//    Each sweep's step is extrapolated (doubled) while that lowers the misfit further: alternating
+//    least squares crawls along flat valleys (the J85 run: 2.1e7 -> 2800 in 500 sweeps, 0.3 s; 3700
 //    without the extrapolation).
 // 3. x' = A x + B u, y = C x + D u, with A block-diagonal (p for a real pole, [[s, -w], [w, s]] for
 //    a pair s +- jw); each path's delay is kept beside the model (delay_s[output][input]).
