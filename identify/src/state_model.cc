@@ -38,6 +38,9 @@ StateModelPathCheck check_path(const std::vector<FrdPoint>& pts, const FitResult
     }
     if (sigma && p.sigma > 0.3 * p.mag) continue;
     ++c.clear;
+    // A model with no response at a clear point has an unbounded log error (rms_log_error alone
+    // would skip the point and read 0 for a model silent everywhere).
+    c.model_silent = c.model_silent || gm == Cx(0);
     model.push_back(gm);
     meas.push_back(gd);
   }
@@ -45,9 +48,6 @@ StateModelPathCheck check_path(const std::vector<FrdPoint>& pts, const FitResult
     c.chi2_per_point = chi2 / c.points;
     c.fit_chi2_per_point = fit_chi2 / c.points;
   }
-  // A model with no response at a clear point has an unbounded log error (rms_log_error alone
-  // would skip the point and read 0 for a model silent everywhere).
-  for (const Cx& v : model) c.model_silent = c.model_silent || std::abs(v) == 0;
   if (c.clear > 0 && !c.model_silent) c.error = detail::rms_log_error(model, meas);
   return c;
 }
@@ -294,7 +294,10 @@ StateModel build_state_model(const TransferMatrix& m,
     }
     const double gain = s.fit_chi2 - next;
     c = c1, b = b1, s.D = D1, s.fit_chi2 = next;
-    if (gain <= opt.rel_tol * next) break;
+    if (gain <= opt.rel_tol * next) {
+      ++s.sweeps;  // this sweep was taken
+      break;
+    }
   }
   // Each factor pair scaled to equal norms (the product is what the data fix).
   for (int k = 0; k < nk; ++k) {
