@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <set>
 #include <sstream>
 
 #include "fralab/core/numerics.h"
@@ -84,16 +85,25 @@ Cx term(const PathData& pd, size_t q, int nk, int k, bool pair, Cx r) {
   return pair ? r * pd.hp[at] + std::conj(r) * pd.hm[at] : r * pd.hp[at];
 }
 
-// sum over the paths and points of wt^2 |g - d - sum_k term|^2.
-double weighted_sse(const std::vector<PathData>& paths, const std::vector<bool>& pair,
+// The factors' components: component j is a rank-one term c_j b_j^T on cluster kc[j]'s pole (a
+// cluster of residue rank r has r components).
+struct Components {
+  std::vector<int> kc;     // the cluster of each component
+  std::vector<bool> pair;  // that cluster's pole is a pair
+  int nk = 0;              // clusters (the stride of PathData::hp)
+  int size() const { return int(kc.size()); }
+};
+
+// sum over the paths and points of wt^2 |g - d - sum_j term_j|^2.
+double weighted_sse(const std::vector<PathData>& paths, const Components& cm,
                     const Eigen::MatrixXcd& c, const Eigen::MatrixXcd& b,
                     const Eigen::MatrixXd& D) {
-  const int nk = int(pair.size());
   double sse = 0;
   for (const PathData& pd : paths) {
     for (size_t q = 0; q < pd.g.size(); ++q) {
       Cx v = D(pd.o, pd.i);
-      for (int k = 0; k < nk; ++k) v += term(pd, q, nk, k, pair[k], c(pd.o, k) * b(pd.i, k));
+      for (int j = 0; j < cm.size(); ++j)
+        v += term(pd, q, cm.nk, cm.kc[j], cm.pair[j], c(pd.o, j) * b(pd.i, j));
       sse += pd.wt[q] * pd.wt[q] * std::norm(pd.g[q] - v);
     }
   }
@@ -103,9 +113,9 @@ double weighted_sse(const std::vector<PathData>& paths, const std::vector<bool>&
 // One half-step of the alternating least squares: with b fixed, each output's c (side 0), or with c
 // fixed, each input's b (side 1), with the d of its biproper paths: a linear weighted least-squares
 // problem per output (input), its unknowns Re (and Im, for a pair) of each factor.
-void solve_side(int side, const std::vector<PathData>& paths, const std::vector<bool>& pair,
+void solve_side(int side, const std::vector<PathData>& paths, const Components& cm,
                 Eigen::MatrixXcd& c, Eigen::MatrixXcd& b, Eigen::MatrixXd& D) {
-  const int nk = int(pair.size());
+  const int nc = cm.size();
   Eigen::MatrixXcd& own = side == 0 ? c : b;
   const Eigen::MatrixXcd& other = side == 0 ? b : c;
   for (int e = 0; e < own.rows(); ++e) {
@@ -113,9 +123,9 @@ void solve_side(int side, const std::vector<PathData>& paths, const std::vector<
     for (const PathData& pd : paths)
       if ((side == 0 ? pd.o : pd.i) == e) mine.push_back(&pd);
     if (mine.empty()) continue;
-    std::vector<int> col(nk);
+    std::vector<int> col(nc);
     int nu = 0;
-    for (int k = 0; k < nk; ++k) col[k] = nu, nu += pair[k] ? 2 : 1;
+    for (int j = 0; j < nc; ++j) col[j] = nu, nu += cm.pair[j] ? 2 : 1;
     std::vector<int> dcol(mine.size(), -1);
     size_t rows = 0;
     for (size_t j = 0; j < mine.size(); ++j) {
@@ -134,9 +144,10 @@ void solve_side(int side, const std::vector<PathData>& paths, const std::vector<
           A(r0 + q, cc) = pd.wt[q] * v.real();
           A(r0 + np + q, cc) = pd.wt[q] * v.imag();
         };
-        for (int k = 0; k < nk; ++k) {
-          put(col[k], term(pd, q, nk, k, pair[k], other(oe, k)));  // d/d Re(own)
-          if (pair[k]) put(col[k] + 1, term(pd, q, nk, k, true, Cx(0, 1) * other(oe, k)));
+        for (int k = 0; k < nc; ++k) {
+          put(col[k], term(pd, q, cm.nk, cm.kc[k], cm.pair[k], other(oe, k)));  // d/d Re(own)
+          if (cm.pair[k])
+            put(col[k] + 1, term(pd, q, cm.nk, cm.kc[k], true, Cx(0, 1) * other(oe, k)));
         }
         if (dcol[j] >= 0) put(dcol[j], 1.0);
         y(r0 + q) = pd.wt[q] * pd.g[q].real();
@@ -151,10 +162,83 @@ void solve_side(int side, const std::vector<PathData>& paths, const std::vector<
     Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(A * scale.asDiagonal());
     cod.setThreshold(1e-10);
     const Eigen::VectorXd x = scale.asDiagonal() * cod.solve(y);
-    for (int k = 0; k < nk; ++k) own(e, k) = pair[k] ? Cx(x(col[k]), x(col[k] + 1)) : Cx(x(col[k]));
+    for (int k = 0; k < nc; ++k)
+      own(e, k) = cm.pair[k] ? Cx(x(col[k]), x(col[k] + 1)) : Cx(x(col[k]));
     for (size_t j = 0; j < mine.size(); ++j)
       if (dcol[j] >= 0) D(mine[j]->o, mine[j]->i) = x(dcol[j]);
   }
+}
+
+// The factors fitted to the data by alternating weighted least squares (each half-step an exact
+// minimum, so the misfit never rises), each sweep extrapolated along its step while that lowers
+// the misfit further (alternating least squares crawls along flat valleys). Returns the misfit;
+// *sweeps: the sweeps taken.
+double fit_factors(const std::vector<PathData>& paths, const Components& cm,
+                   const StateModelOptions& opt, Eigen::MatrixXcd& c, Eigen::MatrixXcd& b,
+                   Eigen::MatrixXd& D, int* sweeps) {
+  double sse = weighted_sse(paths, cm, c, b, D);
+  for (*sweeps = 0; *sweeps < opt.max_sweeps && sse > 0; ++*sweeps) {
+    Eigen::MatrixXcd c1 = c, b1 = b;
+    Eigen::MatrixXd D1 = D;
+    solve_side(0, paths, cm, c1, b1, D1);
+    solve_side(1, paths, cm, c1, b1, D1);
+    double next = weighted_sse(paths, cm, c1, b1, D1);
+    if (!(next <= sse)) break;
+    for (double a = 2; a <= 64; a *= 2) {  // the sweep's step, doubled while it helps
+      Eigen::MatrixXcd c2 = c + a * (c1 - c), b2 = b + a * (b1 - b);
+      Eigen::MatrixXd D2 = D + a * (D1 - D);
+      const double e = weighted_sse(paths, cm, c2, b2, D2);
+      if (!(e < next)) break;
+      c1 = c2, b1 = b2, D1 = D2, next = e;
+    }
+    const double gain = sse - next;
+    c = c1, b = b1, D = D1, sse = next;
+    if (gain <= opt.rel_tol * next) {
+      ++*sweeps;  // this sweep was taken
+      break;
+    }
+  }
+  return sse;
+}
+
+// The start of one more component on cluster k: each path's residue on k refitted to what the
+// model leaves of its data (weighted least squares, one residue per path), the matrix of those
+// residues with each output's row scaled to unit norm (the outputs' units differ by orders of
+// magnitude), and its first right singular vector as b; c is then solved by the first half-step.
+Eigen::VectorXcd residual_direction(const std::vector<PathData>& paths, const Components& cm, int k,
+                                    bool pair, const Eigen::MatrixXcd& c, const Eigen::MatrixXcd& b,
+                                    const Eigen::MatrixXd& D, int no, int ni) {
+  Eigen::MatrixXcd E = Eigen::MatrixXcd::Zero(no, ni);
+  for (const PathData& pd : paths) {
+    const size_t np = pd.g.size();
+    Eigen::MatrixXd A(2 * np, pair ? 2 : 1);
+    Eigen::VectorXd y(2 * np);
+    for (size_t q = 0; q < np; ++q) {
+      Cx v = D(pd.o, pd.i);
+      for (int j = 0; j < cm.size(); ++j)
+        v += term(pd, q, cm.nk, cm.kc[j], cm.pair[j], c(pd.o, j) * b(pd.i, j));
+      const Cx e = pd.g[q] - v, h1 = term(pd, q, cm.nk, k, pair, 1.0);
+      A(q, 0) = pd.wt[q] * h1.real();
+      A(np + q, 0) = pd.wt[q] * h1.imag();
+      if (pair) {
+        const Cx h2 = term(pd, q, cm.nk, k, true, Cx(0, 1));
+        A(q, 1) = pd.wt[q] * h2.real();
+        A(np + q, 1) = pd.wt[q] * h2.imag();
+      }
+      y(q) = pd.wt[q] * e.real();
+      y(np + q) = pd.wt[q] * e.imag();
+    }
+    const Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
+    const Cx r = pair ? Cx(x(0), x(1)) : Cx(x(0));
+    // Its phase, and as its size the root of the chi2 that residue alone would remove.
+    if (std::abs(r) > 0) E(pd.o, pd.i) = r / std::abs(r) * (A * x).norm();
+  }
+  if (!pair) {  // a real pole's factors are real
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(E.real(), Eigen::ComputeThinV);
+    return svd.matrixV().col(0).cast<Cx>();
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXcd> svd(E, Eigen::ComputeThinV);
+  return svd.matrixV().col(0).conjugate();
 }
 
 }  // namespace
@@ -175,6 +259,7 @@ StateModel build_state_model(const TransferMatrix& m,
     pair[k] = m.clusters[k].mean.pair, pole[k] = location(m.clusters[k].mean);
   std::vector<Eigen::MatrixXcd> R(nk, Eigen::MatrixXcd::Zero(no, ni));  // residues per cluster
   std::vector<PathData> paths;  // the data the factors are fitted to
+  bool all_sigma = true;        // every one of them with its sigma
   for (int o = 0; o < no; ++o) {
     for (int i = 0; i < ni; ++i) {
       auto it = m.fits.find({m.outputs[o], m.inputs[i]});
@@ -197,6 +282,7 @@ StateModel build_state_model(const TransferMatrix& m,
       const bool mor = fit.status == FitResult::Status::kMaxOrderReached;
       const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
       if (pts.empty() || !(converged || mor || zero)) continue;
+      all_sigma = all_sigma && sigma;
       const Tf& tf = fit.tf;
       if (converged || mor) s.delay_s(o, i) = tf.delay_s;
       PathData pd;
@@ -274,52 +360,97 @@ StateModel build_state_model(const TransferMatrix& m,
       b.col(k) = (rs.matrixV().col(0) * std::sqrt(s1)).cast<Cx>();
     }
   }
-  // ... then fitted to the data themselves by alternating weighted least squares (each half-step
-  // an exact minimum, so the misfit never rises), each sweep extrapolated along its step while
-  // that lowers the misfit further (alternating least squares crawls along flat valleys).
-  s.start_chi2 = s.fit_chi2 = weighted_sse(paths, pair, c, b, s.D);
-  for (s.sweeps = 0; s.sweeps < opt.max_sweeps && s.fit_chi2 > 0; ++s.sweeps) {
-    Eigen::MatrixXcd c1 = c, b1 = b;
-    Eigen::MatrixXd D1 = s.D;
-    solve_side(0, paths, pair, c1, b1, D1);
-    solve_side(1, paths, pair, c1, b1, D1);
-    double next = weighted_sse(paths, pair, c1, b1, D1);
-    if (!(next <= s.fit_chi2)) break;
-    for (double a = 2; a <= 64; a *= 2) {  // the sweep's step, doubled while it helps
-      Eigen::MatrixXcd c2 = c + a * (c1 - c), b2 = b + a * (b1 - b);
-      Eigen::MatrixXd D2 = s.D + a * (D1 - s.D);
-      const double e = weighted_sse(paths, pair, c2, b2, D2);
-      if (!(e < next)) break;
-      c1 = c2, b1 = b2, D1 = D2, next = e;
+  // ... then fitted to the data themselves (fit_factors).
+  Components cm;
+  cm.nk = nk;
+  for (int k = 0; k < nk; ++k) cm.kc.push_back(k), cm.pair.push_back(pair[k]);
+  s.start_chi2 = weighted_sse(paths, cm, c, b, s.D);
+  s.fit_chi2 = fit_factors(paths, cm, opt, c, b, s.D, &s.sweeps);
+  // Gilbert's realisation: a cluster whose residues the data show are not rank one gets one more
+  // component (its pole's states once more) while that lowers the criterion, the misfit plus
+  // ln(2N) per real parameter the component adds (as the order search's; with sigma on every
+  // path the misfit is chi2, else the unknown-variance form 2N ln(sse / 2N), the sse floored at
+  // 1e-18 of the data's weighted energy so that noise-free data do not buy rounding).
+  s.rank.assign(nk, 1);
+  for (int k = 0; k < nk; ++k) s.poles.push_back(m.clusters[k].mean);
+  std::set<int> outs_used, ins_used;
+  size_t n_points = 0;
+  double energy = 0;
+  for (const PathData& pd : paths) {
+    outs_used.insert(pd.o), ins_used.insert(pd.i), n_points += pd.g.size();
+    for (size_t q = 0; q < pd.g.size(); ++q) energy += pd.wt[q] * pd.wt[q] * std::norm(pd.g[q]);
+  }
+  const double nr = 2.0 * double(n_points), per_param = std::log(std::max(nr, 2.0));
+  auto criterion = [&](double sse) {
+    return all_sigma ? sse : nr * std::log(std::max(sse, 1e-18 * energy) / nr);
+  };
+  std::vector<int> cap(nk, 1);  // a cluster's rank at most: its members' outputs and inputs
+  for (int k = 0; k < nk; ++k) {
+    std::set<std::string> mo, mi;
+    for (const std::string& key : m.clusters[k].pairs) {
+      const size_t colon = key.find(':');
+      mi.insert(key.substr(0, colon)), mo.insert(key.substr(colon + 1));
     }
-    const double gain = s.fit_chi2 - next;
-    c = c1, b = b1, s.D = D1, s.fit_chi2 = next;
-    if (gain <= opt.rel_tol * next) {
-      ++s.sweeps;  // this sweep was taken
-      break;
+    cap[k] = std::min({int(mo.size()), int(mi.size()), opt.max_rank});
+  }
+  // Each candidate is tried with a few sweeps from the current factors, against the current
+  // factors given the same sweeps: alternating least squares creeps on along flat valleys for
+  // hundreds of sweeps, and a candidate given more sweeps than the model it is compared with would
+  // be credited with the creep (the J85 test: 100-300 in chi2 for components the data do not need).
+  StateModelOptions trial = opt;
+  trial.max_sweeps = std::min(opt.max_sweeps, opt.rank_trial_sweeps);
+  while (opt.max_sweeps > 0) {
+    Eigen::MatrixXcd c0 = c, b0 = b;
+    Eigen::MatrixXd D0 = s.D;
+    int sweeps0 = 0;
+    const double crit0 = criterion(fit_factors(paths, cm, trial, c0, b0, D0, &sweeps0));
+    int best = -1;
+    double best_crit = crit0;
+    Eigen::MatrixXcd best_c, best_b;
+    Eigen::MatrixXd best_D;
+    for (int k = 0; k < nk; ++k) {
+      if (s.rank[k] >= cap[k]) continue;
+      Components cm2 = cm;
+      cm2.kc.push_back(k), cm2.pair.push_back(pair[k]);
+      Eigen::MatrixXcd c2(no, cm2.size()), b2(ni, cm2.size());
+      c2 << c, Eigen::VectorXcd::Zero(no);
+      b2 << b, residual_direction(paths, cm, k, pair[k], c, b, s.D, no, ni);
+      Eigen::MatrixXd D2 = s.D;
+      int sweeps = 0;
+      const double sse = fit_factors(paths, cm2, trial, c2, b2, D2, &sweeps);
+      const double added = (int(outs_used.size()) + int(ins_used.size()) - 1) * (pair[k] ? 2 : 1);
+      const double cr = criterion(sse) + per_param * added;
+      if (cr < best_crit) best = k, best_crit = cr, best_c = c2, best_b = b2, best_D = D2;
     }
+    if (best < 0) break;
+    cm.kc.push_back(best), cm.pair.push_back(pair[best]);
+    c = best_c, b = best_b, s.D = best_D;
+    int sweeps = 0;
+    s.fit_chi2 = fit_factors(paths, cm, opt, c, b, s.D, &sweeps);
+    s.sweeps += sweeps;
+    ++s.rank[best];
   }
   // Each factor pair scaled to equal norms (the product is what the data fix).
-  for (int k = 0; k < nk; ++k) {
-    const double nc = c.col(k).norm(), nb = b.col(k).norm();
+  for (int j = 0; j < cm.size(); ++j) {
+    const double nc = c.col(j).norm(), nb = b.col(j).norm();
     if (nc > 0 && nb > 0) {
       const double a = std::sqrt(nb / nc);
-      c.col(k) *= a;
-      b.col(k) /= a;
+      c.col(j) *= a;
+      b.col(j) /= a;
     }
   }
-  // States.
-  for (int k = 0; k < nk; ++k) s.order += m.clusters[k].mean.order();
+  // States: one per real component, two per pair's.
+  for (int j = 0; j < cm.size(); ++j) s.order += pair[cm.kc[j]] ? 2 : 1;
   s.A = Eigen::MatrixXd::Zero(s.order, s.order);
   s.B = Eigen::MatrixXd::Zero(s.order, ni);
   s.C = Eigen::MatrixXd::Zero(no, s.order);
   int x0 = 0;
-  for (int k = 0; k < nk; ++k) {
-    const Cx p = pole[k];
-    if (!pair[k]) {
+  for (int j = 0; j < cm.size(); ++j) {
+    const Cx p = pole[cm.kc[j]];
+    if (!cm.pair[j]) {
       s.A(x0, x0) = p.real();
-      s.B.row(x0) = b.col(k).real().transpose();
-      s.C.col(x0) = c.col(k).real();
+      s.B.row(x0) = b.col(j).real().transpose();
+      s.C.col(x0) = c.col(j).real();
       x0 += 1;
     } else {
       // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b; Im
@@ -328,10 +459,10 @@ StateModel build_state_model(const TransferMatrix& m,
       s.A(x0, x0 + 1) = -p.imag();
       s.A(x0 + 1, x0) = p.imag();
       s.A(x0 + 1, x0 + 1) = p.real();
-      s.B.row(x0) = b.col(k).real().transpose();
-      s.B.row(x0 + 1) = b.col(k).imag().transpose();
-      s.C.col(x0) = 2 * c.col(k).real();
-      s.C.col(x0 + 1) = -2 * c.col(k).imag();
+      s.B.row(x0) = b.col(j).real().transpose();
+      s.B.row(x0 + 1) = b.col(j).imag().transpose();
+      s.C.col(x0) = 2 * c.col(j).real();
+      s.C.col(x0 + 1) = -2 * c.col(j).imag();
       x0 += 2;
     }
   }
@@ -390,11 +521,32 @@ Json state_model_json(const StateModel& s) {
       {"path_check", checks},
       {"error", s.error},
       {"rank1_loss", s.rank1_loss},
+      {"rank", s.rank},
       {"factor_fit", {{"start_chi2", s.start_chi2}, {"chi2", s.fit_chi2}, {"sweeps", s.sweeps}}},
       {"metric",
        "rms over the points measured to better than 30 % (sigma <= 0.3 |G|) of "
        "|ln(G_model/G_measured)|; error: over the paths in the model"}};
 }
+
+namespace {
+
+// "rank one everywhere", or "rank one but at [s/3.38 + 1] (rank 2), ..." naming the clusters above.
+std::string ranks_text(const StateModel& s) {
+  std::ostringstream t;
+  int above = 0;
+  for (int r : s.rank) above += r > 1;
+  if (above == 0) return "rank one everywhere";
+  t << "rank one but at";
+  const char* sep = " ";
+  for (size_t k = 0; k < s.rank.size(); ++k) {
+    if (s.rank[k] < 2) continue;
+    t << sep << factor_text(s.poles[k]) << " (rank " << s.rank[k] << ")";
+    sep = ", ";
+  }
+  return t.str();
+}
+
+}  // namespace
 
 std::string state_model_markdown(const StateModel& s) {
   auto num = [](double v) {
@@ -408,7 +560,9 @@ std::string state_model_markdown(const StateModel& s) {
   for (const auto& [k, c] : s.path_check) in_model += c.fit_status == "converged";
   std::ostringstream md;
   md << "\n## State model\n\nOrder " << s.order
-     << " (one state per distinct real pole, two per pair; residue matrices reduced to rank one); "
+     << " (one state per distinct real pole, two per pair, times the rank of its residue matrix: "
+     << ranks_text(s)
+     << "); "
         "error against the data (rms |ln(G_model/G_measured)| over the points measured to better "
         "than 30 %): "
      << num(s.error) << " over the " << in_model

@@ -15,12 +15,6 @@ std::string num(double v) {
   return b;
 }
 
-std::string factor_text(const Root& r) {
-  if (r.pair) return "[(s/" + num(r.wn) + ")^2 + 2(" + num(r.zeta) + ")s/" + num(r.wn) + " + 1]";
-  if (r.real < 0) return "[s/" + num(-r.real) + " + 1]";
-  return "[1 - s/" + num(r.real) + "]";
-}
-
 double dist(const Root& a, const Root& b) {
   auto loc = [](const Root& r) {
     auto l = r.locations()[0];
@@ -30,6 +24,12 @@ double dist(const Root& a, const Root& b) {
 }
 
 }  // namespace
+
+std::string factor_text(const Root& r) {
+  if (r.pair) return "[(s/" + num(r.wn) + ")^2 + 2(" + num(r.zeta) + ")s/" + num(r.wn) + " + 1]";
+  if (r.real < 0) return "[s/" + num(-r.real) + " + 1]";
+  return "[1 - s/" + num(r.real) + "]";
+}
 
 std::string tf_to_text(const Tf& tf) {
   std::string n, d;

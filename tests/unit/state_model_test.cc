@@ -38,7 +38,148 @@ struct Truth {
   }
 };
 
+// A transfer matrix with shared poles: G(s) = sum_k R_k / (s - p_k) (+ conj(R_k) / (s - conj p_k)
+// for a pair), whose minimal realisation has rank(R_k) states per real pole, twice that per pair
+// (Gilbert). Points at 10 per decade over 0.1-1000 rad/s, noise rel * |G| with that sigma.
+struct SharedPoles {
+  std::vector<Root> poles;
+  std::vector<Eigen::MatrixXcd> R;
+  std::complex<double> at(int o, int i, double w) const {
+    std::complex<double> g = 0;
+    for (size_t k = 0; k < poles.size(); ++k) {
+      std::complex<double> p = poles[k].locations()[0];
+      if (p.imag() < 0) p = std::conj(p);
+      const std::complex<double> s(0, w);
+      g += R[k](o, i) / (s - p);
+      if (poles[k].pair) g += std::conj(R[k](o, i)) / (s - std::conj(p));
+    }
+    return g;
+  }
+  // Each path fitted, the transfer matrix of the fits and the measured curves.
+  TransferMatrix measure(double rel, uint64_t seed,
+                         std::map<std::string, std::vector<FrdPoint>>* data) const {
+    const int no = int(R[0].rows()), ni = int(R[0].cols());
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n(0.0, std::sqrt(0.5));
+    std::vector<MatrixEntry> entries;
+    for (int o = 0; o < no; ++o) {
+      for (int i = 0; i < ni; ++i) {
+        std::vector<FrdPoint> pts;
+        for (int q = 0; q <= 40; ++q) {
+          FrdPoint pt;
+          pt.w = 0.1 * std::pow(10.0, q / 10.0);
+          std::complex<double> g = at(o, i, pt.w);
+          if (rel > 0) g += std::complex<double>(n(rng), n(rng)) * rel * std::abs(g);
+          pt.mag = std::abs(g);
+          pt.phase_deg = std::arg(g) * 180 / M_PI;
+          pt.sigma = rel * std::abs(at(o, i, pt.w));
+          pts.push_back(pt);
+        }
+        FitOptions opt;
+        opt.delay = FitOptions::Delay::kNone;
+        if (rel == 0) opt.c_n = 1e-12;
+        const std::string in = "u" + std::to_string(i), out = "y" + std::to_string(o);
+        entries.push_back({in, out, fit_tf(pts, opt)});
+        (*data)[in + ":" + out] = pts;
+      }
+    }
+    return build_transfer_matrix(entries);
+  }
+};
+
+// The rank of the cluster whose mean is nearest pole p (-1: none).
+int rank_at(const TransferMatrix& m, const StateModel& s, const Root& p) {
+  int best = -1;
+  double bd = 0.05;
+  for (size_t k = 0; k < m.clusters.size(); ++k) {
+    const Root& c = m.clusters[k].mean;
+    if (c.pair != p.pair) continue;
+    const double d = c.pair ? std::abs(c.wn / p.wn - 1) : std::abs(c.real / p.real - 1);
+    if (d < bd) bd = d, best = s.rank[k];
+  }
+  return best;
+}
+
 }  // namespace
+
+// Gilbert's realisation on a known answer: a 2 x 2 plant whose pole at -2 has a residue matrix of
+// rank two (no rank-one product can hold it) and whose pole at -10 has one of rank one. The
+// minimal order is 3: two states at -2, one at -10; the model then matches the noise-free data.
+// Restricted to rank one (the report's recipe), it misses them.
+TEST(StateModel, AClusterWhoseResiduesAreRankTwoGetsTwoStates) {
+  SharedPoles t;
+  t.poles = {Root::Real(-2), Root::Real(-10)};
+  Eigen::MatrixXcd r2(2, 2), r1(2, 2);
+  r2 << 1.0, 0.5, 0.3, 2.0;    // rank two
+  r1 << 2.0, -2.0, 1.0, -1.0;  // (2, 1)^T (1, -1): rank one
+  t.R = {r2, r1};
+  std::map<std::string, std::vector<FrdPoint>> data;
+  const TransferMatrix m = t.measure(0.0, 1, &data);
+  ASSERT_EQ(m.state_count, 2);
+  const StateModel s = build_state_model(m, data);
+  EXPECT_EQ(s.order, 3);
+  EXPECT_EQ(rank_at(m, s, t.poles[0]), 2);
+  EXPECT_EQ(rank_at(m, s, t.poles[1]), 1);
+  for (int o = 0; o < 2; ++o)
+    for (int i = 0; i < 2; ++i)
+      for (double w : {0.3, 3.0, 30.0})
+        EXPECT_NEAR(std::abs(s.at(o, i, w) / t.at(o, i, w) - 1.0), 0.0, 1e-6);
+  EXPECT_LT(s.error, 1e-6);
+  StateModelOptions rank_one;
+  rank_one.max_rank = 1;
+  const StateModel s1 = build_state_model(m, data, rank_one);
+  EXPECT_EQ(s1.order, 2);
+  EXPECT_GT(s1.error, 0.05);
+}
+
+// Randomised: 20 plants of 3 outputs (units 1, 1e-3 and 100) and 3 inputs with poles at -1 and -8
+// and a pair at 40 rad/s (zeta 0.2), each pole's residue matrix of a random rank 1-3 (orthonormal
+// factors, singular values 0.5-1), measured at 1 % noise with sigma. Each cluster's rank must come
+// back as drawn in at least 90 % of the plants, and every path within 2 chi2 per point.
+TEST(StateModel, RandomSharedPolesComeBackAtTheirResidueRanks) {
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> rank_of(1, 3);
+  std::uniform_real_distribution<double> sv(0.5, 1.0);
+  std::normal_distribution<double> n01;
+  const Eigen::Vector3d units(1.0, 1e-3, 100.0);
+  int plants_right = 0, plants = 20;
+  for (int d = 0; d < plants; ++d) {
+    SCOPED_TRACE("plant " + std::to_string(d));
+    SharedPoles t;
+    t.poles = {Root::Real(-1), Root::Real(-20), Root::Pair(200, 0.2)};
+    std::vector<int> ranks;
+    for (const Root& p : t.poles) {
+      const int r = rank_of(rng);
+      ranks.push_back(r);
+      auto draw = [&] {
+        Eigen::MatrixXcd a(3, 3);
+        for (int i = 0; i < 9; ++i)
+          a(i) = p.pair ? std::complex<double>(n01(rng), n01(rng)) : n01(rng);
+        return Eigen::HouseholderQR<Eigen::MatrixXcd>(a).householderQ() *
+               Eigen::MatrixXcd::Identity(3, 3);
+      };
+      const Eigen::MatrixXcd U = draw(), V = draw();
+      Eigen::MatrixXcd R = Eigen::MatrixXcd::Zero(3, 3);
+      for (int l = 0; l < r; ++l) R += sv(rng) * U.col(l) * V.col(l).adjoint();
+      // A real pole's residues are real; each pole's scaled by its frequency (a gain of order 1).
+      if (!p.pair) R = R.real().cast<std::complex<double>>().eval();
+      R *= p.pair ? p.wn : -p.real;
+      t.R.push_back(units.cast<std::complex<double>>().asDiagonal() * R);
+    }
+    std::map<std::string, std::vector<FrdPoint>> data;
+    const TransferMatrix m = t.measure(0.01, 100 + d, &data);
+    const StateModel s = build_state_model(m, data);
+    bool right = true;
+    for (size_t k = 0; k < t.poles.size(); ++k)
+      right = right && rank_at(m, s, t.poles[k]) == ranks[k];
+    plants_right += right;
+    for (const auto& [key, c] : s.path_check) {
+      if (c.fit_status != "converged") continue;
+      EXPECT_LT(c.chi2_per_point, 2.0) << key << ", its own fit " << c.fit_chi2_per_point;
+    }
+  }
+  EXPECT_GE(plants_right, 18) << "of " << plants;
+}
 
 TEST(StateModel, OrderIsTheNumberOfDistinctPolesAndTheModelMatchesTheData) {
   Truth t;
@@ -98,11 +239,11 @@ TEST(StateModel, OrderIsTheNumberOfDistinctPolesAndTheModelMatchesTheData) {
 // across the paths and clusters as one, whose residues are then not rank one, in sensors whose
 // units differ by 1e4 (DPP3 against P3). The SVD's rank-one factors keep the large residues and
 // lose the small sensors' (the factors' fit switched off: 7 paths over 100 chi2 per point, the
-// worst 1.4e6); fitted to the data, every path in the model comes back within 6 chi2 per point
-// (its own fit about 1; measured 0.8-4.9) but IGV:P3, whose own rotor pole (3.25 rad/s) shares
-// the 3.38 rad/s state with three other paths: one rank-one residue matrix cannot hold the four
-// (measured 171 after 500 sweeps, 141 after 20000). The paths with no response stay within their
-// noise, and each path's error is measured on its clear points only.
+// worst 1.4e6); fitted to the data at rank one, IGV:P3, whose own rotor pole (3.25 rad/s) shares
+// the 3.38 rad/s state with three other paths, stays at 171 (141 after 20000 sweeps). With a
+// cluster's rank raised where the data need it (Gilbert), two more states and every path in the
+// model within 3 chi2 per point (measured 0.72-2.34; its own fit 0.6-1.2). The paths with no
+// response stay within their noise, and each path's error is measured on its clear points only.
 TEST(StateModel, FittedFactorsReproduceEveryJ85PathWithinItsNoise) {
   const Model m = load_model(source_path("models/j85_95.json"));
   std::vector<MatrixEntry> entries;
@@ -145,8 +286,18 @@ TEST(StateModel, FittedFactorsReproduceEveryJ85PathWithinItsNoise) {
   StateModelOptions svd_only;
   svd_only.max_sweeps = 0;
   const StateModel before = build_state_model(tm, data, svd_only);
+  StateModelOptions rank_one;
+  rank_one.max_rank = 1;
+  const StateModel r1 = build_state_model(tm, data, rank_one);
   const StateModel s = build_state_model(tm, data);
-  EXPECT_EQ(s.order, tm.state_count);
+  EXPECT_EQ(r1.order, tm.state_count);
+  // Gilbert: the states are the clusters' ranks (measured: two real clusters at rank two).
+  int states = 0;
+  for (size_t k = 0; k < tm.clusters.size(); ++k) states += s.rank[k] * tm.clusters[k].mean.order();
+  EXPECT_EQ(s.order, states);
+  EXPECT_GT(s.order, tm.state_count);
+  EXPECT_LE(s.order, tm.state_count + 4);
+  EXPECT_GT(r1.path_check.at("IGV:P3").chi2_per_point, 100.0);  // rank one (measured 171)
   double worst_before = 0;
   for (const auto& [k, c] : before.path_check)
     if (c.fit_status == "converged") worst_before = std::max(worst_before, c.chi2_per_point);
@@ -159,13 +310,8 @@ TEST(StateModel, FittedFactorsReproduceEveryJ85PathWithinItsNoise) {
     if (c.fit_status == "converged") {
       ++in_model;
       EXPECT_EQ(s.path_error.at(k), c.error);
-      if (k == "IGV:P3") {  // what one rank-one cluster cannot hold (measured: 171, error 0.31)
-        EXPECT_LT(c.chi2_per_point, 300.0);
-        EXPECT_LT(c.error, 0.5);  // the SVD's factors: 1.4e6 and 3.2
-        continue;
-      }
-      EXPECT_LT(c.chi2_per_point, 6.0) << "its own fit: " << c.fit_chi2_per_point;
-      EXPECT_LT(c.error, 0.06);  // 2 % noise on its clear points
+      EXPECT_LT(c.chi2_per_point, 3.0) << "its own fit: " << c.fit_chi2_per_point;
+      EXPECT_LT(c.error, 0.04);  // 2 % noise on its clear points
     } else if (c.fit_status == "no_response") {
       EXPECT_EQ(c.clear, 0);
       EXPECT_LT(c.error, 0);  // none: every point is noise

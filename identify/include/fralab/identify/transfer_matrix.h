@@ -36,6 +36,10 @@ struct TransferMatrix {
   int state_count = 0;
 };
 
+/// One root as the report writes its factor: [s/a + 1] a stable real root (-a), [1 - s/a] a
+/// right-half-plane one (a), [(s/w)^2 + 2(z)s/w + 1] a pair (w rad/s, damping z).
+std::string factor_text(const Root& r);
+
 /// Human form of a tf in the report's notation: 2.86 [1 - s/192] / ([s/2.86 + 1][s/76.7 + 1])
 /// e^(-0.011 s).
 std::string tf_to_text(const Tf& tf);
