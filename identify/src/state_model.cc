@@ -202,9 +202,10 @@ double fit_factors(const std::vector<PathData>& paths, const Components& cm,
 }
 
 // The start of one more component on cluster k: each path's residue on k refitted to what the
-// model leaves of its data (weighted least squares, one residue per path), the matrix of those
-// residues with each output's row scaled to unit norm (the outputs' units differ by orders of
-// magnitude), and its first right singular vector as b; c is then solved by the first half-step.
+// model leaves of its data (weighted least squares, one residue per path), entered in a matrix
+// with its phase and, as its size, the root of the chi2 it would remove (dimensionless: the
+// outputs' units differ by orders of magnitude, and the paths the model misses most lead); its
+// first right singular vector is b'. c' is then solved by the fit's first half-step (from 0).
 Eigen::VectorXcd residual_direction(const std::vector<PathData>& paths, const Components& cm, int k,
                                     bool pair, const Eigen::MatrixXcd& c, const Eigen::MatrixXcd& b,
                                     const Eigen::MatrixXd& D, int no, int ni) {
