@@ -5,6 +5,7 @@
 #include <set>
 #include <sstream>
 
+#include "fralab/core/frd.h"
 #include "fralab/core/numerics.h"
 
 namespace fralab {
@@ -201,40 +202,62 @@ double fit_factors(const std::vector<PathData>& paths, const Components& cm,
   return sse;
 }
 
+// Weighted linear least squares of `target` (at pd's points) on d (with_d) and the residues of the
+// clusters ks: min sum wt^2 |target - d - sum_k term_k(r_k)|^2, unknowns d, then Re (and Im, for a
+// pair) of each r_k in ks's order. *fitted: |W A x|, the root of the chi2 the fit removes.
+Eigen::VectorXd residue_fit(const PathData& pd, int nk, const std::vector<int>& ks,
+                            const std::vector<bool>& pair, bool with_d,
+                            const std::vector<Cx>& target, double* fitted = nullptr) {
+  int nu = with_d ? 1 : 0;
+  for (int k : ks) nu += pair[k] ? 2 : 1;
+  const size_t np = pd.g.size();
+  Eigen::MatrixXd A(2 * np, nu);
+  Eigen::VectorXd y(2 * np);
+  for (size_t q = 0; q < np; ++q) {
+    int c = 0;
+    auto put = [&](Cx v) {
+      A(q, c) = pd.wt[q] * v.real();
+      A(np + q, c) = pd.wt[q] * v.imag();
+      ++c;
+    };
+    if (with_d) put(1.0);
+    for (int k : ks) {
+      put(term(pd, q, nk, k, pair[k], 1.0));
+      if (pair[k]) put(term(pd, q, nk, k, true, Cx(0, 1)));
+    }
+    y(q) = pd.wt[q] * target[q].real();
+    y(np + q) = pd.wt[q] * target[q].imag();
+  }
+  Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
+  if (fitted) *fitted = (A * x).norm();
+  return x;
+}
+
 // The start of one more component on cluster k: each path's residue on k refitted to what the
 // model leaves of its data (weighted least squares, one residue per path), entered in a matrix
 // with its phase and, as its size, the root of the chi2 it would remove (dimensionless: the
 // outputs' units differ by orders of magnitude, and the paths the model misses most lead); its
 // first right singular vector is b'. c' is then solved by the fit's first half-step (from 0).
 Eigen::VectorXcd residual_direction(const std::vector<PathData>& paths, const Components& cm, int k,
-                                    bool pair, const Eigen::MatrixXcd& c, const Eigen::MatrixXcd& b,
-                                    const Eigen::MatrixXd& D, int no, int ni) {
+                                    const std::vector<bool>& pair, const Eigen::MatrixXcd& c,
+                                    const Eigen::MatrixXcd& b, const Eigen::MatrixXd& D, int no,
+                                    int ni) {
   Eigen::MatrixXcd E = Eigen::MatrixXcd::Zero(no, ni);
   for (const PathData& pd : paths) {
-    const size_t np = pd.g.size();
-    Eigen::MatrixXd A(2 * np, pair ? 2 : 1);
-    Eigen::VectorXd y(2 * np);
-    for (size_t q = 0; q < np; ++q) {
+    std::vector<Cx> e(pd.g.size());  // what the model leaves of the data
+    for (size_t q = 0; q < pd.g.size(); ++q) {
       Cx v = D(pd.o, pd.i);
       for (int j = 0; j < cm.size(); ++j)
         v += term(pd, q, cm.nk, cm.kc[j], cm.pair[j], c(pd.o, j) * b(pd.i, j));
-      const Cx e = pd.g[q] - v, h1 = term(pd, q, cm.nk, k, pair, 1.0);
-      A(q, 0) = pd.wt[q] * h1.real();
-      A(np + q, 0) = pd.wt[q] * h1.imag();
-      if (pair) {
-        const Cx h2 = term(pd, q, cm.nk, k, true, Cx(0, 1));
-        A(q, 1) = pd.wt[q] * h2.real();
-        A(np + q, 1) = pd.wt[q] * h2.imag();
-      }
-      y(q) = pd.wt[q] * e.real();
-      y(np + q) = pd.wt[q] * e.imag();
+      e[q] = pd.g[q] - v;
     }
-    const Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
-    const Cx r = pair ? Cx(x(0), x(1)) : Cx(x(0));
+    double fitted = 0;
+    const Eigen::VectorXd x = residue_fit(pd, cm.nk, {k}, pair, false, e, &fitted);
+    const Cx r = pair[k] ? Cx(x(0), x(1)) : Cx(x(0));
     // Its phase, and as its size the root of the chi2 that residue alone would remove.
-    if (std::abs(r) > 0) E(pd.o, pd.i) = r / std::abs(r) * (A * x).norm();
+    if (std::abs(r) > 0) E(pd.o, pd.i) = r / std::abs(r) * fitted;
   }
-  if (!pair) {  // a real pole's factors are real
+  if (!pair[k]) {  // a real pole's factors are real
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(E.real(), Eigen::ComputeThinV);
     return svd.matrixV().col(0).cast<Cx>();
   }
@@ -313,29 +336,8 @@ StateModel build_state_model(const TransferMatrix& m,
         }
         if (best >= 0 && std::find(ks.begin(), ks.end(), best) == ks.end()) ks.push_back(best);
       }
-      // Unknowns: d (when the fit is biproper), a real residue per real pole, Re/Im per pair.
-      int nu = pd.has_d ? 1 : 0;
-      for (int k : ks) nu += pair[k] ? 2 : 1;
-      if (nu == 0) continue;
-      const size_t np = pd.g.size();
-      Eigen::MatrixXd A(2 * np, nu);
-      Eigen::VectorXd y(2 * np);
-      for (size_t q = 0; q < np; ++q) {
-        int c = 0;
-        auto put = [&](Cx v) {
-          A(q, c) = pd.wt[q] * v.real();
-          A(np + q, c) = pd.wt[q] * v.imag();
-          ++c;
-        };
-        if (pd.has_d) put(1.0);
-        for (int k : ks) {
-          put(term(pd, q, nk, k, pair[k], 1.0));
-          if (pair[k]) put(term(pd, q, nk, k, true, Cx(0, 1)));
-        }
-        y(q) = pd.wt[q] * pd.g[q].real();
-        y(np + q) = pd.wt[q] * pd.g[q].imag();
-      }
-      Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
+      if (ks.empty() && !pd.has_d) continue;
+      const Eigen::VectorXd x = residue_fit(pd, nk, ks, pair, pd.has_d, pd.g);
       int c = 0;
       if (pd.has_d) s.D(o, i) = x(c++);
       for (int k : ks) {
@@ -389,8 +391,8 @@ StateModel build_state_model(const TransferMatrix& m,
   for (int k = 0; k < nk; ++k) {
     std::set<std::string> mo, mi;
     for (const std::string& key : m.clusters[k].pairs) {
-      const size_t colon = key.find(':');
-      mi.insert(key.substr(0, colon)), mo.insert(key.substr(colon + 1));
+      auto [in, out] = split_pair(key);
+      mi.insert(in), mo.insert(out);
     }
     cap[k] = std::min({int(mo.size()), int(mi.size()), opt.max_rank});
   }
@@ -415,7 +417,7 @@ StateModel build_state_model(const TransferMatrix& m,
       cm2.kc.push_back(k), cm2.pair.push_back(pair[k]);
       Eigen::MatrixXcd c2(no, cm2.size()), b2(ni, cm2.size());
       c2 << c, Eigen::VectorXcd::Zero(no);
-      b2 << b, residual_direction(paths, cm, k, pair[k], c, b, s.D, no, ni);
+      b2 << b, residual_direction(paths, cm, k, pair, c, b, s.D, no, ni);
       Eigen::MatrixXd D2 = s.D;
       int sweeps = 0;
       const double sse = fit_factors(paths, cm2, trial, c2, b2, D2, &sweeps);
