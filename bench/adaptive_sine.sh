@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# Issue 13 item 4's figures: the adaptive stepped sine (--sigma-target) against the report's fixed
-# stepped sine (8 cycles or 4 s a step, its limits) on the J85 at 95 %, all four actuators, same
-# plant seed. Per target: engine time and the share saved, the steps per state (met, limit,
+# Figures for docs/validation.md: the adaptive stepped sine (--sigma-target) against the report's
+# fixed stepped sine (8 cycles or 4 s a step, its limits) on the J85 at 95 %, all four actuators,
+# same plant seed. Per target: engine time and the share saved, the steps per state (met, limit,
 # undetectable), and the precision per point: over every (pair, step) whose response the fixed run
-# detects (sigma / |G| <= 1/3), r = adaptive sigma / max(target, fixed sigma), its median and
-# 95th percentile (r <= 1: the point has the target or at least the fixed run's precision; the
-# sigmas are estimates, so r scatters about 1 where both integrate alike). Then the diagnosis
-# (against j85_95_sim) measured both ways: findings, validation error, engine time of the run and
-# of its validation run. Run after scripts/build.sh (about 12 min):
+# detects (sigma / |G| <= 1/3), r = adaptive sigma / max(target, fixed sigma), its median and 95th
+# percentile (r <= 1: the point has the target or at least the fixed run's precision; the sigmas are
+# estimates, so r scatters about 1 where both integrate alike). Then the diagnosis (against
+# j85_95_sim) measured both ways: findings, validation error, engine time of the run and of its
+# validation run. Run after scripts/build.sh (about 12 min):
 #   bash bench/adaptive_sine.sh [SEED]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Issue 13's figures: the auto campaign (orthogonal multisine, a sine for the actuators that
-# distort) and the orthogonal multisine alone (2 periods; its backlash fitted by its best linear
-# approximation) against the report's stepped sine, on the J85 at 70, 85 and 95 % (each against
-# its _sim), same seed. Per operating point and campaign: engine time, findings, error, validation
-# error on its own validation run, and both extended models' error on the same data (the stepped
-# run's validation measurement). Run after scripts/build.sh (about 15 min, the stepped runs most):
+# Figures for docs/validation.md: the auto campaign (orthogonal multisine, a sine for the actuators
+# that distort) and the orthogonal multisine alone (2 periods; its backlash fitted by its best
+# linear approximation) against the report's stepped sine, on the J85 at 70, 85 and 95 % (each
+# against its _sim), same seed. Per operating point and campaign: engine time, findings, error,
+# validation error on its own validation run, and both extended models' error on the same data
+# (the stepped run's validation measurement). Run after scripts/build.sh (about 15 min, the
+# stepped runs most):
 #   bash bench/campaign_compare.sh [SEED]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,4 +1,4 @@
-// fralab-bench-diagnose: the diagnosis's randomised self-check (issue 11). N random plants
+// fralab-bench-diagnose: the diagnosis's randomised self-check. N random plants
 // (tests/util/random_plant.h), each hiding 0-2 effects, go through the real processes
 // (`fralab diagnose --engine`, measurement and validation included); prints per case the findings
 // that were not hidden and the hidden effects that were missed, then precision (true findings /

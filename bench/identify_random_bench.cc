@@ -1,4 +1,4 @@
-// Issue 14: the identifier on randomised frequency responses it has never seen (tests/util/
+// The identifier on randomised frequency responses it has never seen (tests/util/
 // random_frd.h: orders 1-8 with 0..n zeros, close light resonances, right-half-plane zeros, poles
 // over four decades, a pole outside the band, sparse grids, delays), at six noise conditions
 // relative to |G| and two of additive noise (0.5 % of the peak |G|, with sigma and without:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every benchmark the README quotes, in order. Run after scripts/build.sh:
+# Every benchmark docs/validation.md quotes, in order. Run after scripts/build.sh:
 #   bash bench/run_benchmarks.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,5 +26,5 @@ $B/fralab analyze --log "$out/j85/tape.lcmlog" "${pairs[@]}" --out "$out/offline
 $B/fralab diagnose --simulation j85_95_sim --measured "$out/offline" --out "$out/diag"
 end=$(date +%s%N)
 echo "diagnosis from tape: $(( (end - start) / 1000000 )) ms wall"
-echo "== the auto campaign against the stepped sine, J85 at 70/85/95 % (issue 13; about 15 min)"
+echo "== the auto campaign against the stepped sine, J85 at 70/85/95 % (about 15 min)"
 bash bench/campaign_compare.sh

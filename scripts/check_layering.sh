@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The dependency rule (README, Layout), checked: every #include of a fralab header in a module's
-# library (include/ and src/) must name a module the rule allows; executables (app/) and the LCM
-# edges (*/lcm/) may also use the LCM bridge. Prints each violation as FILE:LINE: what, and
+# The dependency rule (docs/development.md), checked: every #include of a fralab header in a
+# module's library (include/ and src/) must name a module the rule allows; executables (app/) and
+# the LCM edges (*/lcm/) may also use the LCM bridge. Prints each violation as FILE:LINE: what, and
 # exits 1 when there is any. Usage: check_layering.sh [SOURCE_DIR]
 set -uo pipefail
 root=${1:-$(cd "$(dirname "$0")/.." && pwd)}

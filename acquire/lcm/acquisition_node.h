@@ -8,7 +8,7 @@
 // run. The plant and the analysers may share the instances (memq:// in tests: everything runs in
 // the caller's thread, dispatched while this waits for acknowledgements).
 //
-// Free-running plant (AcquireOptions::free_running, issue 15): no acknowledgement from the plant
+// Free-running plant (AcquireOptions::free_running): no acknowledgement from the plant
 // is awaited; command blocks go out while they are less than `lead` blocks ahead of the plant's
 // clock (the tape it publishes, watched here). The campaign's "done" and final block are held
 // back: idle blocks (every input at its operating point) keep the plant fed until it has played

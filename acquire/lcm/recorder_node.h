@@ -1,4 +1,4 @@
-// The tape recorder inside the flow control (issue 12): every message on the data instance is
+// The tape recorder inside the flow control: every message on the data instance is
 // written to a standard LCM log file (lcm-logplayer and lcm::LogFile read it) in arrival order,
 // retransmitted duplicates included, flushed, and the last tape block and status event on disk
 // without a gap are acknowledged under the recorder's name on the control instance (streams

@@ -27,9 +27,9 @@ struct PairFit {
   std::vector<C> factor;                    // product of accepted cause factors so far
 };
 
-/// A fitted candidate: the cause, its parameters (contracts 6 names), its factor F at each point of
-/// the pair, chi2 with F applied, k free parameters, and `detail` (the resonance's "peak"/"notch",
-/// or a nonlinearity's explanation).
+/// A fitted candidate: the cause, its parameters (docs/formats.md §6 names), its factor F at each
+/// point of the pair, chi2 with F applied, k free parameters, and `detail` (the resonance's
+/// "peak"/"notch", or a nonlinearity's explanation).
 struct Cause {
   CauseKind cause = CauseKind::kGainMismatch;
   std::map<std::string, double> params;

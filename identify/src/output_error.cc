@@ -173,23 +173,25 @@ void merge_real_roots(std::vector<Root>& v) {
 // Stops early when the objective has stalled: sum W |e|^2 lowered by less than kStallChi2 (with
 // sigma: in chi^2 units, nothing a criterion can see) or by less than kStallRel of itself (without)
 // over kStallSteps steps. A root running off along a flat valley (two real poles packed as a pair,
-// zeta -> 1500 and one pole -> 1e7 rad/s) otherwise crawls on to the whole budget: measured on the
-// random benchmark's seed 4, 0.5 %, such crawls were 3/4 of the time, and stopping them changed
-// no fit's order. A tenth of a chi^2 unit over ten steps (0.01 before: the same orders on seeds
-// 1-5, BM_Order3Fit100Points 4.5 -> 3.2 ms) moves a parameter by at most ~0.3 of its sigma.
+// zeta -> 1500 and one pole -> 1e7 rad/s) otherwise crawls on to the whole budget: on the random
+// benchmark's seed 4 at 0.5 % noise such crawls are 3/4 of the time, and stopping them changes no
+// fit's order. A tenth of a chi^2 unit over ten steps moves a parameter by at most ~0.3 of its
+// sigma; against 0.01 it gives the same orders on seeds 1-5 in less time (BM_Order3Fit100Points
+// 3.2 ms against 4.5 ms).
 constexpr int kStallSteps = 10;
 constexpr double kStallChi2 = 0.1, kStallRel = 1e-4;
 
 // MINPACK's Levenberg-Marquardt (lmder and lmpar, More 1978: a trust region ||D h|| <= delta,
 // D the running maximum of J's column norms, the first bound 100 ||D x0|| cut to the first step,
 // the damping par found by Newton's method on ||D h(par)|| = delta) with each step solved from the
-// normal equations (J^T J + par D^2) h = -J^T r by Cholesky. Eigen's port of MINPACK took the same
-// steps from a pivoted QR of the 2N x p Jacobian at every step, half of a refinement's time:
-// measured on the random benchmark (seeds 1-5), 5-20 % less time per fit at the median and 15-25 %
-// at p90, the same orders everywhere. The normal equations square J's condition number, so a
-// converged optimum is polished by one Gauss-Newton step solved by QR of J itself (noise-free data
-// stay at machine precision). Stops: the relative reductions (actual and predicted) below ftol,
-// the trust region below xtol of ||D x||, the stall rule above, or max_fev residual evaluations.
+// normal equations (J^T J + par D^2) h = -J^T r by Cholesky. Eigen's port of MINPACK takes the
+// same steps from a pivoted QR of the 2N x p Jacobian at every step, half of a refinement's time:
+// on the random benchmark (seeds 1-5) the normal equations take 5-20 % less time per fit at the
+// median and 15-25 % at p90, with the same orders everywhere. They square J's condition number,
+// so a converged optimum is polished by one Gauss-Newton step solved by QR of J itself
+// (noise-free data stay at machine precision). Stops: the relative reductions (actual and
+// predicted) below ftol, the trust region below xtol of ||D x||, the stall rule above, or max_fev
+// residual evaluations.
 enum class LmStop { kConverged, kStalled, kBudget, kBadStart };
 struct Lmpar {
   double par = 0;

@@ -174,7 +174,7 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     const MatR Q1tAD = Q1.transpose().lazyProduct(AD);
     MatR ADp = AD - Q1.lazyProduct(Q1tAD);
     // The smallest right singular vector of ADp is that of its small triangular factor R, the
-    // upper triangle of the QR's top rows (null_vector.h reads only that; JacobiSVD before: 1.6x
+    // upper triangle of the QR's top rows (null_vector.h reads only that; a JacobiSVD takes 1.6x
     // the time at n = 10, 2x at n = 14, BM_NullVector*).
     Eigen::HouseholderQR<MatR> qd(ADp);
     VecR a = smallest_right_singular_vector(qd.matrixQR().topRows(n + 1));

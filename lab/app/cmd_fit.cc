@@ -62,7 +62,7 @@ void add_fit_command(CLI::App& app) {
   c->add_option("--frd", fc->in, "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck")
       ->required();
   c->add_option("--delay", fc->delay, "auto, none or SECONDS (subtracted)")->capture_default_str();
-  c->add_option("--out", fc->out, "tf JSON (contracts 1) plus fit figures, roots, Pade sets")
+  c->add_option("--out", fc->out, "tf JSON (docs/formats.md §1) plus fit figures, roots, Pade sets")
       ->required();
   c->add_option("--max-order", fc->max_order, "highest denominator order");
   c->add_option("--delay-max", fc->delay_max,

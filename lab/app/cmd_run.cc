@@ -70,8 +70,8 @@ void run(const RunCommand& c) {
 void add_run_command(CLI::App& app) {
   auto rc = std::make_shared<RunCommand>();
   rc->measure.out = "out/lab";
-  // Issue 13: the campaign that decides itself by default (lab/auto_campaign.h); `--excitation
-  // stepped` keeps the report's procedure.
+  // The campaign that decides itself by default (lab/auto_campaign.h); `--excitation stepped`
+  // keeps the report's procedure.
   rc->measure.auto_campaign = true;
   rc->measure.acquire.excitation = Excitation::kMultisine;
   auto* c =

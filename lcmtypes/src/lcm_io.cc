@@ -284,8 +284,8 @@ std::string private_lcm_url(uint64_t salt, std::pair<int, int> ephemeral) {
   // datagram to every socket bound to its port whatever the group, so the port is what separates
   // two runs. Outside the ephemeral range because LCM's send sockets are never bound: each takes an
   // ephemeral port at its first datagram, without SO_REUSEADDR, and a receiver's bind to that port
-  // then fails ("bind: Address already in use"; seen once in a full test run, when the tape ports
-  // were 20000-59998).
+  // then fails ("bind: Address already in use"; a full test run meets it with tape ports in
+  // 20000-59998).
   const auto [lo, hi] = ephemeral;
   const int a_end = std::min(lo - 2, 65534);  // segment A: even P in [10000, a_end], P + 1 < lo
   const int b_begin = std::max(10000, (hi + 2) / 2 * 2);  // segment B: even P >= hi + 1

@@ -6,7 +6,7 @@
 // blocks are kept and republished when the acquisition asks (FRALAB_FLOW "resend", stream
 // "tape": a consumer lost them); "close" ends the run. Tests run it in-process over memq://.
 //
-// Free-running (tick_samples > 0, issue 15): the plant is not in lockstep; command blocks go into a
+// Free-running (tick_samples > 0): the plant is not in lockstep; command blocks go into a
 // CommandBuffer (plant/command_buffer.h) by the samples they stamp, the contiguous part is still
 // acknowledged (so lost commands are retransmitted), and the caller's clock calls tick(): the next
 // tick_samples samples are played from the buffer, held where it ran dry (channel "underrun"),

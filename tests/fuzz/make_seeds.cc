@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
     e.sample = 120;
     put(kStatusChannel, to_status_msg(e));
   }
-  {  // An orthogonal multisine tape (issue 13): inputs Wf and A8 on lines 1-3 of a 20-sample
+  {  // An orthogonal multisine tape: inputs Wf and A8 on lines 1-3 of a 20-sample
      // period, two experiments (DFT phases 0 and pi for A8) of two periods, then done.
     TapeWriter put(d + "/tape/seed_orthogonal.tape");
     const int P = 20;

@@ -281,7 +281,7 @@ TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
   expect_j85_95_findings(json_load_file(d + "/diagnosis.json"));
 }
 
-// Issue 13: the auto campaign (orthogonal multisine over the four actuators, a sine for A8, whose
+// The auto campaign (orthogonal multisine over the four actuators, a sine for A8, whose
 // backlash distorts at the multisine's level) finds the same nine findings within the same
 // tolerances, at 10 points per decade, in at most 10 min of engine time (validation apart).
 TEST(Diagnose, J85AutoCampaignFindsTheSameInTenMinutesOfEngineTime) {

@@ -1,4 +1,5 @@
-// Fault injection (issue 12): the lab's real processes under the conditions a test cell meets.
+// Fault injection (docs/robustness.md): the lab's real processes under the conditions a test cell
+// meets.
 // Every run is `fralab measure --engine j85_95 --input Wf --band 0.5:20 --points-per-decade 3`
 // (177 s of engine time), and every completed run must give frd files, fits and transfer matrix
 // byte-identical to an undisturbed run of the same seed:
@@ -187,7 +188,7 @@ std::pair<std::string, std::string> kill_and_resume(const std::string& run, cons
   return {ref, d};
 }
 
-// Issue 13: a multisine run resumes as a stepped one does. The orthogonal multisine of Wf and A8
+// A multisine run resumes as a stepped one does. The orthogonal multisine of Wf and A8
 // (2 experiments of 2 periods, 18 s of engine time, paced at 5x), its acquisition killed mid-run,
 // then resumed: identical to an undisturbed multisine run of the same seed.
 TEST(Faults, AKilledMultisineRunResumesToTheUninterruptedNumbers) {
@@ -197,7 +198,7 @@ TEST(Faults, AKilledMultisineRunResumesToTheUninterruptedNumbers) {
       "multisine", 5, 1.5, 21);
 }
 
-// Issue 13 item 4: an adaptive stepped sine's campaign grows with the decisions it takes while
+// An adaptive stepped sine's campaign grows with the decisions it takes while
 // running; killed mid-run and resumed, it reads them back from the tape, takes the open step's
 // again on the same samples, and ends identical to an undisturbed run, each step's cycles
 // included (Wf over 0.5-20 Hz: five of six steps extended; 210 s of engine time, paced at 10x).

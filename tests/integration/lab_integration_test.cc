@@ -317,7 +317,7 @@ TEST(Lab, MonitorFollowsARunningLab) {
   EXPECT_EQ(rows, int(load_frd(d + "/run/frd/Wf_P3.json").points.size()));
 }
 
-// Issue 13: the orthogonal multisine (every input on every line, two experiments) measures both
+// The orthogonal multisine (every input on every line, two experiments) measures both
 // actuators' paths in one run at >= 8 lines per decade each, within noise of the model.
 TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
   std::string d = tmpdir("multisine");
@@ -344,7 +344,7 @@ TEST(Lab, OrthogonalMultisinesMeasureTwoActuatorsInOneRun) {
   EXPECT_EQ(run["excitation"], "multisine");
 }
 
-// Issue 13, the campaign that decides itself: an orthogonal multisine over the four J85 actuators,
+// The campaign that decides itself: an orthogonal multisine over the four J85 actuators,
 // then a sine for the one whose position distorts at the multisine's level (A8's backlash: its
 // actuator curve shows > 1 % on the non-excited lines, the others < 1 %). The merged curves: A8's
 // actuator curve from the sine (its describing function: odd harmonics at low frequency), no
@@ -403,7 +403,7 @@ TEST(Lab, AutoCampaignMeasuresByMultisineAndTheBacklashBySine) {
   }
 }
 
-// Issue 15, import/export: a measured tape written out as a time series and its schedule (CSV and
+// Import/export: a measured tape written out as a time series and its schedule (CSV and
 // .mat), imported back with other block boundaries, analyses to byte-identical frd files.
 TEST(Lab, ExportedTapeReimportedGivesIdenticalFrdFiles) {
   const std::string d = tmpdir("roundtrip"), tape = measured() + "/tape.lcmlog";
@@ -465,7 +465,7 @@ TEST(Lab, ExportedTapeReimportedGivesIdenticalFrdFiles) {
   EXPECT_FALSE(fs::exists(d + "/gap.lcmlog"));
 }
 
-// Issue 15, export: the results load in Octave (`load`), with names and units, and the exported
+// Export: the results load in Octave (`load`), with names and units, and the exported
 // num/den reproduce the fitted tf; the CSV reads with dlmread.
 TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
   ASSERT_EQ(sh("command -v octave-cli").status, 0)
@@ -529,7 +529,7 @@ TEST(Lab, ExportedResultsLoadInOctaveWithNamesAndUnits) {
   EXPECT_EQ(p3_name, "P3");
 }
 
-// Issue 15, report.html: one self-contained page (every figure an inline SVG, the overview of the
+// report.html: one self-contained page (every figure an inline SVG, the overview of the
 // transfer matrix among them) that a real browser renders: headless Chromium loads it and takes a
 // screenshot in which the simulation's red and the extended model's blue curves are drawn.
 TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
@@ -585,7 +585,7 @@ TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
             json_load_file(measured() + "/run.json")["measurement_chain"]);
 }
 
-// Issue 15, a plant that is not in lockstep: on its own clock at real time, with jittered ticks,
+// A plant that is not in lockstep: on its own clock at real time, with jittered ticks,
 // fed from a command buffer kept well ahead, the free-running plant gives the lockstep numbers bit
 // for bit (the same commands at the same samples); were the buffer to run dry (a very busy
 // machine), the steps it touched are repeated and the numbers agree within noise instead.
@@ -637,7 +637,7 @@ TEST(Lab, FreeRunningPlantRepeatsTheStepsItsBufferRanDryIn) {
   const std::string d = tmpdir("free_dry"), run = kFreeRun;
   measure_lockstep(d);
   // Stopped once the plant has played about a second (the tape past 100 kB), for 2 s: 20 times
-  // the lead. The wait is bounded (60 s): a run that fails before its tape grows (it once did, its
+  // the lead. The wait is bounded (60 s): a run that fails before its tape grows (e.g. its
   // acquire unable to bind its port) must fail the test, not hang it until ctest's timeout.
   const std::string tape = d + "/dry/tape.lcmlog";
   Cmd free = sh("(i=0; while [ $(stat -c %s " + tape +

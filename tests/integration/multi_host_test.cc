@@ -1,4 +1,4 @@
-// Multi-host, on purpose (issue 12): two network namespaces joined by a veth pair
+// Multi-host, on purpose: two network namespaces joined by a veth pair
 // (scripts/two_hosts.sh), the plant, recorder and every analyser on "host" A through its deputy
 // (fralab-deputy), the launcher, acquisition and identifier on B. The numbers must be identical
 // to a run on one host; a deputy that is not there is named.

@@ -163,7 +163,7 @@ TEST(Multisine, ZipperedIsPeriodicDisjointAndScaledToTheAmplitude) {
   EXPECT_DOUBLE_EQ(cmd[2][123], ins[2].dc);  // BLD not excited: held at its operating point
 }
 
-// Issue 13: the orthogonal design puts every input on every line of a quasi-logarithmic grid with
+// The orthogonal design puts every input on every line of a quasi-logarithmic grid with
 // at least the requested lines per decade, in n_u experiments whose line phases differ by the DFT
 // phase matrix exp(j 2 pi q e / n_u); each experiment's commands are periodic from its settle on
 // and carry the sine test's power (rms = amplitude / sqrt 2), the peak the status states.

@@ -264,7 +264,7 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
 }
 
-// Issue 13: a backlash measured by a multisine is fitted with its best linear approximation under
+// A backlash measured by a multisine is fitted with its best linear approximation under
 // that multisine, and comes out as it does from a sine. The truth: the simulation's actuator
 // (20 rad/s) moved to `pole` with a backlash of `width`, the command's rms 0.028; measured through
 // the lab's own code (make_campaign's multisine, 4 random-phase realisations of 2 periods, the
@@ -287,8 +287,8 @@ Diagnosis multisine_backlash(double width, double pole) {
 
 // The J85's A8 case: a backlash of width 0.03 at a command rms of 0.028 and the actuator three
 // times faster than simulated. The hysteresis within 5 % and the actuator's pole within 2 % (the
-// issue's tolerances for the J85); the extended model better than the simulation (by less than
-// the exact-data tests above: what remains is the distortion's scatter).
+// J85 diagnosis's tolerances, diagnose_integration_test); the extended model better than the
+// simulation (by less than the exact-data tests above: what remains is the distortion's scatter).
 TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
   const Diagnosis d = multisine_backlash(0.03, 60);
   const Finding* nl = nullptr;

@@ -1,6 +1,6 @@
-// The exchange library (issue 15): time series in CSV, WAV and .mat read onto the sample clock,
-// every malformed file refused naming what and where; schedules; a run's blocks as a series and
-// back; the results written to .mat read back by matio.
+// The exchange library (docs/exchange.md): time series in CSV, WAV and .mat read onto the sample
+// clock, every malformed file refused naming what and where; schedules; a run's blocks as a series
+// and back; the results written to .mat read back by matio.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sndfile.h>

@@ -107,7 +107,7 @@ TEST(Frd, BadDocumentsNameFileAndPath) {
 }
 
 // Numeric nonsense is refused with the file and point named: sigma <= 0, coherence > 1, absurd or
-// non-finite magnitudes (fit exited 0 on these before).
+// non-finite magnitudes (none may reach a fit).
 TEST(Frd, NumericNonsenseIsRefusedNamingThePoint) {
   auto err = [](const std::string& point) {
     try {

@@ -1,7 +1,8 @@
 // Every fuzz corpus input and every input that once crashed a reader (tests/fuzz/regressions),
 // replayed through the same targets as the fuzzers (tests/fuzz/targets.h) in the ordinary build:
-// each is read or refused with an InputError, nothing else escapes. The two known crashes of issue
-// 12 are made here: a tape event claiming 0x7fffffff bytes, a model nested 200,000 deep.
+// each is read or refused with an InputError, nothing else escapes. Two inputs that crash an
+// unguarded reader are made here: a tape event claiming 0x7fffffff bytes, a model nested 200,000
+// deep.
 #include <gtest/gtest.h>
 
 #include <filesystem>

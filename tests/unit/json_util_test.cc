@@ -1,5 +1,5 @@
 // JSON reading (core/json_util.h): a file nested deeper than kMaxJsonDepth is refused naming the
-// file (200,000 levels overflowed the stack of the readers before), ordinary files read.
+// file (200,000 levels would overflow a recursive reader's stack), ordinary files read.
 #include "fralab/core/json_util.h"
 
 #include <gmock/gmock.h>

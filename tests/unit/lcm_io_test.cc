@@ -92,7 +92,7 @@ TEST(TapeFile, ACutTapeIsReadUpToTheCutWithAWarning) {
 }
 
 // Headers are checked against the file before anything is read or allocated: an event claiming
-// 0x7fffffff bytes (a crash inside liblcm's reader before) and garbage in the middle are refused,
+// 0x7fffffff bytes (liblcm's own reader crashes on it) and garbage in the middle are refused,
 // naming the file and byte.
 TEST(TapeFile, ImpossibleHeadersAndGarbageAreRefusedNamingTheByte) {
   const std::string p = tmp("bad.lcmlog");
@@ -152,7 +152,7 @@ TEST(TapeFile, FollowingReadsOnlyWhatWasAddedAndWaitsForAPartEvent) {
   fs::remove(p);
 }
 
-// Every FrdPoint field travels on FRALAB_FRD (input, amplitude and nl_rel were once dropped).
+// Every FrdPoint field travels on FRALAB_FRD (input, amplitude and nl_rel included).
 TEST(LcmIo, FrdMessagesCarryEveryField) {
   Frd f;
   f.pair = "Wf:N";
@@ -220,7 +220,7 @@ TEST(LcmIo, TfMessagesRoundTrip) {
 }
 
 // Tape blocks carry a CRC-32 (zlib) of their encoding: one flipped byte anywhere is refused with
-// the block named; a tape recorded before checksums (tape_block_v1_t, the old fingerprint) is
+// the block named; a tape recorded without checksums (tape_block_v1_t, its own fingerprint) is
 // still read.
 namespace {
 
@@ -273,8 +273,8 @@ TEST(TapeChecksum, AFlippedByteIsRefusedNamingTheBlock) {
 }
 
 TEST(TapeChecksum, TapesRecordedBeforeChecksumsAreStillRead) {
-  // The fingerprint of tape_block_t until issue 12 (lcm-gen of its old .lcm: base hash
-  // 0x371122aab21e9704): old tapes decode as tape_block_v1_t.
+  // The fingerprint of tape_block_t without checksums (lcm-gen of that .lcm: base hash
+  // 0x371122aab21e9704): such tapes decode as tape_block_v1_t.
   EXPECT_EQ(tape_block_v1_t::getHash(), int64_t(7935981726436503048LL));
   const Block b = sample_block();
   tape_block_v1_t old;

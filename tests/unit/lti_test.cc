@@ -14,7 +14,7 @@ using fralab::testing::sine_phasor;
 
 namespace {
 
-Tf p3_wf_95() {  // Table 9, 95 %, Pade replaced by the delay (contracts 1 example)
+Tf p3_wf_95() {  // Table 9, 95 %, Pade replaced by the delay (docs/formats.md §1 example)
   Tf t;
   t.gain = 0.0308;
   t.zeros = {Root::Real(-10.8), Root::Pair(50.1, 0.013)};

@@ -126,7 +126,7 @@ TEST(NoiseModel, AFitLeavesThePointsLessHalfItsParameters) {
 // fit_tf's flat over-fit): counted with the variance the fit leaves each point, the level is
 // unbiased over 50 draws; counted as whole points it is low by about 1 - p / 2N = 0.81 (6
 // parameters, 16 points). (Weighted relatively instead, the fit of additive noise is far from
-// linear: its estimate was 0.35-1.3x the level on such draws, which is why fit_tf judges each
+// linear: its estimate is 0.35-1.3x the level on such draws, which is why fit_tf judges each
 // hypothesis with its own over-fit.)
 TEST(NoiseModel, TheVarianceAFitLeavesUnbiasesTheLevel) {
   Tf t;

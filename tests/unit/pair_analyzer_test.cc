@@ -98,8 +98,9 @@ Model two_by_two() {
 
 }  // namespace
 
-// Issue 4's accuracy: noise off, every pair within 1e-4 relative and 0.01 degree of the plant's
-// exact response over 0.1-100 Hz (the plant's deviation from continuous H(jw) is the FOH's, lti.h).
+// The analyser's accuracy: noise off, every pair within 1e-4 relative and 0.01 degree of the
+// plant's exact response over 0.1-100 Hz (the plant's deviation from continuous H(jw) is the
+// FOH's, lti.h).
 TEST(PairAnalyzer, NoiseFreeAccuracyAgainstThePlant) {
   Model m = load_model(source_path("models/j85_95.json"));
   auto run = simulate_tape(m, {"Wf"}, band(0.1, 100, 4), false, 1);
@@ -274,7 +275,8 @@ TEST(PairAnalyzer, MissingChannelIsAnErrorNamingIt) {
 }
 
 // The continuous sweep, analysed against the recorded reference phase: on a smooth plant (a lag
-// and a delay) the slow sweep's bias is small; near sharp resonances it is not (README).
+// and a delay) the slow sweep's bias is small; near sharp resonances it is not
+// (docs/method/analyser.md).
 TEST(PairAnalyzer, SweepMeasuresASmoothPlant) {
   Tf t;
   t.gain = 2.0;
@@ -326,7 +328,7 @@ TEST(PairAnalyzer, ZipperedMultisinesMeasureTheWholeMatrixInOneRun) {
   EXPECT_GT(worst, 1e-3);
 }
 
-// Issue 13, orthogonal multisines: both inputs of the 2x2 plant on every line, two experiments
+// Orthogonal multisines: both inputs of the 2x2 plant on every line, two experiments
 // (DFT phase matrix). Noise off: every pair at every line within 1e-4 / 0.01 degree of the exact
 // response, commands (u_a:y) as positions (a:y). b's recorded position sees 0.3 y (a
 // measurement coupling, like the J85's fuel flow and P3), so it moves with a's reference too: the
@@ -449,7 +451,7 @@ TEST(PairAnalyzer, OrthogonalMultisineRefusesExperimentsThatDisagree) {
     EXPECT_FALSE(p.valid);
     EXPECT_THAT(p.note, ::testing::HasSubstr("experiment 2: its status states another design"));
   }
-  for (int bad : {7, -1}) {  // no such input (the fuzzer's -1 once indexed before the list)
+  for (int bad : {7, -1}) {  // no such input (a -1 must not index before the list)
     run = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine");
     for (auto& e : run.events)
       if (e.state == RunState::kIntegrate) e.line_input.back() = bad;

@@ -38,7 +38,7 @@ SimRun run_sine(const Model& m, const SimulatorOptions& opt, int in, double f, d
 
 }  // namespace
 
-// Issue 2's acceptance: steady-state sinusoid of every J85 95 % channel vs the model's H(jw),
+// The simulator's acceptance: steady-state sinusoid of every J85 95 % channel vs the model's H(jw),
 // gain within 0.1 %, phase within 0.1 degree, noise off. Linear inputs only (A8 has backlash).
 TEST(Simulator, J85SinusoidalResponseMatchesTheModel) {
   Model m = load_model(source_path("models/j85_95.json"));

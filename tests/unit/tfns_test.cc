@@ -96,7 +96,8 @@ void check_recovery(double noise, double root_tol, uint64_t seed, double max_bey
   std::printf("noise %.0f %%: %d of %d in-band roots within %.1f %% (%.0f %%), %d beyond 3 sigma\n",
               100 * noise, within, total, 100 * root_tol, 100.0 * within / total, beyond);
   // Most roots meet the tolerance outright; the rest are within their own 3-sigma (reported).
-  // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 %; 5 %: 52 % (README).
+  // Measured: 1 % noise: 93 % of in-band roots within 2 %; 2 % noise: 82 %; 5 %: 52 %
+  // (docs/validation.md).
   const double min_within = noise == 0 ? 1.0 : noise <= 0.01 ? 0.9 : noise <= 0.02 ? 0.8 : 0.45;
   EXPECT_GE(double(within) / total, min_within) << within << " of " << total;
 }
@@ -292,7 +293,7 @@ TEST(Tfns, AZeroPathIsReportedAsNoResponse) {
   EXPECT_THAT(r.message, ::testing::HasSubstr("no response above the noise")) << r.message;
 }
 
-// Issue 14: without sigma the stop rule uses the noise level estimated from the data; noise-free
+// Without sigma the stop rule uses the noise level estimated from the data; noise-free
 // data come back exact at the right orders, whatever the relative degree.
 TEST(Tfns, NoiseFreeRelativeDegreeFiveWithoutSigmaIsExactAtTheRightOrders) {
   constexpr double kExact = 1e-9;  // rms relative error of an exact fit (noise floor 1e-9)
@@ -394,7 +395,7 @@ TEST(Tfns, DelayRangeIsAnOptionAndNeverExceeded) {
   Tf t;
   t.gain = 1.0;
   t.poles = {Root::Real(-3.0), Root::Pair(40.0, 0.4)};
-  t.delay_s = 0.12;  // beyond the former fixed 50 ms search range
+  t.delay_s = 0.12;  // beyond 50 ms (the second fit's range), inside the default 0.2 s
   auto pts = tf_points(t, 0.05, 50, 10, 0.0, 1);
   FitResult r = fit_tf(pts, FitOptions{});  // default range: [0, 0.2] s
   EXPECT_NEAR(r.tf.delay_s, t.delay_s, kDelayTol) << r.message;
@@ -421,13 +422,14 @@ TEST(Tfns, AnUndampedDipoleIsNotAPadeDelay) {
 }
 
 // The identifier against an oracle told the true orders and delay (refine_tf from the truth) on the
-// issue-14 generator's cases it was not tuned on (seed 5), at 2 % noise with sigma and without:
+// random generator's cases (tests/util/random_frd.h) it was not tuned on (seed 5), at 2 % noise
+// with sigma and without:
 // orders, model error and 3-sigma coverage of the in-band roots (bench/identify_random_bench.cc
 // prints the same at every noise level).
 TEST(Tfns, RandomCasesComeBackAtTheirOrdersWithTheOraclesError) {
   constexpr int kCases = 32;
   // Measured: orders 31 and 32 of 32, median ratio 1.000, 136 of 136 in-band roots within
-  // max(2 %, 3 sigma). (Before candidates were refined when SK's fit already passed: 30 of 32,
+  // max(2 %, 3 sigma). (Without refining the candidates when SK's fit already passes: 30 of 32,
   // 1.023, 96 %.)
   constexpr double kMinOrdersRight = 0.9, kMaxMedianRatio = 1.05, kMinCoverage = 0.98;
   for (const bool sigma : {true, false}) {
@@ -461,12 +463,12 @@ TEST(Tfns, RandomCasesComeBackAtTheirOrdersWithTheOraclesError) {
 
 // The order search can end above the data's order with roots the data do not determine (the SK
 // fit at that order needed them to pass); the pruning removes them. Two cases of the random
-// benchmark that came back above their orders before it: two close resonances (2/5, 2 % noise) at
+// benchmark that end above their orders without it: two close resonances (2/5, 2 % noise) at
 // 7/10 with three pole-zero couples within 0.3 % of each other, and a path with a right-half-plane
-// zero (5/5, 5 %) at 8/9 with out-of-band roots whose relative sigma exceeded 1. Both now come
+// zero (5/5, 5 %) at 8/9 with out-of-band roots whose relative sigma exceeds 1. Both must come
 // back at their true orders, at the oracle's optimum, and with no near-cancelling couple left.
 TEST(Tfns, RootsTheDataDoNotDetermineArePruned) {
-  // No pole-zero couple closer than this (relative) may remain: the pruned ones were within 0.3 %,
+  // No pole-zero couple closer than this (relative) may remain: the pruned ones are within 0.3 %,
   // the first truth's own antiresonance lies 3 % from its poles.
   constexpr double kCoupleTol = 0.01;
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
@@ -490,8 +492,8 @@ TEST(Tfns, RootsTheDataDoNotDetermineArePruned) {
 // The true orders miss the search's adequacy test (chi^2/dof within 3 sigma of 1) by chance in
 // ~0.5 % of fits: chi^2 is a sum of N exponentials. The search then goes on to an adequate higher
 // order, but the criterion chooses: two draws of the random benchmark whose truth, refined, misses
-// the test came back above their orders (2/5 at 4/7, 1/3 + delay at 2/4) and now come back at
-// them, converged, with the criterion's choice in the message.
+// the test (a 2/5 the search alone ends at 4/7, a 1/3 + delay it ends at 2/4) must come back at
+// their orders, converged, with the criterion's choice in the message.
 TEST(Tfns, TheCriterionChoosesATruthThatMissesTheAdequacyTestByChance) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
   for (const Draw k : {Draw{1, 0.02, 3}, Draw{14, 0.02, 3}}) {
@@ -509,8 +511,9 @@ TEST(Tfns, TheCriterionChoosesATruthThatMissesTheAdequacyTestByChance) {
 // Past an adequate order the next one also starts nested in the adequate fit (a real pole far
 // above the band, or a cancelling couple where the residual is largest): SK's and vector fitting's
 // starts at that order can all refine into poorer basins than the lower order's optimum. Two draws
-// of the random benchmark came back one pole short (4/5 as 4/4 at 10 % noise, criterion 86.2
-// against the truth's 83.4; 1/3 as 2/2 at 5 %); both now at their orders and the oracle's chi2.
+// of the random benchmark end one pole short without the nested start (4/5 as 4/4 at 10 % noise,
+// criterion 86.2 against the truth's 83.4; 1/3 as 2/2 at 5 %); both must come back at their orders
+// and the oracle's chi2.
 TEST(Tfns, TheOrderAboveAnAdequateFitStartsNestedInIt) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
   for (const Draw k : {Draw{3, 0.10, 3}, Draw{12, 0.05, 10}}) {
@@ -524,9 +527,10 @@ TEST(Tfns, TheOrderAboveAnAdequateFitStartsNestedInIt) {
 
 // Data that scatter more than their sigma says (the random benchmark's cases at 2 % noise with
 // sigma halved, as a multisine BLA's sigma below a weak path's scatter): no order is adequate, and
-// chosen by the smallest error every fit went to the highest order tried (0 of 32 at their orders).
-// The order is now chosen with sigma scaled by the scatter's level: the true orders come back, the
-// status stays max_order_reached against the sigma given, and the scale is reported (the truth: 2).
+// chosen by the smallest error every fit goes to the highest order tried (0 of 32 at their orders).
+// The order is chosen with sigma scaled by the scatter's level instead: the true orders come back,
+// the status stays max_order_reached against the sigma given, and the scale is reported (the
+// truth: 2).
 TEST(Tfns, DataThatScatterMoreThanTheirSigmaAreFittedAtTheirOrders) {
   constexpr int kCases = 16;
   constexpr double kMinOrdersRight = 0.9;           // measured: 16 of 16
@@ -555,7 +559,7 @@ TEST(Tfns, DataThatScatterMoreThanTheirSigmaAreFittedAtTheirOrders) {
 // Two real poles where the data have a resonance: the refinement takes real roots of one sign in
 // pairs (zeta >= 1 is two reals), so it can cross into the resonance; at the true orders (2/4,
 // a pair at 0.158 rad/s near the band's lower edge, 10 % noise) the fit reaches the oracle's chi^2.
-// (Refined as separate reals it stopped at chi^2/dof 1.32 against 1.12.)
+// (Refined as separate reals it stops at chi^2/dof 1.32 against 1.12.)
 TEST(Tfns, RealPolesCanBecomeAResonanceInTheRefinement) {
   const auto c = fralab::testing::random_frd_case(27, 0.10, true, 1);
   ASSERT_EQ(c.truth.den_order(), 4);
@@ -580,8 +584,8 @@ TEST(Tfns, RealPolesCanBecomeAResonanceInTheRefinement) {
 
 // Measured data (the lab's J85 95 % auto campaign, `bash scripts/lab.sh`: the command u_Wf to P3,
 // 34 points with sigma, a sharp resonance and antiresonance near 50 rad/s): adequate at 9/9. When
-// SK's own fit is inadequate both its start and vector fitting's are refined: VF's start was the
-// better SK fit here but refined to chi^2/dof 8.4 (max_order_reached at 8/8), SK's to 1.2.
+// SK's own fit is inadequate both its start and vector fitting's are refined: VF's start is the
+// better SK fit here but refines to chi^2/dof 8.4 (max_order_reached at 8/8), SK's to 1.2.
 TEST(Tfns, AMeasuredPathWithASharpResonanceIsFittedAdequately) {
   const Frd f = load_frd(source_path("tests/data/j85_95_auto_u_Wf_P3.frd.json"));
   const FitResult r = fit_tf(f.points, FitOptions{});
@@ -592,8 +596,8 @@ TEST(Tfns, AMeasuredPathWithASharpResonanceIsFittedAdequately) {
 
 // Two real poles 16 decades apart (a pole at 1e-8 rad/s: an integrator in a 0.1-100 rad/s band,
 // and one at 1e8) are refined as one pair (zeta 5e7) and split back: the smaller root computed as
-// -wn (zeta - sqrt(zeta^2 - 1)) cancelled to -7.45e-9 or to 0 (a model the data's frequencies
-// could not evaluate); it must come back as the root it was, and the model finite.
+// -wn (zeta - sqrt(zeta^2 - 1)) cancels to -7.45e-9 or to 0 (a model the data's frequencies
+// cannot evaluate); it must come back as the root it was, and the model finite.
 TEST(Tfns, AnOverdampedPairSplitsBackIntoItsRealPolesExactly) {
   Tf truth;
   truth.gain = 1e8;
@@ -614,11 +618,12 @@ TEST(Tfns, AnOverdampedPairSplitsBackIntoItsRealPolesExactly) {
 
 // A real right-half-plane zero above the band imitates there the lag of a pole at its frequency
 // (the same phase, magnitudes (w/z)^2 / 2 apart). Draws of the random benchmark whose pole lies
-// 2-10x above the band came back with such a zero instead, each at a criterion within 0.4 of the
-// truth's: they now come back at their orders and the oracle's chi^2, and the message says what
-// was replaced. A zero the data do support is kept: at w_max / z = 0.63 (18 % of magnitude at the
-// top of the band, 1 % noise) the lag does not fit; at w_max / z = 0.25 (3 %, 2 % noise) the lag
-// is adequate but the zero's criterion is lower by 5.1 (measured), beyond the 1 the rule asks.
+// 2-10x above the band fit such a zero instead when nothing prefers the lag, each at a criterion
+// within 0.4 of the truth's: they must come back at their orders and the oracle's chi^2, and the
+// message says what was replaced. A zero the data do support is kept: at w_max / z = 0.63 (18 % of
+// magnitude at the top of the band, 1 % noise) the lag does not fit; at w_max / z = 0.25 (3 %, 2 %
+// noise) the lag is adequate but the zero's criterion is lower by 5.1 (measured), beyond the 1 the
+// rule asks.
 TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
   for (const Draw k : {Draw{12, 0.10, 1}, Draw{4, 0.05, 2}, Draw{20, 0.05, 2}, Draw{28, 0.05, 3},
@@ -651,9 +656,9 @@ TEST(Tfns, AnRhpZeroAboveTheBandIsTheLagItImitatesUnlessTheDataSayOtherwise) {
 
 // Lower numerator orders are abandoned once one misses clearly, but not on a failed fit: (n, m)
 // holds every (n - 1, k <= m), so an error 10x above theirs says its starts missed. Three draws of
-// the random benchmark came back one order short or above because the loop stopped at such a fit (a
-// 1/7 at 10 % noise as 0/6: every start of (7, 6) refined to chi^2/dof 466; a 3/6 at 5 % as 4/4; a
-// 1/6 at 0.5 % as 4/5): each now at its orders and the oracle's chi^2.
+// the random benchmark end one order short or above if the loop stops at such a fit (a 1/7 at 10 %
+// noise as 0/6: every start of (7, 6) refines to chi^2/dof 466; a 3/6 at 5 % as 4/4; a 1/6 at
+// 0.5 % as 4/5): each must come back at its orders and the oracle's chi^2.
 TEST(Tfns, AFailedFitDoesNotEndTheLowerNumeratorOrders) {
   constexpr double kChi2Tol = 1e-3;  // relative: the oracle's optimum is reached
   for (const Draw k : {Draw{0, 0.10, 6}, Draw{3, 0.05, 2}, Draw{19, 0.005, 8}}) {
@@ -668,8 +673,8 @@ TEST(Tfns, AFailedFitDoesNotEndTheLowerNumeratorOrders) {
 // Data without sigma whose noise is additive (a measured path's output noise: 0.5 % of the peak
 // |G| at every point, so sigma / |G| grows where |G| falls), the random benchmark's draws of seed
 // 2: the absolute part is found and the orders are those the same data give with their sigma.
-// Measured on cases 0-15: 14 of 16 as with sigma (5 of 16 before the absolute part; with it
-// turned off now, 1: the relative level reaches 30 % and the path is called no_response), found
+// Measured on cases 0-15: 14 of 16 as with sigma (with the absolute part turned off, 1: the
+// relative level reaches 30 % and the path is called no_response), found
 // in 15, b 0.55-1.67x the level drawn (median 1.19: the over-fits are SK's, near the
 // least-squares optimum, not at it).
 TEST(Tfns, AdditiveNoiseWithoutSigmaIsFoundAndFittedAsWithItsSigma) {

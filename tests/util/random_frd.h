@@ -1,4 +1,4 @@
-// Randomised frequency-response cases for the identifier's benchmark and tests (issue 14): orders
+// Randomised frequency-response cases for the identifier's benchmark and tests: orders
 // 1-8 with 0..n zeros, close resonance pairs, right-half-plane zeros, poles over four decades, a
 // pole outside the band, sparse grids, delays; complex Gaussian noise relative to |G| or additive.
 #pragma once

@@ -87,7 +87,7 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
     const std::string in = m.inputs[g() % ni].name, out = m.outputs[g() % no].name;
     ModelPath* ep = find_path(c.engine, out, in);
     // A path the simulation lacks (kind 11) is drawn from its own generator, 1 effect in 12, so
-    // the other kinds' cases stay the sequence they were (the figures measured before it).
+    // the other kinds' cases are the same sequence with or without it.
     int kind = int(g() % 11);
     if (g_path() % 12 == 0) kind = 11;
     const bool at_input = kind == 4 || kind == 5;

@@ -1,4 +1,4 @@
-// A generator of random plants for the diagnosis's self-check (issue 11): sizes 1-3 inputs x 2-4
+// A generator of random plants for the diagnosis's self-check: sizes 1-3 inputs x 2-4
 // outputs, random names, dynamics, actuators with and without position noise, sensors, noise
 // levels; each case hides 0-2 effects drawn from the catalogue into the engine and says what the
 // diagnosis must find (cause, place, parameter, tolerance). Deterministic in the seed.
@@ -13,8 +13,9 @@
 
 namespace fralab::testing {
 
-/// One hidden effect: the finding that names it (cause, scope, input/output as in contracts 6) and
-/// its parameter `param` with value and tolerance (absolute `tol_abs` or relative `tol_rel`).
+/// One hidden effect: the finding that names it (cause, scope, input/output as in docs/formats.md
+/// §6) and its parameter `param` with value and tolerance (absolute `tol_abs` or relative
+/// `tol_rel`).
 struct HiddenEffect {
   CauseKind cause;
   Scope scope;

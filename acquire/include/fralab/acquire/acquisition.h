@@ -45,7 +45,7 @@ struct AcquireOptions {
   int block = 100;                      // samples per command block
   int window = 2;                       // blocks in flight ahead of the slowest consumer
   double speed = 0;                     // 1 = real time, 0 = as fast as the consumers keep up
-  // A free-running plant (issue 15): it runs on its own clock at `speed` (> 0) x real time,
+  // A free-running plant: it runs on its own clock at `speed` (> 0) x real time,
   // playing commands from a buffer; the acquisition keeps `lead` blocks of commands ahead of the
   // plant's clock (no acknowledgement awaited), watches the tape for held samples (channel
   // "underrun") and repeats each step they touch, at most `max_repeats` rounds.

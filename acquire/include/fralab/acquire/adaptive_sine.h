@@ -1,4 +1,4 @@
-// Adaptive stepped sine (issue 13 item 4, `--sigma-target`): each point integrated until its
+// Adaptive stepped sine (`--sigma-target`): each point integrated until its
 // sigma reaches a target or a cycle limit, decided while running, as a hardware analyser's
 // auto-integration does. No I/O: fralab-acquire wires it to the tape (acquisition_node.h).
 //

@@ -54,7 +54,7 @@ class FlowControl {
   /// The acquisition has published `seq` on `s` (command blocks, status events); with a
   /// free-running plant, the tape blocks it has seen the plant make.
   void published(Stream s, int64_t seq);
-  /// A free-running plant (issue 15): tape blocks are made by the plant's clock, not one per
+  /// A free-running plant: tape blocks are made by the plant's clock, not one per
   /// command, so what exists on the tape is what published(kTape, ..) reported, not the plant's
   /// command acknowledgement.
   void tape_on_plant_clock() { tape_on_plant_clock_ = true; }

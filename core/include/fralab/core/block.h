@@ -1,7 +1,7 @@
 // The tape's records as plain structs, free of LCM: a block of sample-clocked multi-channel samples
-// and an excitation status (contracts 3). The LCM adapters (lcmtypes/include/fralab/lcm_io.h)
-// convert them to and from fralab.tape_block_t / command_block_t / excitation_status_t; the
-// libraries (acquire, analyze) only ever see these.
+// and an excitation status (docs/formats.md §3). The LCM adapters
+// (lcmtypes/include/fralab/lcm_io.h) convert them to and from fralab.tape_block_t /
+// command_block_t / excitation_status_t; the libraries (acquire, analyze) only ever see these.
 #pragma once
 
 #include <cstdint>
@@ -15,8 +15,8 @@
 
 namespace fralab {
 
-/// The test signal. On the tape (StatusEvent, contracts 3) its words are "stepped_sine", "sweep"
-/// and "multisine" (status_word); on the command line "stepped", "sweep", "multisine".
+/// The test signal. On the tape (StatusEvent, docs/formats.md §3) its words are "stepped_sine",
+/// "sweep" and "multisine" (status_word); on the command line "stepped", "sweep", "multisine".
 enum class Excitation { kStepped, kSweep, kMultisine };
 /// The test signal's state: "start", "settle", "integrate", "done", "abort" on the tape.
 enum class RunState { kStart, kSettle, kIntegrate, kDone, kAbort };

@@ -1,8 +1,8 @@
-// Frequency-response data, `fralab-frd/1` (contracts 4): the pair "E1:E2" (response E2/E1) and
-// its points. w in rad/s, mag the amplitude ratio |E2/E1| (not dB), phase_deg the phase of E2
-// relative to E1 in degrees, sigma the standard deviation of the complex ratio, coherence in
-// [0, 1]. fralab adds f_hz, h2_rel/h3_rel (harmonic distortion of E2), n_cycles, step, input, valid
-// and note; readers ignore what they do not know.
+// Frequency-response data, `fralab-frd/1` (docs/formats.md §4): the pair "E1:E2" (response E2/E1)
+// and its points. w in rad/s, mag the amplitude ratio |E2/E1| (not dB), phase_deg the phase of E2
+// relative to E1 in degrees, sigma the standard deviation of the complex ratio, coherence
+// in [0, 1]. fralab adds f_hz, h2_rel/h3_rel (harmonic distortion of E2), n_cycles, step, input,
+// valid and note; readers ignore what they do not know.
 #pragma once
 
 #include <complex>

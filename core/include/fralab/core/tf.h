@@ -1,5 +1,5 @@
-// The factored transfer function of contracts 1: a DC gain times unity-DC-gain factors and an exact
-// time delay,
+// The factored transfer function of docs/formats.md §1: a DC gain times unity-DC-gain factors and
+// an exact time delay,
 //
 //   G(s) = gain * prod_zeros F_z(s) / prod_poles F_p(s) * exp(-s * delay_s),
 //
@@ -71,9 +71,9 @@ struct Tf {
   std::vector<double> denominator_coefficients() const;
 };
 
-/// Reads a tf object (contracts 1). Throws InputError naming `where` for a missing gain, a root at
-/// s = 0, a non-positive wn, a negative delay, an unknown root form, and (unless `allow_unstable`)
-/// a pole not in the open left half plane.
+/// Reads a tf object (docs/formats.md §1). Throws InputError naming `where` for a missing gain, a
+/// root at s = 0, a non-positive wn, a negative delay, an unknown root form, and (unless
+/// `allow_unstable`) a pole not in the open left half plane.
 Tf tf_from_json(const Json& j, const JsonWhere& where, std::vector<std::string>* warnings = nullptr,
                 bool allow_unstable = false);
 Json tf_to_json(const Tf& tf);

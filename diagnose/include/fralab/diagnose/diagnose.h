@@ -1,4 +1,5 @@
-// Diagnosis (contracts 6): where a simulation is wrong, why, and what the extended model gains.
+// Diagnosis (docs/formats.md §6, docs/method/diagnosis.md): where a simulation is wrong, why, and
+// what the extended model gains.
 //
 // Points with sigma > 0.3 |G| (an actuator inside its own backlash, a response in the noise) are
 // left out of fitting and of the error metric. For every measured pair the residual is R(w) =
@@ -82,7 +83,7 @@
 
 namespace fralab {
 
-/// The catalogue (contracts 6 names at the JSON edge: to_string / cause_from_string).
+/// The catalogue (docs/formats.md §6 names at the JSON edge: to_string / cause_from_string).
 enum class CauseKind {
   kTimeDelay,
   kMissingLag,
@@ -103,7 +104,7 @@ enum class Scope { kPath, kOutput, kInput, kPlant };
 
 const char* to_string(CauseKind c);
 const char* to_string(Scope s);
-/// InputError naming the text when it is not a contracts-6 name.
+/// InputError naming the text when it is not a name of docs/formats.md §6.
 CauseKind cause_from_string(const std::string& s);
 Scope scope_from_string(const std::string& s);
 
@@ -217,7 +218,7 @@ struct Diagnosis {
 Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data,
                    const DiagnoseOptions& opt = {});
 
-/// fralab-diagnosis/1 JSON (contracts 6).
+/// fralab-diagnosis/1 JSON (docs/formats.md §6).
 Json diagnosis_to_json(const Diagnosis& d);
 
 /// The model's response for a measured pair ("X:O" position -> output, "u_X:X" the actuator's

@@ -19,7 +19,7 @@
 //   `fralab fit --frd` reads it back), tf.csv (one row per path: pair,input,output,gain,delay_s,
 //   num,den,zeros,poles,fit_error,text; polynomial coefficients space separated), ss_A.csv ..
 //   ss_D.csv and ss_delay_s.csv (row and column names in the first column and row), units.csv.
-// JSON stays what `fralab measure` writes (contracts 1 and 4).
+// JSON stays what `fralab measure` writes (docs/formats.md §1 and §4).
 #pragma once
 
 #include <map>

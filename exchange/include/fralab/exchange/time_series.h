@@ -1,11 +1,11 @@
-// Time series recorded elsewhere, and written for use elsewhere (issue 15, `fralab import` and
-// `fralab export --tape`): named channels sampled on one clock.
+// Time series recorded elsewhere, and written for use elsewhere (docs/exchange.md, `fralab import`
+// and `fralab export --tape`): named channels sampled on one clock.
 //
 // The clock: row k of a series is sample n = start_sample + k, at time t = n / sample_rate_hz
-// seconds (the tape's sample clock, contracts 3). Files that carry a time column are checked
-// against it: times strictly increasing, each step within kClockTolerance of a sample period
-// (a larger step is a gap, a smaller one a clock that is not the schedule's), first time on the
-// clock within kClockTolerance of a period.
+// seconds (the tape's sample clock, docs/formats.md §3). Files that carry a time column are
+// checked against it: times strictly increasing, each step within kClockTolerance of a sample
+// period (a larger step is a gap, a smaller one a clock that is not the schedule's), first time on
+// the clock within kClockTolerance of a period.
 //
 // File forms (readers name the file and the row, channel or variable of anything wrong):
 //  - CSV: a header row naming the columns, one row per sample, comma separated; `#` lines are

@@ -1,4 +1,4 @@
-// The noise of frequency-response data that carry no sigma (issue 14): the level fit_tf's order
+// The noise of frequency-response data that carry no sigma: the level fit_tf's order
 // rule judges candidates against when the analyser's sigma is not there.
 //
 // Model: the complex error of point i is circular Gaussian with variance

@@ -1,6 +1,6 @@
-// Frequency-response input for `fralab fit` (contracts 4): fralab-frd/1 JSON, CSV with a header
-// naming its columns (w or f_hz; mag or mag_db; phase_deg; or re, im; optional sigma), and the
-// report's TFNS card decks (Appendix B).
+// Frequency-response input for `fralab fit` (docs/formats.md §4): fralab-frd/1 JSON, CSV with a
+// header naming its columns (w or f_hz; mag or mag_db; phase_deg; or re, im; optional sigma), and
+// the report's TFNS card decks (Appendix B).
 //
 // TFNS deck: a program control group ended by a "*" card, then frequency-response cards ended by
 // "*". Control cards: "C" (cols 2-10 denominator starting order, 11-20 numerator starting order,

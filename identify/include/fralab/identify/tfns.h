@@ -2,7 +2,7 @@
 // Appendix B (Suzuki's method, a Sanathanan-Koerner iteration), made numerically sound, and carried
 // on to an output-error optimum.
 //
-// Model (contracts 1): G_a(s) = N(s)/D(s) e^{-s tau}, factored into real roots and pairs.
+// Model (docs/formats.md §1): G_a(s) = N(s)/D(s) e^{-s tau}, factored into real roots and pairs.
 //
 // 1. Frequency scaling (TFNS's scale factor): s' = s / ws, ws = sqrt(w_min w_max), centring the
 //    logarithms of the data's frequencies around zero.
@@ -92,7 +92,7 @@ struct FitOptions {
   double delay_s = 0.0;      // kFixed: subtracted (TFNS sense switch 2); kAuto: ignored
   double max_delay_s = 0.2;  // kAuto: the delay is searched and fitted in [0, max_delay_s], never
                              // outside
-  // Without sigma (issue 14): the stop rule is the reduced chi^2 against sigma_i = s |G_i|, s the
+  // Without sigma: the stop rule is the reduced chi^2 against sigma_i = s |G_i|, s the
   // data's relative noise level: `tolerance` when > 0, else estimated from the data (the residual
   // of deliberately over-fitted models, delay removed: of the over-fit as a model of roots, or of
   // its polynomials when rooting a degenerate over-fit lost more than 100x), never below
@@ -172,7 +172,7 @@ std::vector<RootInfo> root_info(const std::vector<Root>& roots);
 /// Pade-like sets among a tf's roots: a zero mirrored onto a pole within `tol` relative distance.
 std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol = 0.15);
 
-/// JSON of a fit: the tf (contracts 1) plus "fit" figures, "roots", "pade".
+/// JSON of a fit: the tf (docs/formats.md §1) plus "fit" figures, "roots", "pade".
 Json fit_to_json(const FitResult& r, const std::string& pair);
 
 }  // namespace fralab

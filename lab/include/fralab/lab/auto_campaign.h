@@ -1,4 +1,4 @@
-// The campaign that decides itself (issue 13, `--excitation auto`): multisine for what is linear,
+// The campaign that decides itself (`--excitation auto`): multisine for what is linear,
 // sine for what is not.
 //   1. An orthogonal multisine (acquire/campaign.h: every selected input on every line, n_u
 //      experiments of multisine_periods measured periods, at the sine test's power) over the

@@ -1,5 +1,5 @@
-// The free-running plant's command buffer (issue 15): what a DAQ's output FIFO does, free of LCM
-// and of the clock. Command blocks (contracts 3: u_<input>, ref_phase, ref_freq_hz) are buffered by
+// The free-running plant's command buffer: what a DAQ's output FIFO does, free of LCM and of the
+// clock. Command blocks (docs/formats.md §3: u_<input>, ref_phase, ref_freq_hz) are buffered by
 // the samples they stamp (start_sample ..), in any order; the plant's own clock takes the next
 // `tick` samples at a time. A sample with a buffered command plays it; a sample without one
 // (the buffer ran dry: an underrun) holds the last command played (a DAC's hold), the reference

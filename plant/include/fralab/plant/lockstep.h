@@ -1,8 +1,9 @@
 // The plant emulator's protocol logic, free of LCM: a command block in, the tape block out, in
-// lockstep (contracts 3). fralab-plant wires it to FRALAB_CMD / FRALAB_TAPE; tests call it
-// directly. The tape block carries, per sample, the commands echoed (u_<input>, in model order),
-// the simulator's channels (every actuator position, then every output) and every non-command
-// channel of the command block (the reference: ref_phase, ref_freq_hz), in that order.
+// lockstep (docs/formats.md §3, docs/plant-protocol.md). fralab-plant wires it to FRALAB_CMD /
+// FRALAB_TAPE; tests call it directly. The tape block carries, per sample, the commands echoed
+// (u_<input>, in model order), the simulator's channels (every actuator position, then every
+// output) and every non-command channel of the command block (the reference: ref_phase,
+// ref_freq_hz), in that order.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,5 @@
-// Exact sampled simulation of one SISO transfer function (contracts 1) driven by a sampled input.
+// Exact sampled simulation of one SISO transfer function (docs/formats.md §1) driven by a sampled
+// input.
 //
 // The input samples u[k] (period h seconds) are joined by straight lines (first-order hold): the
 // continuous system sees the piecewise-linear u(t), and the output samples y[k] are the exact

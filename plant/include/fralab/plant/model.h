@@ -1,5 +1,6 @@
-// The model file `fralab-model/1` (contracts 2): one operating point of a plant. The same format
-// describes the engine the plant emulator runs and the simulation diagnosis checks against data.
+// The model file `fralab-model/1` (docs/formats.md §2): one operating point of a plant. The same
+// format describes the engine the plant emulator runs and the simulation diagnosis checks against
+// data.
 //
 // Signal flow for one path: command u -> actuator tf -> actuator nonlinearities (in order) ->
 // actuator position (the input's channel) -> path tf -> sum over inputs -> sensor tf -> + white

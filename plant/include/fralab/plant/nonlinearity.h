@@ -1,6 +1,6 @@
-// Actuator nonlinearities of contracts 2, applied sample by sample to the actuator's deviation from
-// its operating point x (input units), and their sinusoidal-input describing functions
-// N(A) = (first harmonic of the output) / (input amplitude A), complex, phase in radians
+// Actuator nonlinearities of docs/formats.md §2, applied sample by sample to the actuator's
+// deviation from its operating point x (input units), and their sinusoidal-input describing
+// functions N(A) = (first harmonic of the output) / (input amplitude A), complex, phase in radians
 // (negative = lag), for x = A sin(w t).
 #pragma once
 
@@ -35,7 +35,7 @@ std::complex<double> backlash_describing_function(double amplitude, double width
 /// r = (w/2)/A: N = 1 - (2/pi)(asin r + r sqrt(1 - r^2)); 0 for A <= w/2.
 double deadband_describing_function(double amplitude, double width);
 
-/// The counterpart of a describing function for a multisine (issue 13): the best linear
+/// The counterpart of a describing function for a multisine: the best linear
 /// approximation (BLA) of a rate-independent element (hysteresis, deadband) whose input is a
 /// random-phase multisine x[n] = sum_j a_j cos(2 pi k_j n / P + phi_j), phi_j uniform, lines k_j
 /// (harmonics of one period, any positive integers), a_j the peak amplitude of each (input units,
