@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Fuzzes every reader (tape, model, frd, csv, tfns, series, schedule) with libFuzzer under
+# Fuzzes every reader (tape, model, frd, csv, tfns, series, schedule), and the transfer matrix
+# and state model on random shapes of data (shapes: at most FUZZ_SHAPES_RUNS, default 1000,
+# executions), with libFuzzer under
 # AddressSanitizer and UndefinedBehaviorSanitizer: configures build-fuzz/ with clang
 # (-DFRALAB_FUZZ=ON), builds the fuzz_<reader> executables and runs each for RUNS executions
 # (default 100000) from the seed corpus
@@ -15,7 +17,7 @@ runs=${1:-100000}
 seed=${FUZZ_SEED:-1}
 shift || true
 readers=("$@")
-[ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns series schedule)
+[ ${#readers[@]} -eq 0 ] && readers=(tape model frd csv tfns series schedule shapes)
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DFRALAB_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   >/dev/null || exit 2
 targets=()
@@ -24,12 +26,15 @@ cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]}" >build-fuzz/build
   { tail -30 build-fuzz/build.log; exit 2; }
 bad=0
 for r in "${readers[@]}"; do
+  # A "shapes" input builds a whole state model (up to 8 x 8 paths): fewer runs.
+  n=$runs
+  [ "$r" = shapes ] && n=$((runs < ${FUZZ_SHAPES_RUNS:-1000} ? runs : ${FUZZ_SHAPES_RUNS:-1000}))
   work=$(mktemp -d)
   cp tests/fuzz/corpus/"$r"/* "$work"/
   mkdir -p build-fuzz/crashes/"$r"
   t0=$(date +%s)
   ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
-    build-fuzz/bin/fuzz_"$r" -runs="$runs" -seed="$seed" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
+    build-fuzz/bin/fuzz_"$r" -runs="$n" -seed="$seed" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
     -artifact_prefix=build-fuzz/crashes/"$r"/ "$work" >build-fuzz/fuzz_"$r".log 2>&1
   rc=$?
   t1=$(date +%s)

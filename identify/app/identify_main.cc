@@ -1,8 +1,11 @@
 // fralab-identify: the live identifier. Collects the analysers' finished curves of a run
 // (FRALAB_FRD, complete = true, each acknowledged on FRALAB_FRD_ACK), fits every pair, publishes
 // each fit (FRALAB_TF), and writes DIR/tf/<E1>_<E2>.json and the transfer matrix
-// DIR/transfer_matrix.{json,md}.
+// DIR/transfer_matrix.{json,md}. With --from-frd DIR it fits the curves DIR/frd/<E1>_<E2>.json of
+// the pairs given (--pair, repeated) instead, without LCM: the launcher's fit of a resumed run or
+// an auto campaign, in a process of its own so that a crash in fitting leaves the curves whole.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <map>
@@ -43,7 +46,11 @@ int main(int argc, char** argv) {
   double timeout = 3600;
   app.add_option("--lcm-url", url);
   app.add_option("--run-id", run_id);
-  app.add_option("--expect", expect, "number of pairs to wait for")->required();
+  std::string from_frd;
+  std::vector<std::string> pairs;
+  app.add_option("--expect", expect, "number of pairs to wait for (live)");
+  app.add_option("--from-frd", from_frd, "fit DIR/frd/<E1>_<E2>.json of the --pair given, no LCM");
+  app.add_option("--pair", pairs, "with --from-frd: a pair E1:E2 (repeatable)");
   app.add_option("--out", out, "writes OUT/tf/*.json and OUT/transfer_matrix.{json,md}")
       ->required();
   app.add_option("--delay", delay, "auto, none or seconds")->capture_default_str();
@@ -53,6 +60,17 @@ int main(int argc, char** argv) {
   try {
     FitOptions o;
     parse_delay_option(delay, &o);
+    if (!from_frd.empty()) {
+      if (pairs.empty()) throw InputError("--from-frd " + from_frd + ": no --pair given");
+      std::vector<Frd> curves;
+      for (const std::string& p : pairs)
+        curves.push_back(load_frd(from_frd + "/frd/" + pair_file_stem(p) + ".json"));
+      std::sort(curves.begin(), curves.end(),
+                [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
+      fit_and_write(curves, o, out, title);
+      return 0;
+    }
+    if (expect <= 0) throw InputError("--expect N (the pairs to wait for) or --from-frd DIR");
     lcm::LCM lcm(resolve_lcm_url(url));
     require_lcm(lcm, "LCM", resolve_lcm_url(url));
     Collector c{run_id, &lcm, {}, ""};

@@ -133,6 +133,9 @@ void solve_side(int side, const std::vector<PathData>& paths, const Components& 
       if (mine[j]->has_d) dcol[j] = nu++;
       rows += 2 * mine[j]->g.size();
     }
+    // Nothing to solve for (no pole in the model, no biproper path here): a decomposition of an
+    // empty matrix is undefined (Eigen's pivoting reads the maximum of no column norms).
+    if (nu == 0 || rows == 0) continue;
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, nu);
     Eigen::VectorXd y(rows);
     size_t r0 = 0;
@@ -160,8 +163,11 @@ void solve_side(int side, const std::vector<PathData>& paths, const Components& 
     // determine stays 0.
     Eigen::VectorXd scale = A.colwise().norm().transpose();
     for (int j = 0; j < nu; ++j) scale(j) = scale(j) > 0 ? 1.0 / scale(j) : 0.0;
-    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(A * scale.asDiagonal());
+    // The threshold is set before the decomposition: its Z part is built for the rank seen then,
+    // and a threshold changed afterwards makes solve() read Z coefficients never computed.
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
     cod.setThreshold(1e-10);
+    cod.compute(A * scale.asDiagonal());
     const Eigen::VectorXd x = scale.asDiagonal() * cod.solve(y);
     for (int k = 0; k < nc; ++k)
       own(e, k) = cm.pair[k] ? Cx(x(col[k]), x(col[k] + 1)) : Cx(x(col[k]));
@@ -211,6 +217,10 @@ Eigen::VectorXd residue_fit(const PathData& pd, int nk, const std::vector<int>& 
   int nu = with_d ? 1 : 0;
   for (int k : ks) nu += pair[k] ? 2 : 1;
   const size_t np = pd.g.size();
+  if (nu == 0 || np == 0) {  // nothing to fit (see solve_side)
+    if (fitted) *fitted = 0;
+    return Eigen::VectorXd::Zero(nu);
+  }
   Eigen::MatrixXd A(2 * np, nu);
   Eigen::VectorXd y(2 * np);
   for (size_t q = 0; q < np; ++q) {
@@ -433,11 +443,14 @@ StateModel build_state_model(const TransferMatrix& m,
     s.sweeps += sweeps;
     ++s.rank[best];
   }
-  // Each factor pair scaled to equal norms (the product is what the data fix).
+  // Each factor pair scaled to equal norms (the product is what the data fix). Where nb / nc
+  // under- or overflows (factors of 1e-160 and 1e160, as data in units of 1e-20 weighted by their
+  // sigma make them), the factor is the quotient of the roots.
   for (int j = 0; j < cm.size(); ++j) {
     const double nc = c.col(j).norm(), nb = b.col(j).norm();
-    if (nc > 0 && nb > 0) {
-      const double a = std::sqrt(nb / nc);
+    double a = std::sqrt(nb / nc);
+    if (!(std::isfinite(a) && a > 0)) a = std::sqrt(nb) / std::sqrt(nc);
+    if (std::isfinite(a) && a > 0) {
       c.col(j) *= a;
       b.col(j) /= a;
     }

@@ -20,7 +20,11 @@ void add_diagnose_command(CLI::App& app) {
   c->add_option("--out", dc->out)->required();
   c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
   add_measure_flags(c, dc->measure);
-  c->callback([dc] { std::printf("fralab: %s\n", run_diagnose(*dc).c_str()); });
+  c->callback([dc] {
+    const DiagnoseResult r = run_diagnose(*dc);
+    std::printf("fralab: %s\n", r.summary.c_str());
+    throw_if_partial(r.partial);
+  });
 }
 
 }  // namespace fralab

@@ -76,7 +76,7 @@ void add_export_command(CLI::App& app) {
   c->add_option("--from", ec->from, "a measure directory: its frd/, tf/, transfer_matrix.json");
   c->add_option("--tape", ec->tape, "a tape: its run as a time series and a schedule");
   c->add_option("--run", ec->run_id, "with --tape: the run id (default: the tape's first run)");
-  c->add_option("--to", ec->to, "mat (default) or csv");
+  c->add_option("--to,--format", ec->to, "mat (default) or csv");
   c->add_option("--out", ec->out,
                 "the .mat file or CSV folder (default DIR/fralab.mat, DIR/export; with --tape "
                 "TAPE.mat or TAPE.csv)");

@@ -43,6 +43,12 @@ void print_measure(const MeasureResult& r, const std::string& out) {
       out.c_str());
 }
 
+void throw_if_partial(const std::vector<std::string>& partial) {
+  std::string all;
+  for (const std::string& p : partial) all += (all.empty() ? "" : "\n") + p;
+  if (!all.empty()) throw PartialRun(all);
+}
+
 void add_measure_command(CLI::App& app) {
   auto mo = std::make_shared<MeasureOptions>();
   auto* c = app.add_subcommand("measure", "plant, acquisition, analysers: tape and frd files");
@@ -63,7 +69,9 @@ void add_measure_command(CLI::App& app) {
       if (engine->count() == 0) throw CLI::RequiredError("--engine");
       if (out->count() == 0) throw CLI::RequiredError("--out");
     }
-    print_measure(run_measure(*mo), mo->out);
+    const MeasureResult r = run_measure(*mo);
+    print_measure(r, mo->out);
+    if (r.partial()) throw_if_partial({partial_run_message(r, mo->out)});
   });
 }
 

@@ -29,7 +29,9 @@ void run(const RunCommand& c) {
       if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
   }
   if (sim.empty()) {
-    print_measure(run_measure(c.measure), c.measure.out);
+    const MeasureResult r = run_measure(c.measure);
+    print_measure(r, c.measure.out);
+    if (r.partial()) throw_if_partial({partial_run_message(r, c.measure.out)});
     return;
   }
   DiagnoseCommand d;
@@ -39,7 +41,7 @@ void run(const RunCommand& c) {
   d.measure = c.measure;
   std::printf("fralab: measuring %s and diagnosing %s ...\n", c.measure.engine.c_str(),
               sim.c_str());
-  const std::string summary = run_diagnose(d);
+  const DiagnoseResult res = run_diagnose(d);
   const Json rj = json_load_file(c.measure.out + "/measure/run.json");
   const std::string m = c.measure.out + "/measure";
   std::string tapes = m + "/tape.lcmlog";
@@ -62,7 +64,8 @@ void run(const RunCommand& c) {
       "%s/transfer_matrix.md\n",
       rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600,
       rj["wall_time_s"].get<double>(), rj["speedup"].get<double>(), tapes.c_str(), m.c_str());
-  std::printf("fralab: %s\n", summary.c_str());
+  std::printf("fralab: %s\n", res.summary.c_str());
+  throw_if_partial(res.partial);
 }
 
 }  // namespace

@@ -14,6 +14,8 @@ namespace fralab {
 void add_measure_flags(CLI::App* c, MeasureOptions& m);
 /// "fralab: N pairs measured; engine time ..." on stdout.
 void print_measure(const MeasureResult& r, const std::string& out);
+/// After everything is written: PartialRun (exit status 3) naming each partial measurement.
+void throw_if_partial(const std::vector<std::string>& partial);
 
 void add_run_command(CLI::App& app);
 void add_measure_command(CLI::App& app);

@@ -1,6 +1,8 @@
 // fralab: the one driver. Subcommands spawn the module executables as separate processes talking
 // LCM (run, measure) or run a module's library directly on files (analyze --log, fit, tape). Exit
-// status 0 on success, non-zero with a one-line reason on stderr otherwise.
+// status 0 on success; 3 for a partial run (everything measured, a later step such as the fit
+// failed: lab/measure.h); otherwise 1 (CLI11's code, above 100, for a bad command line) with a
+// one-line reason on stderr.
 #include <cstdio>
 #include <exception>
 
@@ -22,6 +24,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);  // the chosen subcommand's callback runs here
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const fralab::PartialRun& e) {  // measured whole, a later step failed
+    std::fprintf(stderr, "fralab: %s\n", e.what());
+    return 3;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "fralab: %s\n", e.what());
     return 1;

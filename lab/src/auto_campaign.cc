@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iostream>
 
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
 #include "fralab/diagnose/report.h"
+#include "fralab/lab/run_lock.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -45,7 +47,8 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   const Model model = load_model_or_embedded(opt.engine);
   const std::vector<int> excite = select_inputs(model, opt.acquire.inputs);
   AutoCampaignResult res;
-  fs::create_directories(opt.out);
+  // The campaign's folder is its own until it ends (each run below takes its own sub-folder too).
+  const RunLock lock(opt.out, "fralab measure --excitation auto");
   // 1. The orthogonal multisine over every selected input.
   MeasureOptions m = opt;
   m.acquire.excitation = Excitation::kMultisine;
@@ -106,9 +109,10 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   if (fs::exists(opt.out + "/frd"))
     for (const auto& e : fs::directory_iterator(opt.out + "/frd"))
       if (e.path().extension() == ".json") fs::remove(e.path());
-  save_curves_and_fit(curves, opt.out, opt.fit_delay,
-                      model.name + ": measured transfer matrix (auto campaign)");
   save_model(opt.out + "/engine.json", model);
+  const std::string fit_failure =
+      save_curves_and_fit(curves, opt.out, opt.fit_delay,
+                          model.name + ": measured transfer matrix (auto campaign)", opt.timeout_s);
   res.measure = mr;
   res.measure.pairs.clear();
   for (const Frd& f : curves) res.measure.pairs.push_back(f.pair);
@@ -118,8 +122,9 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   res.measure.tape_blocks =
       mr.tape_blocks + (sine_run.is_null() ? 0 : sine_run.value("tape_blocks", int64_t(0)));
   Json run = Json::object();
-  run["state"] = "complete";
+  record_fit_outcome(run, res.measure, fit_failure, opt.out);
   run["excitation"] = "auto";
+  run["fit_delay"] = opt.fit_delay;
   run["engine"] = model.name;
   run["seed"] = opt.seed;
   run["engine_time_s"] = res.measure.engine_time_s;
@@ -142,6 +147,34 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   run["pairs"] = res.measure.pairs;
   json_save_file(opt.out + "/run.json", run);
   return res;
+}
+
+MeasureResult resume_auto_campaign(const std::string& dir) {
+  const RunLock lock(dir, "fralab measure --resume");
+  Json run = json_load_file(dir + "/run.json");
+  const std::string state = run.value("state", "");
+  if (state == "complete")
+    throw InputError(dir + ": the run is complete; there is nothing to resume");
+  if (state != "partial")
+    throw InputError(dir + "/run.json: an auto campaign in state \"" + state +
+                     "\": it resumes its runs one by one: `fralab measure --resume " + dir +
+                     "/multisine` (or /sine)");
+  std::vector<Frd> curves;
+  for (const MeasuredPair& p : read_measured_dir(dir)) curves.push_back(p.frd);
+  const Model model = load_model(dir + "/engine.json");
+  MeasureResult r;
+  for (const Frd& f : curves) r.pairs.push_back(f.pair);
+  r.engine_time_s = run.value("engine_time_s", 0.0);
+  r.wall_time_s = run.value("wall_time_s", 0.0);
+  std::cerr << "fralab: resuming the auto campaign in " << dir << ": fitting its " << curves.size()
+            << " curves again\n";
+  const std::string fit_failure =
+      save_curves_and_fit(curves, dir, run.value("fit_delay", std::string("auto")),
+                          model.name + ": measured transfer matrix (auto campaign)");
+  record_fit_outcome(run, r, fit_failure, dir);
+  run["resumed"] = run.value("resumed", 0) + 1;
+  json_save_file(dir + "/run.json", run);
+  return r;
 }
 
 }  // namespace fralab

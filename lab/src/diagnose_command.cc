@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "fralab/diagnose/report.h"
+#include "fralab/lab/run_lock.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -14,12 +15,14 @@ namespace fralab {
 
 namespace fs = std::filesystem;
 
-std::string run_diagnose(const DiagnoseCommand& c) {
+DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
+  DiagnoseResult res;
   if (c.out.empty()) throw InputError("--out DIR is required");
   if (c.engine.empty() == c.measured.empty())
     throw InputError("give exactly one of --engine TRUTH.json or --measured DIR");
   Model sim = load_model_or_embedded(c.simulation);
-  fs::create_directories(c.out);
+  // The diagnosis's folder is its own until it ends (its measurements take their sub-folders).
+  const RunLock lock(c.out, "fralab diagnose");
   std::string data_dir = c.measured, data_name = c.measured;
   if (!c.engine.empty()) {
     MeasureOptions m = c.measure;
@@ -29,14 +32,16 @@ std::string run_diagnose(const DiagnoseCommand& c) {
         m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
     }
     m.out = c.out + "/measure";
-    run_measure(m);
+    if (const MeasureResult r = run_measure(m); r.partial())
+      res.partial.push_back(partial_run_message(r, m.out));
     // An independent measurement for validation, not used for fitting: another noise seed and a
     // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
     MeasureOptions v = m;
     v.seed = m.seed + 1;
     v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
     v.out = c.out + "/measure/validation";
-    run_measure(v);
+    if (const MeasureResult r = run_measure(v); r.partial())
+      res.partial.push_back(partial_run_message(r, v.out));
     data_dir = m.out;
     data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) +
                 "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
@@ -74,6 +79,7 @@ std::string run_diagnose(const DiagnoseCommand& c) {
   const bool plots = c.plots && render_diagnosis_plots(d, c.out);
   write_diagnosis_report(d, sim.name, data_name, plots, c.out);
   write_report_html(c.out, "Diagnosis: " + sim.name);
-  return diagnosis_summary(d, c.out);
+  res.summary = diagnosis_summary(d, c.out);
+  return res;
 }
 }  // namespace fralab

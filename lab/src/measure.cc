@@ -19,6 +19,7 @@
 #include "fralab/lab/deputy.h"
 #include "fralab/lab/progress.h"
 #include "fralab/lab/resume.h"
+#include "fralab/lab/run_lock.h"
 #include "fralab/lab/supervisor.h"
 #include "fralab/lcm_io.h"
 #include "fralab/plant/embedded_models.h"
@@ -163,15 +164,57 @@ MeasureOptions options_from_run(const std::string& dir, const Json& run) {
 
 }  // namespace
 
-void save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
-                         const std::string& fit_delay, const std::string& title) {
+std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
+                                const std::string& fit_delay, const std::string& title,
+                                double timeout_s) {
   std::sort(curves.begin(), curves.end(),
             [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
   fs::create_directories(dir + "/frd");
+  fs::create_directories(dir + "/logs");
   for (const Frd& f : curves) save_frd(dir + "/frd/" + pair_file_stem(f.pair) + ".json", f);
   FitOptions fo;
-  parse_delay_option(fit_delay, &fo);
-  fit_and_write(curves, fo, dir, title);
+  parse_delay_option(fit_delay, &fo);  // a bad --delay is the caller's error, not a failed fit
+  std::vector<std::string> args = {module_path("fralab-identify"),
+                                   "--from-frd",
+                                   dir,
+                                   "--out",
+                                   dir,
+                                   "--delay",
+                                   fit_delay,
+                                   "--title",
+                                   title};
+  for (const Frd& f : curves) args.insert(args.end(), {"--pair", f.pair});
+  Supervisor sup;
+  sup.start({"identify", args, dir + "/logs/identify.log"});
+  try {
+    sup.wait_for({"identify"}, timeout_s);
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string partial_run_message(const MeasureResult& r, const std::string& dir) {
+  return dir + ": partial run: everything was measured (tape and frd files complete), but " +
+         r.failed_step + " failed: " + r.failure + "; fit again with `fralab measure --resume " +
+         dir + "`";
+}
+
+void record_fit_outcome(Json& run, MeasureResult& r, const std::string& fit_failure,
+                        const std::string& dir) {
+  run.erase("reason");
+  if (fit_failure.empty()) {
+    run["state"] = "complete";
+    run.erase("failed_step");
+    r.failed_step.clear(), r.failure.clear();
+    return;
+  }
+  run["state"] = "partial";
+  run["failed_step"] = {{"step", "identify"}, {"error", fit_failure}};
+  r.failed_step = "identify";
+  r.failure = fit_failure;
 }
 
 MeasureResult run_measure(const MeasureOptions& given) {
@@ -181,15 +224,24 @@ MeasureResult run_measure(const MeasureOptions& given) {
     o.auto_campaign = false;  // its runs are plain ones
     return run_auto_campaign(o).measure;
   }
+  if (given.resume && !fs::exists(given.out + "/run.json")) {
+    if (fs::exists(given.out + "/multisine/run.json"))
+      throw InputError(given.out +
+                       ": an auto campaign that did not end resumes its runs one by one: "
+                       "`fralab measure --resume " +
+                       given.out + "/multisine` (or /sine)");
+    throw InputError(given.out +
+                     "/run.json: no such file: --resume needs the folder of a run started by "
+                     "`fralab measure`");
+  }
+  if (given.resume && json_load_file(given.out + "/run.json").value("excitation", "") == "auto")
+    return resume_auto_campaign(given.out);
+  // The folder is this run's until it ends: a second run or a resume on it is refused.
+  const RunLock lock(given.out, given.resume ? "fralab measure --resume" : "fralab measure");
   Json run;
   MeasureOptions o = given;
   if (given.resume) {
-    const std::string rj = given.out + "/run.json";
-    if (!fs::exists(rj))
-      throw InputError(rj +
-                       ": no such file: --resume needs the folder of a run started by "
-                       "`fralab measure`");
-    run = json_load_file(rj);
+    run = json_load_file(given.out + "/run.json");
     if (run.value("state", "") == "complete")
       throw InputError(given.out + ": the run is complete; there is nothing to resume");
     o = options_from_run(given.out, run);
@@ -291,7 +343,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
   Supervisor sup;
   sup.set_remote(deputies.get());
   sup.set_stop_first(
-      {"acquire"});  // the excitation stops first, actuators to their operating point
+      {"acquire"});         // the excitation stops first, actuators to their operating point
+  std::string fit_failure;  // the identifier's, when it failed after everything was measured
   try {
     if (!rp.complete) {
       // The recorder: inside the flow control (a consumer the acquisition waits for), so a busy
@@ -361,7 +414,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
                     "--expect", std::to_string(r.pairs.size()), "--out", o.out, "--delay",
                     o.fit_delay, "--title", model.name + ": measured transfer matrix"},
                    log("identify"),
-                   host_of("identify")});
+                   host_of("identify"),
+                   /*essential=*/false});
       }
       std::string consumers_csv;
       for (const auto& c : consumers) consumers_csv += (consumers_csv.empty() ? "" : ",") + c;
@@ -441,7 +495,15 @@ MeasureResult run_measure(const MeasureOptions& given) {
       r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     const auto t_fit = std::chrono::steady_clock::now();
-    if (!o.resume) sup.wait_for({"identify"}, o.timeout_s);
+    if (!o.resume) {
+      try {  // a failed fit leaves the measurement whole: the run ends partial
+        sup.wait_for({"identify"}, o.timeout_s);
+      } catch (const Interrupted&) {
+        throw;
+      } catch (const InputError& e) {
+        fit_failure = e.what();
+      }
+    }
 
     // The recorder acknowledged every tape block once on disk; the tape is read back and checked
     // (every tape block and status event, the done status) before the recorder is stopped.
@@ -460,7 +522,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
       // The whole tape, analysed as the live analysers would (tape = live), then fitted as the
       // live identifier would (the curves in pair order).
       std::vector<Frd> curves = analyze_tape_file(tape, r.pairs, {});
-      save_curves_and_fit(curves, o.out, o.fit_delay, model.name + ": measured transfer matrix");
+      fit_failure = save_curves_and_fit(curves, o.out, o.fit_delay,
+                                        model.name + ": measured transfer matrix", o.timeout_s);
     }
     r.fit_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_fit).count();
   } catch (const Interrupted& e) {
@@ -501,8 +564,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
     for (int g = 0; g < adaptive.n_steps(); ++g) limits.push_back(adaptive.limit(g));
     run["adaptive"] = adaptive_steps_json(adaptive_steps(curves, ao.adaptive.sigma_target, limits));
   }
-  run["state"] = "complete";
-  run.erase("reason");
+  record_fit_outcome(run, r, fit_failure, o.out);
   run["engine_time_s"] = r.engine_time_s;
   run["wall_time_s"] = r.wall_time_s;
   run["speedup"] = r.engine_time_s / std::max(r.wall_time_s, 1e-9);

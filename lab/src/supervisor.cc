@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstring>
@@ -131,6 +132,7 @@ void Supervisor::wait_for(const std::vector<std::string>& names, double timeout_
       throw Interrupted("stopped by signal " + std::to_string(sig) + " (" + strsignal(sig) + ")");
     reap(false);
     for (auto& [n, p] : procs_) {
+      if (!p.spec.essential && std::find(names.begin(), names.end(), n) == names.end()) continue;
       if (p.exited && !(WIFEXITED(p.status) && WEXITSTATUS(p.status) == 0))
         throw InputError(reason(p) + (p.remote ? " (on " + p.spec.host + ")" : ""));
     }

@@ -396,11 +396,50 @@ uint64_t be(const uint8_t* p, int n) {
 
 enum class Stop { kEnd, kCut, kCorrupt };
 
+// Whether an event header at `at` (its 28 bytes in h) is possible: the sync word, a channel of
+// 1..kMaxChannel bytes, data of 0..kMaxData bytes.
+bool possible_header(const uint8_t* h) {
+  const int32_t clen = int32_t(be(h + 20, 4)), dlen = int32_t(be(h + 24, 4));
+  return uint32_t(be(h, 4)) == kSync && clen > 0 && clen <= kMaxChannel && dlen >= 0 &&
+         dlen <= kMaxData;
+}
+
+// The first offset in (from, size) where a whole event starts: a possible header whose event ends
+// inside the file and whose channel name is printable ASCII (what every LCM channel is). -1 when
+// there is none. Reads in chunks; restores nothing (the caller seeks).
+int64_t next_event(std::FILE* f, int64_t from, int64_t size) {
+  constexpr int64_t kChunk = 1 << 16;
+  std::vector<uint8_t> buf;
+  for (int64_t pos = from; pos + kHeader <= size; pos += kChunk) {
+    const int64_t n = std::min<int64_t>(kChunk + kHeader + kMaxChannel, size - pos);
+    buf.resize(size_t(n));
+    if (std::fseek(f, long(pos), SEEK_SET) != 0 ||
+        std::fread(buf.data(), 1, size_t(n), f) != size_t(n))
+      return -1;
+    for (int64_t k = 0; k < std::min(kChunk, n) && k + kHeader <= n; ++k) {
+      const uint8_t* h = buf.data() + k;
+      if (h[0] != 0xED || !possible_header(h)) continue;
+      const int32_t clen = int32_t(be(h + 20, 4)), dlen = int32_t(be(h + 24, 4));
+      if (pos + k + kHeader + clen + dlen > size) continue;  // would end beyond the file
+      if (k + kHeader + clen > n) continue;                  // its name not in this chunk
+      bool printable = true;
+      for (int32_t c = 0; c < clen && printable; ++c)
+        printable = h[kHeader + c] > 0x20 && h[kHeader + c] < 0x7f;
+      if (printable) return pos + k;
+    }
+  }
+  return -1;
+}
+
 // Reads whole events from byte `from` on; *end: the offset after the last whole event. Returns how
 // the reading stopped: the end of the file, a last event cut short (the file ends inside it), or
-// bytes that are not an event (*why says which).
+// bytes that are not an event (*why says which). With `skipped`, bytes that are not an event are
+// passed over to the next whole event (next_event), each stretch recorded as [first, end) byte
+// offsets, and the reading goes on; without a next whole event the reading stops there (kCorrupt)
+// and the stretch is not recorded.
 Stop read_events(const std::string& path, int64_t from, int64_t* end, int64_t* n, std::string* why,
-                 const std::function<void(const TapeEvent&)>& fn) {
+                 const std::function<void(const TapeEvent&)>& fn,
+                 std::vector<std::pair<int64_t, int64_t>>* skipped = nullptr) {
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such tape file");
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(path + ": cannot open the tape file");
@@ -421,16 +460,20 @@ Stop read_events(const std::string& path, int64_t from, int64_t* end, int64_t* n
     const uint32_t sync = uint32_t(be(h, 4));
     const int64_t eventnum = int64_t(be(h + 4, 8)), ts = int64_t(be(h + 12, 8));
     const int32_t clen = int32_t(be(h + 20, 4)), dlen = int32_t(be(h + 24, 4));
-    if (sync != kSync) {
-      *why = "no event at byte " + std::to_string(at) + " (sync word " + std::to_string(sync) +
-             ", not an LCM log event)";
-      return Stop::kCorrupt;
-    }
-    if (clen <= 0 || clen > kMaxChannel || dlen < 0 || dlen > kMaxData) {
-      *why = "event at byte " + std::to_string(at) + " claims a channel of " +
-             std::to_string(clen) + " bytes and data of " + std::to_string(dlen) +
-             " bytes (impossible)";
-      return Stop::kCorrupt;
+    if (!possible_header(h)) {
+      if (sync != kSync)
+        *why = "no event at byte " + std::to_string(at) + " (sync word " + std::to_string(sync) +
+               ", not an LCM log event)";
+      else
+        *why = "event at byte " + std::to_string(at) + " claims a channel of " +
+               std::to_string(clen) + " bytes and data of " + std::to_string(dlen) +
+               " bytes (impossible)";
+      if (!skipped) return Stop::kCorrupt;
+      const int64_t next = next_event(f, at + 1, size);
+      if (next < 0 || std::fseek(f, long(next), SEEK_SET) != 0) return Stop::kCorrupt;
+      skipped->emplace_back(at, next);
+      at = next;
+      continue;
     }
     const int64_t body = int64_t(clen) + dlen;
     if (size - at - kHeader < body) return Stop::kCut;  // the file ends inside this event
@@ -445,19 +488,44 @@ Stop read_events(const std::string& path, int64_t from, int64_t* end, int64_t* n
   }
 }
 
+std::string skipped_text(const std::string& path,
+                         const std::vector<std::pair<int64_t, int64_t>>& skipped) {
+  std::string t;
+  for (const auto& [a, b] : skipped)
+    t += (t.empty() ? "" : "; ") + path + ": damaged stretch: bytes " + std::to_string(a) + " to " +
+         std::to_string(b - 1) + " (" + std::to_string(b - a) +
+         " bytes) are not LCM log events; read on from the next whole event at byte " +
+         std::to_string(b);
+  return t;
+}
+
 }  // namespace
 
 int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn,
-                       std::string* warning) {
+                       std::string* warning, TapeDamage* damage) {
   int64_t end = 0, n = 0;
   std::string why;
-  const Stop stop = read_events(path, 0, &end, &n, &why, fn);
-  if (stop == Stop::kCorrupt)
-    throw InputError(path + ": corrupt tape: " + std::to_string(n) + " events read, then " + why);
+  std::vector<std::pair<int64_t, int64_t>> skipped;
+  const Stop stop = read_events(path, 0, &end, &n, &why, fn, &skipped);
+  if (damage) damage->skipped = skipped;
+  std::string w = skipped_text(path, skipped);
+  if (stop == Stop::kCorrupt) {
+    // Bytes that are not an event up to the end of the file: everything before them was read.
+    if (n == 0)
+      throw InputError(path + ": corrupt tape: " + std::to_string(n) + " events read, then " + why);
+    const int64_t size = int64_t(std::filesystem::file_size(path));
+    if (damage) damage->skipped.emplace_back(end, size);
+    w += (w.empty() ? "" : "; ") + path + ": corrupt tape: " + std::to_string(n) +
+         " events read, then " + why + "; no whole event after it (bytes " + std::to_string(end) +
+         " to " + std::to_string(size - 1) + " passed over)";
+  }
   if (stop == Stop::kCut) {
-    const std::string w = path + ": the tape ends inside an event (cut mid-write at byte " +
-                          std::to_string(std::filesystem::file_size(path)) + "): read its " +
-                          std::to_string(n) + " whole events, up to byte " + std::to_string(end);
+    w += (w.empty() ? "" : "; ") + path +
+         ": the tape ends inside an event (cut mid-write at byte " +
+         std::to_string(std::filesystem::file_size(path)) + "): read its " + std::to_string(n) +
+         " whole events, up to byte " + std::to_string(end);
+  }
+  if (!w.empty()) {
     if (warning)
       *warning = w;
     else
@@ -470,7 +538,9 @@ int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn) {
   int64_t end = 0, n = 0;
   std::string why;
-  if (read_events(path, *offset, &end, &n, &why, fn) == Stop::kCorrupt)
+  std::vector<std::pair<int64_t, int64_t>> skipped;
+  if (read_events(path, *offset, &end, &n, &why, fn, &skipped) == Stop::kCorrupt && n == 0 &&
+      *offset == 0)
     throw InputError(path + ": corrupt tape: " + why);
   *offset = end;
   return n;
@@ -572,6 +642,7 @@ Json tape_summary(const std::string& path) {
   int64_t samples = 0;
   double fs = 0;
   std::string warning;
+  TapeDamage damage;
   read_tape_file(
       path,
       [&](const TapeEvent& ev) {
@@ -611,8 +682,12 @@ Json tape_summary(const std::string& path) {
           throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
         }
       },
-      &warning);
+      &warning, &damage);
   if (!warning.empty()) j["warning"] = warning;
+  Json damaged = Json::array();  // the stretches passed over: [first byte, last byte]
+  for (const auto& [a, b] : damage.skipped)
+    damaged.push_back({{"from_byte", a}, {"to_byte", b - 1}});
+  j["damaged"] = damaged;
   std::sort(seqs.begin(), seqs.end());
   Json gaps = Json::array();
   for (size_t i = 1; i < seqs.size(); ++i) {
@@ -645,7 +720,12 @@ std::map<int64_t, Block> collect_run(const std::string& path, std::string* run_i
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
       if (ev.channel == kTapeChannel) {
-        Block b = decode_tape_block(&rb, ev.channel);
+        Block b;
+        try {
+          b = decode_tape_block(&rb, ev.channel);
+        } catch (const CorruptBlock&) {  // failed its checksum: a whole copy may follow, else the
+          return;                        // block is named missing (blocks_in_order)
+        }
         if (run_id->empty()) *run_id = b.run_id;
         if (b.run_id == *run_id && b.seq >= 0 && b.seq < below && !got.count(b.seq))
           got.emplace(b.seq, std::move(b));

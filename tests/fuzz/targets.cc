@@ -10,7 +10,10 @@
 #include "fralab/exchange/schedule.h"
 #include "fralab/exchange/time_series.h"
 #include "fralab/identify/readers.h"
+#include "fralab/identify/state_model.h"
+#include "fralab/identify/transfer_matrix.h"
 #include "fralab/plant/model.h"
+#include "random_shapes.h"
 #include "tape_analysis.h"
 
 namespace fralab::fuzz {
@@ -60,11 +63,17 @@ int run(const std::string& reader, const uint8_t* data, size_t size) {
       schedule_from_reference(ts, o);
     } else if (reader == "schedule") {
       load_schedule(path);
+    } else if (reader == "shapes") {  // the bytes choose a set's shape: matrix and state model
+      const auto set = testing::random_shape_set_from_bytes(data, size);
+      const TransferMatrix m = build_transfer_matrix(set.entries);
+      const StateModel sm = build_state_model(m, set.data);
+      state_model_json(sm);
+      state_model_markdown(sm);
     } else {
       throw std::logic_error("no fuzz target " + reader);
     }
   } catch (const InputError&) {
-    // a clean refusal
+    return 1;  // a clean refusal
   }
   return 0;
 }

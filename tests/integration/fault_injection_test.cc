@@ -9,7 +9,9 @@
 //   - SIGKILL of each process type mid-run, then `fralab measure --resume DIR`;
 //   - SIGTERM / SIGINT to the launcher: no process left, the abort on the tape, resume;
 //   - a stopped (SIGSTOP) analyser: the run fails naming it as silent;
-//   - two runs sharing one port: neither takes the other's messages.
+//   - two runs sharing one port: neither takes the other's messages;
+//   - a resume or a second run on a live run's folder: refused, the live run completes;
+//   - a tape with a damaged stretch: read past it, and resume measures again what it held.
 // FRALAB_FAULT_HOG_RUNS sets the number of runs under CPU hogs (default 20).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -130,12 +132,25 @@ TEST_P(Kill, AKilledProcessFailsTheRunAndResumeGivesTheUninterruptedNumbers) {
               (who == "launcher" ? std::string("kill -TERM $lp")
                                  : "pkill -KILL -f '[f]ralab-" + who + ".*" + d + "'") +
               "; wait $lp; echo exit=$?)");
-  EXPECT_THAT(c.output, HasSubstr("exit=1")) << slurp(first);
+  // The identifier works after everything is measured: its failure leaves a partial run (exit
+  // status 3) whose curves are already the uninterrupted run's.
+  const bool partial = who == "identify";
+  EXPECT_THAT(c.output, HasSubstr(partial ? "exit=3" : "exit=1")) << slurp(first);
   sh("sleep 0.5");
   EXPECT_EQ(processes_of(d), 0) << "processes left after the run failed";
   Json run = json_load_file(d + "/run.json");
-  EXPECT_EQ(run["state"], who == "launcher" ? "interrupted" : "failed") << run.dump();
-  if (who == "launcher") {
+  EXPECT_EQ(run["state"], who == "launcher" ? "interrupted"
+                          : partial         ? "partial"
+                                            : "failed")
+      << run.dump();
+  if (partial) {
+    EXPECT_EQ(run["failed_step"]["step"], "identify");
+    EXPECT_THAT(run["failed_step"]["error"].get<std::string>(), HasSubstr("killed by signal 9"));
+    EXPECT_THAT(slurp(first), HasSubstr("partial run: everything was measured"));
+    for (const auto& f : fs::directory_iterator(reference() + "/frd"))
+      EXPECT_EQ(slurp(f.path().string()), slurp(d + "/frd/" + f.path().filename().string()))
+          << f.path().filename();
+  } else if (who == "launcher") {
     EXPECT_THAT(slurp(first), HasSubstr("the excitation was stopped first"));
     const auto tape = sh(kBin + "/fralab tape --log " + d + "/tape.lcmlog");
     EXPECT_THAT(tape.output, HasSubstr("\"abort\"")) << "no abort status on the tape";
@@ -229,6 +244,63 @@ TEST(Faults, TwoRunsSharingAPortNeverMix) {
   EXPECT_THAT(c.output, HasSubstr("b=0")) << c.output;
   expect_identical(d + "/a");
   expect_identical(d + "/b");
+}
+
+// One writer per run folder: while a run measures, a resume of its folder and a second run into
+// it are refused naming the run that holds it, and the live run completes identical to an
+// undisturbed one.
+TEST(Faults, AResumeOrASecondRunOnALiveRunFolderIsRefusedAndTheLiveRunCompletes) {
+  reference();
+  const std::string d = tmpdir("live_folder");
+  const std::string first = tmpdir("live_folder_first") + "/output.txt";
+  const auto c = sh("(" + kBin + "/fralab" + kRun + "--speed 20 --out " + d + " > " + first +
+                    " 2>&1 & lp=$!; for i in $(seq 200); do [ -f " + d + "/run.lock ] && grep -q " +
+                    "running " + d + "/run.json 2>/dev/null && break; sleep 0.05; done; " + kBin +
+                    "/fralab measure --resume " + d + "; echo resume=$?; " + kBin + "/fralab" +
+                    kRun + "--out " + d + "; echo second=$?; wait $lp; echo first=$?)");
+  EXPECT_THAT(c.output, HasSubstr("resume=1")) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("second=1")) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("first=0")) << c.output << slurp(first);
+  EXPECT_THAT(c.output, HasSubstr(d + ": the run folder is in use by fralab measure, pid "));
+  EXPECT_EQ(json_load_file(d + "/run.json")["state"], "complete");
+  EXPECT_FALSE(fs::exists(d + "/run.lock"));
+  expect_identical(d);
+}
+
+// A tape with 1 kB overwritten by garbage in its middle: `fralab tape` reads every block outside
+// the damaged stretch and names it with the blocks lost; `--resume` measures those again and the
+// run ends identical to an undisturbed one.
+TEST(Faults, ADamagedStretchOfTapeIsPassedOverAndResumeMeasuresItAgain) {
+  const std::string& ref = reference();
+  const std::string d = tmpdir("damaged_tape");
+  fs::remove_all(d);
+  fs::copy(ref, d, fs::copy_options::recursive);
+  const std::string tape = d + "/tape.lcmlog";
+  const auto size = fs::file_size(tape);
+  {
+    std::fstream f(tape, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(size / 2));
+    const std::string junk(1024, '\x5a');
+    f.write(junk.data(), std::streamsize(junk.size()));
+  }
+  auto c = sh(kBin + "/fralab tape --log " + tape);
+  ASSERT_EQ(c.status, 0) << c.output;
+  const Json t = Json::parse(c.output.substr(c.output.find('{')));
+  ASSERT_EQ(t["damaged"].size(), 1u) << c.output;
+  EXPECT_LE(t["damaged"][0]["from_byte"].get<int64_t>(), int64_t(size / 2));
+  EXPECT_GE(t["damaged"][0]["to_byte"].get<int64_t>(), int64_t(size / 2 + 1023));
+  EXPECT_GE(t["missing_seqs"].size(), 1u) << "the blocks in the stretch are named missing";
+  // The run as it stood when the tape was damaged: not complete, its curves gone.
+  Json run = json_load_file(d + "/run.json");
+  run["state"] = "failed";
+  fralab::json_save_file(d + "/run.json", run);
+  fs::remove_all(d + "/frd");
+  fs::remove_all(d + "/tf");
+  c = sh(kBin + "/fralab measure --resume " + d);
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("damaged stretch: bytes "));
+  EXPECT_THAT(c.output, HasSubstr("resuming run"));
+  expect_identical(d);
 }
 
 TEST(Faults, AStoppedAnalyserIsNamedAsSilent) {

@@ -92,38 +92,63 @@ TEST(TapeFile, ACutTapeIsReadUpToTheCutWithAWarning) {
 }
 
 // Headers are checked against the file before anything is read or allocated: an event claiming
-// 0x7fffffff bytes (liblcm's own reader crashes on it) and garbage in the middle are refused,
-// naming the file and byte.
-TEST(TapeFile, ImpossibleHeadersAndGarbageAreRefusedNamingTheByte) {
+// 0x7fffffff bytes (liblcm's own reader crashes on it) and garbage in the middle are damaged
+// stretches, passed over to the next whole event and named by their bytes; a file with no event
+// at all is refused.
+TEST(TapeFile, ADamagedStretchIsPassedOverToTheNextWholeEventNamingItsBytes) {
   const std::string p = tmp("bad.lcmlog");
-  auto ends = write_log(p, 3);
+  auto ends = write_log(p, 4);
   {
     std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
     f.seekp(ends[0] + 24);  // the second event's data length
     const char huge[4] = {0x7f, char(0xff), char(0xff), char(0xff)};
     f.write(huge, 4);
   }
-  try {
-    read_tape_file(p, [](const TapeEvent&) {});
-    ADD_FAILURE() << "an impossible length was read";
-  } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("bad.lcmlog: corrupt tape: 1 events read, then "
-                                               "event at byte " +
-                                               std::to_string(ends[0])));
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("data of 2147483647 bytes (impossible)"));
-  }
-  write_log(p, 3);
+  std::vector<int> sizes;
+  std::string warning;
+  TapeDamage damage;
+  EXPECT_EQ(read_tape_file(
+                p, [&](const TapeEvent& e) { sizes.push_back(e.datalen); }, &warning, &damage),
+            3);
+  EXPECT_EQ(sizes, (std::vector<int>{10, 30, 40}));  // the second event is the damaged stretch
+  EXPECT_THAT(warning,
+              ::testing::HasSubstr("bad.lcmlog: damaged stretch: bytes " + std::to_string(ends[0]) +
+                                   " to " + std::to_string(ends[1] - 1)));
+  ASSERT_EQ(damage.skipped.size(), 1u);
+  EXPECT_EQ(damage.skipped[0], std::make_pair(ends[0], ends[1]));
+
+  write_log(p, 4);
   {
     std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(ends[1]);  // the third event's sync word
-    f.write("JUNK", 4);
+    // Garbage over the end of the second event's data (its header is whole: it is read, and a
+    // tape block there would fail its checksum) and over the third's header.
+    f.seekp(ends[1] - 5);
+    const std::string junk(30, 'J');
+    f.write(junk.data(), std::streamsize(junk.size()));
+  }
+  sizes.clear();
+  warning.clear();
+  EXPECT_EQ(read_tape_file(
+                p, [&](const TapeEvent& e) { sizes.push_back(e.datalen); }, &warning, &damage),
+            3);
+  EXPECT_EQ(sizes, (std::vector<int>{10, 20, 40}));
+  EXPECT_THAT(warning, ::testing::HasSubstr("damaged stretch: bytes " + std::to_string(ends[1]) +
+                                            " to " + std::to_string(ends[2] - 1)));
+  // Following the tape passes over it too.
+  int64_t offset = 0;
+  EXPECT_EQ(follow_tape_file(p, &offset, [](const TapeEvent&) {}), 3);
+  EXPECT_EQ(offset, ends[3]);
+
+  {
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    f << std::string(200, 'x');
   }
   try {
     read_tape_file(p, [](const TapeEvent&) {});
     ADD_FAILURE() << "garbage was read";
   } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("2 events read, then no event at byte " +
-                                               std::to_string(ends[1])));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("bad.lcmlog: corrupt tape: 0 events read, then no "
+                                               "event at byte 0"));
   }
   fs::remove(p);
 }

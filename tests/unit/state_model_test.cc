@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
+#include "fralab/identify/fit_io.h"
 #include "fralab/plant/model.h"
 #include "test_util.h"
 
@@ -321,4 +323,34 @@ TEST(StateModel, FittedFactorsReproduceEveryJ85PathWithinItsNoise) {
   }
   EXPECT_EQ(in_model, 16);
   EXPECT_LT(s.error, 0.1);  // the SVD's factors: 1.28
+}
+
+// A single-input plant whose every path reached the maximum order (the auto campaign's curves of
+// a random plant, one input and three outputs, kept in tests/data/single_input_max_order): no
+// pole is clustered, so the factors' fit has nothing to solve for. The identifier's whole chain
+// (fit_and_write) ends with every file written and an empty state model that still checks each
+// path against its data, where a decomposition of an empty matrix crashed it.
+TEST(StateModel, ASingleInputRunWithNoConvergedFitGivesAnEmptyModelNotACrash) {
+  std::vector<Frd> curves;
+  for (const char* stem : {"Bypass_Pin", "Bypass_Speed", "Bypass_Torque", "u_Bypass_Bypass"})
+    curves.push_back(load_frd(source_path("tests/data/single_input_max_order/") + stem + ".json"));
+  const std::string dir = ::testing::TempDir() + "single_input_max_order";
+  std::filesystem::remove_all(dir);
+  FitOptions o;
+  const std::vector<FitResult> fits = fit_and_write(curves, o, dir, "single input");
+  ASSERT_EQ(fits.size(), 4u);
+  for (const char* stem : {"Bypass_Pin", "Bypass_Speed", "Bypass_Torque", "u_Bypass_Bypass"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/tf/" + stem + ".json")) << stem;
+  const Json tm = json_load_file(dir + "/transfer_matrix.json");
+  const Json& sm = tm.at("state_model");
+  int converged = 0;
+  for (int k = 0; k < 3; ++k) converged += fits[size_t(k)].status == FitResult::Status::kConverged;
+  EXPECT_EQ(converged, 0) << "the data no longer reach the shape this test is about";
+  EXPECT_EQ(sm.at("order"), 0);
+  // Each output path is checked against its data: the empty model's error is the whole response.
+  for (const char* pair : {"Bypass:Pin", "Bypass:Speed", "Bypass:Torque"}) {
+    ASSERT_TRUE(sm.at("path_check").contains(pair)) << pair;
+    EXPECT_GT(sm["path_check"][pair].at("points").get<int>(), 10) << pair;
+  }
+  std::filesystem::remove_all(dir);
 }

@@ -156,19 +156,31 @@ struct TapeEvent {
   int32_t datalen;
 };
 
+/// The damaged stretches a tape reader passed over: [first byte, end byte) of each run of bytes
+/// that were not LCM log events.
+struct TapeDamage {
+  std::vector<std::pair<int64_t, int64_t>> skipped;
+};
+
 /// Reads every event of an LCM log file in order, calling `fn`, with explicit bounds (a header
-/// is checked against the bytes the file holds before anything is read or allocated). A tape cut
-/// inside its last event (a recorder killed mid-write) is read up to the cut with a warning (in
-/// *warning, else on stderr) naming the file and byte; bytes that are not an event (a bad sync
-/// word, an impossible length) throw InputError naming the file and byte. Returns the number of
-/// events read.
+/// is checked against the bytes the file holds before anything is read or allocated). Bytes that
+/// are not an event (a bad sync word, an impossible length: a damaged stretch) are passed over to
+/// the next whole event (a sync word whose header is possible, whose event ends inside the file
+/// and whose channel name is printable), as LCM's own log reader resynchronises; what follows is
+/// trusted block by block (every tape block carries its CRC32: decode_tape_block). Each stretch
+/// passed over, and a tape cut inside its last event (a recorder killed mid-write, read up to the
+/// cut), is said in *warning (else on stderr) naming the file and the bytes; `damage` (optional)
+/// gets the stretches. InputError naming the file and byte when no event at all can be read.
+/// Returns the number of events read.
 int64_t read_tape_file(const std::string& path, const std::function<void(const TapeEvent&)>& fn,
-                       std::string* warning = nullptr);
+                       std::string* warning = nullptr, TapeDamage* damage = nullptr);
 
 /// Follows a tape still being written: reads the whole events from byte *offset on, calling `fn`,
 /// and leaves *offset after the last of them (a partly written last event is read on a later
-/// call). Start with *offset = 0. Returns the number of events read by this call. Throws
-/// InputError when the file cannot be opened or holds bytes that are not an event.
+/// call). A damaged stretch followed by a whole event is passed over as read_tape_file does; one
+/// with nothing whole after it yet is left for a later call. Start with *offset = 0. Returns the
+/// number of events read by this call. Throws InputError when the file cannot be opened, or holds
+/// no event from its start.
 int64_t follow_tape_file(const std::string& path, int64_t* offset,
                          const std::function<void(const TapeEvent&)>& fn);
 

@@ -51,8 +51,16 @@ struct AutoCampaignResult {
 };
 
 /// Runs the campaign into opt.out (opt.acquire's band, points per decade, amplitudes, seed; the
-/// multisine's periods from --min-cycles). Throws InputError for --resume or a failed run.
+/// multisine's periods from --min-cycles). Throws InputError for --resume or a failed run; a fit
+/// that fails after both runs measured leaves a partial campaign (result.measure.partial(),
+/// DIR/run.json "state" "partial": measure.h).
 AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampaignOptions& a = {});
+
+/// `fralab measure --resume DIR` on a partial auto campaign: DIR/frd fitted again (DIR/tf,
+/// DIR/transfer_matrix.*), DIR/run.json "complete" or still "partial". InputError when DIR's
+/// campaign is complete (nothing to resume) or not partial (an interrupted campaign resumes its
+/// runs one by one: DIR/multisine, DIR/sine).
+MeasureResult resume_auto_campaign(const std::string& dir);
 
 /// Step 2 alone: the median nl_rel of an actuator curve over points with sigma / |G| <
 /// max_rel_sigma (-1 when none qualifies).

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "fralab/lab/measure.h"
 
@@ -18,7 +19,14 @@ struct DiagnoseCommand {
   bool plots = true;
 };
 
-/// Runs the diagnosis; returns a one-paragraph summary for the terminal.
-std::string run_diagnose(const DiagnoseCommand& c);
+struct DiagnoseResult {
+  std::string summary;  // one paragraph for the terminal
+  /// With --engine: the measurements that ended partial (measure.h: partial_run_message), each
+  /// one line. The diagnosis needs only their curves, so it runs all the same.
+  std::vector<std::string> partial;
+};
+
+/// Runs the diagnosis.
+DiagnoseResult run_diagnose(const DiagnoseCommand& c);
 
 }  // namespace fralab

@@ -14,6 +14,7 @@
 
 #include "fralab/acquire/acquisition.h"
 #include "fralab/core/frd.h"
+#include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
 #include "fralab/plant/model.h"
 
@@ -52,7 +53,23 @@ struct MeasureResult {
   double fit_time_s = 0;   // the identifier, after the analysers finished
   int64_t tape_blocks = 0;
   std::string run_id;
+  /// A partial run: everything was measured (the tape and every frd file are complete) but a
+  /// step after measuring failed: the step ("identify": the fits, transfer matrix or state
+  /// model) and its error. DIR/run.json says the same ("state": "partial", "failed_step").
+  std::string failed_step, failure;
+  bool partial() const { return !failed_step.empty(); }
 };
+
+/// Thrown by the commands after a partial run has written everything it could (exit status 3):
+/// the measurement is whole, a later step failed.
+struct PartialRun : InputError {
+  using InputError::InputError;
+};
+
+/// The one-line account of a partial run in DIR: "DIR: partial run: everything was measured (tape
+/// and frd files complete), but identify failed: <error>; fit again with `fralab measure --resume
+/// DIR`".
+std::string partial_run_message(const MeasureResult& r, const std::string& dir);
 
 /// The pairs measured for an input X of a model with outputs O: X:O for every output, u_X:X, and
 /// u_X:O for every output.
@@ -67,9 +84,19 @@ MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
 MeasureResult run_measure(const MeasureOptions& opt);
 
 /// A measurement's results from its curves, as the live analysers and identifier leave them:
-/// the curves in pair order (sorted in place), each to DIR/frd/<stem>.json, fitted (`fit_delay`:
-/// the identifier's --delay) into DIR/tf and DIR/transfer_matrix.{json,md} under `title`.
-void save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
-                         const std::string& fit_delay, const std::string& title);
+/// the curves in pair order (sorted in place), each to DIR/frd/<stem>.json, then fitted
+/// (`fit_delay`: the identifier's --delay) into DIR/tf and DIR/transfer_matrix.{json,md} under
+/// `title` by `fralab-identify --from-frd DIR` in a process of its own (its log
+/// DIR/logs/identify.log), so that a crash in fitting leaves the curves whole. Returns "" when the
+/// fit succeeded, else its failure ("identify was killed by signal 11"); Interrupted on a stop
+/// signal (Supervisor::catch_stop_signals).
+std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
+                                const std::string& fit_delay, const std::string& title,
+                                double timeout_s = 3600);
+
+/// DIR/run.json's state after a run's fit: "complete", or "partial" with "failed_step":
+/// {"step": "identify", "error": ...} (the same in `r`) when `fit_failure` is not "".
+void record_fit_outcome(Json& run, MeasureResult& r, const std::string& fit_failure,
+                        const std::string& dir);
 
 }  // namespace fralab

@@ -25,6 +25,9 @@ struct ProcessSpec {
   std::vector<std::string> argv;  // argv[0] is the program (path or PATH name)
   std::string log_file;
   std::string host;  // "" = this host; else the deputy (fralab-deputy --name HOST) that runs it
+  /// An essential process's failure fails every wait_for; a non-essential one's (the identifier,
+  /// whose failure leaves the measurement whole) fails only a wait_for that names it.
+  bool essential = true;
 };
 
 /// Processes on other hosts, started and watched through their deputies (lab/deputy.h).
@@ -75,10 +78,10 @@ class Supervisor {
   /// The exit of a process that has exited: status (-1 when killed) and reason; nullopt while it
   /// runs.
   std::optional<RemoteProcesses::Exit> exit_of(const std::string& name) const;
-  /// Waits until every process named has exited with status 0. If any supervised process exits
-  /// non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout throws too, and
-  /// a stop signal caught (catch_stop_signals) throws Interrupted.
-  /// `on_poll` (optional) is called on every poll (every 20 ms): a progress line, for instance.
+  /// Waits until every process named has exited with status 0. If any essential process, or one
+  /// named, exits non-zero (or is killed) meanwhile, throws InputError with its reason. Timeout
+  /// throws too, and a stop signal caught (catch_stop_signals) throws Interrupted. `on_poll`
+  /// (optional) is called on every poll (every 20 ms): a progress line, for instance.
   void wait_for(const std::vector<std::string>& names, double timeout_s,
                 const std::function<void()>& on_poll = {});
   /// Sends `sig` and waits up to timeout_s for the exit (then SIGKILL).
