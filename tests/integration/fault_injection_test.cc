@@ -276,10 +276,15 @@ TEST(Faults, ADamagedStretchOfTapeIsPassedOverAndResumeMeasuresItAgain) {
   fs::remove_all(d);
   fs::copy(ref, d, fs::copy_options::recursive);
   const std::string tape = d + "/tape.lcmlog";
-  const auto size = fs::file_size(tape);
+  // 1 kB of garbage across the first event boundary (an LCM sync word) past the middle: the end
+  // of one block's data (its checksum fails) and the next event's header (its framing is lost).
+  const std::string bytes = slurp(tape);
+  const size_t boundary = bytes.find("\xED\xA1\xDA\x01", bytes.size() / 2);
+  ASSERT_NE(boundary, std::string::npos);
+  const size_t at = boundary - 512;
   {
     std::fstream f(tape, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(std::streamoff(size / 2));
+    f.seekp(std::streamoff(at));
     const std::string junk(1024, '\x5a');
     f.write(junk.data(), std::streamsize(junk.size()));
   }
@@ -287,9 +292,10 @@ TEST(Faults, ADamagedStretchOfTapeIsPassedOverAndResumeMeasuresItAgain) {
   ASSERT_EQ(c.status, 0) << c.output;
   const Json t = Json::parse(c.output.substr(c.output.find('{')));
   ASSERT_EQ(t["damaged"].size(), 1u) << c.output;
-  EXPECT_LE(t["damaged"][0]["from_byte"].get<int64_t>(), int64_t(size / 2));
-  EXPECT_GE(t["damaged"][0]["to_byte"].get<int64_t>(), int64_t(size / 2 + 1023));
+  EXPECT_EQ(t["damaged"][0]["from_byte"].get<int64_t>(), int64_t(boundary));
+  EXPECT_GE(t["damaged"][0]["to_byte"].get<int64_t>(), int64_t(at + 1023));
   EXPECT_GE(t["missing_seqs"].size(), 1u) << "the blocks in the stretch are named missing";
+  EXPECT_GE(t["corrupt_seqs"].size(), 1u) << "the block whose data the garbage hit";
   // The run as it stood when the tape was damaged: not complete, its curves gone.
   Json run = json_load_file(d + "/run.json");
   run["state"] = "failed";
