@@ -67,10 +67,10 @@
 //    first order (the same phase, magnitudes (w/z)^2 / 2 apart): it is replaced by that pole and
 //    the rest refined, and kept only when its criterion (5) is lower than the lag's by 1 or more
 //    (a likelihood ratio of e; with a sigma given or estimated). The message says so.
-// Weights W_i: 1 / sigma_i^2 when the data carry sigma (or when the noise is estimated: sigma_i from
-// the estimated level, FitOptions::estimate_noise), else 1 / |G_i|^2 (relative error, uniform on the
-// log-frequency axis: TFNS's delta-w weighting of absolute error is replaced).
-// Units: w rad/s, tau seconds, phases radians inside, degrees in files.
+// Weights W_i: 1 / sigma_i^2 when the data carry sigma (or when the noise is estimated: sigma_i
+// from the estimated level, FitOptions::estimate_noise), else 1 / |G_i|^2 (relative error, uniform
+// on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced). Units: w
+// rad/s, tau seconds, phases radians inside, degrees in files.
 #pragma once
 
 #include <string>
