@@ -4,5 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-bash scripts/build.sh
+# What the lab runs, and only that: the driver and the module executables it starts (the tests,
+# benchmarks and fuzz seeds are the test command's).
+bash scripts/build.sh fralab
 exec build/bin/fralab run --out "${FRALAB_OUT:-out/lab}" "$@"

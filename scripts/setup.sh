@@ -10,11 +10,12 @@ PKGS=(build-essential cmake pkg-config git
       libcmark-gfm-extensions-dev libboost-dev gnuplot-nox iproute2
       util-linux nftables)
 # --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
-# clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh).
+# clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh); clang-format:
+# the format test (scripts/check_format.sh).
 # chromium: report.html checked in a real browser (headless); python3-scipy: the .mat export
 # loaded by scipy.io.loadmat.
 if [ "${1:-}" = "--test" ]; then
-  PKGS+=(octave octave-signal clang libclang-rt-14-dev chromium python3-scipy)
+  PKGS+=(octave octave-signal clang clang-format libclang-rt-14-dev chromium python3-scipy)
 fi
 missing=()
 for p in "${PKGS[@]}"; do

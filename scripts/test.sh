@@ -3,5 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --test
+# In CI (CI=true) a compiler warning fails the build.
+[ "${CI:-}" = true ] && export FRALAB_WERROR=ON
 bash scripts/build.sh
 cd build && ctest --output-on-failure -j"$(nproc)" "$@"

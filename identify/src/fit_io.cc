@@ -1,6 +1,7 @@
 #include "fralab/identify/fit_io.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -18,7 +19,7 @@ void parse_delay_option(const std::string& text, FitOptions* o) {
     try {
       size_t p = 0;
       double v = std::stod(text, &p);
-      if (p != text.size() || !(v >= 0)) throw std::invalid_argument("x");
+      if (p != text.size() || !(v >= 0) || !std::isfinite(v)) throw std::invalid_argument("x");
       o->delay = FitOptions::Delay::kFixed;
       o->delay_s = v;
     } catch (const std::exception&) {

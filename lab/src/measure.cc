@@ -185,7 +185,7 @@ std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir
                                    title};
   for (const Frd& f : curves) args.insert(args.end(), {"--pair", f.pair});
   Supervisor sup;
-  sup.start({"identify", args, dir + "/logs/identify.log"});
+  sup.start({"identify", args, dir + "/logs/identify.log", /*host=*/""});
   try {
     sup.wait_for({"identify"}, timeout_s);
   } catch (const Interrupted&) {

@@ -31,8 +31,23 @@ Frd curve(const std::string& pair, const Tf& t) {
 TEST(FitIo, DelayOptionWords) {
   FitOptions o;
   parse_delay_option("none", &o);
+  EXPECT_EQ(o.delay, FitOptions::Delay::kNone);
   parse_delay_option("0.011", &o);
-  EXPECT_THROW(parse_delay_option("11ms", &o), InputError);
+  EXPECT_EQ(o.delay, FitOptions::Delay::kFixed);
+  EXPECT_EQ(o.delay_s, 0.011);
+  parse_delay_option("auto", &o);
+  EXPECT_EQ(o.delay, FitOptions::Delay::kAuto);
+  parse_delay_option("0", &o);
+  EXPECT_EQ(o.delay, FitOptions::Delay::kFixed);
+  EXPECT_EQ(o.delay_s, 0.0);
+  for (const char* bad : {"11ms", "-0.01", "nan", "inf", "", "0.01s", "fixed"}) {
+    try {
+      parse_delay_option(bad, &o);
+      ADD_FAILURE() << "--delay \"" << bad << "\" was taken";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("must be auto, none or a delay in seconds >= 0")) << bad;
+    }
+  }
 }
 
 TEST(FitIo, DeletedRootsLeaveTheFileAndTheGainStays) {
