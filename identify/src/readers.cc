@@ -63,7 +63,8 @@ Frd read_frd_csv(const std::string& file) {
     return it == cols.end() ? -1 : int(it - cols.begin());
   };
   const int iw = idx("w"), if_ = idx("f_hz"), im = idx("mag"), idb = idx("mag_db"),
-            ip = idx("phase_deg"), ire = idx("re"), iim = idx("im"), is = idx("sigma");
+            ip = idx("phase_deg"), ire = idx("re"), iim = idx("im"), is = idx("sigma"),
+            icoh = idx("coherence"), ivalid = idx("valid");
   if (iw < 0 && if_ < 0)
     throw InputError(file + ":" + std::to_string(ln) +
                      ": the header names no frequency column (w or f_hz)");
@@ -97,9 +98,23 @@ Frd read_frd_csv(const std::string& file) {
           im >= 0 ? to_number(v[im], where) : std::pow(10.0, to_number(v[idb], where) / 20);
       p = from_polar(w, mag, to_number(v[ip], where) * std::numbers::pi / 180);
     }
-    if (is >= 0) {
+    // An empty sigma or coherence cell is unknown (as fralab export --to csv writes it).
+    if (is >= 0 && !trim(v[is]).empty()) {
       p.sigma = to_number(v[is], where);
-      if (!(p.sigma > 0)) throw InputError(where + ": sigma must be > 0 (leave the cell out)");
+      if (!(p.sigma > 0))
+        throw InputError(where + ": sigma must be > 0 (leave the cell empty when unknown)");
+    }
+    if (icoh >= 0 && !trim(v[icoh]).empty()) {
+      p.coherence = to_number(v[icoh], where);
+      if (!(p.coherence >= 0 && p.coherence <= 1))
+        throw InputError(where +
+                         ": coherence must be in [0, 1] (leave the cell empty when unknown)");
+    }
+    // valid: 1 or 0 (a point the analyser refused stays refused).
+    if (ivalid >= 0 && !trim(v[ivalid]).empty()) {
+      const double ok = to_number(v[ivalid], where);
+      if (ok != 0 && ok != 1) throw InputError(where + ": valid must be 1 or 0");
+      p.valid = ok == 1;
     }
     if (const std::string bad = frd_point_problem(p); !bad.empty())
       throw InputError(where + ": " + bad);
@@ -204,8 +219,10 @@ FitInput read_tfns_deck(const std::string& file) {
 FitInput read_fit_input(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError(file + ": cannot open for reading");
+  // The first line that is neither blank nor a '#' comment decides the format (no TFNS card
+  // begins with '#': column 1 holds B, P, R, H, D, M, C, O, Z or '*').
   std::string first;
-  while (std::getline(in, first) && trim(first).empty()) {
+  while (std::getline(in, first) && (trim(first).empty() || trim(first)[0] == '#')) {
   }
   std::string t = trim(first);
   if (t.empty()) {

@@ -51,6 +51,40 @@ TEST(Readers, CsvWithNamedColumns) {
   EXPECT_NEAR(b.points[0].phase_deg, -90.0, 1e-12);
 }
 
+// '#' lines are comments wherever a CSV has them, the first line included: such a file is a CSV,
+// not a TFNS deck.
+TEST(Readers, ACsvThatBeginsWithCommentsIsReadAsACsv) {
+  const Frd f = read_fit_input(write("comment_first.csv",
+                                     "# measured on rig 3\n# units: rad/s\nw,mag,phase_deg\n"
+                                     "# a comment between rows\n2,0.5,-30\n1,1,-10\n"))
+                    .frd;
+  ASSERT_EQ(f.points.size(), 2u);
+  EXPECT_EQ(f.points[0].w, 1.0);
+  EXPECT_NEAR(f.points[1].mag, 0.5, 1e-15);
+  EXPECT_NEAR(f.points[1].phase_deg, -30.0, 1e-12);
+}
+
+// The CSV `fralab export --to csv` writes reads back: an empty sigma or coherence is unknown, and
+// a point the analyser refused (valid 0) stays refused.
+TEST(Readers, TheExportedCsvReadsBackWithUnknownsAndRefusedPoints) {
+  const Frd f = read_fit_input(write("exported.csv",
+                                     "# pair Wf:P3; w rad/s, f_hz Hz, phase_deg degrees, sigma of "
+                                     "the complex ratio (empty: unknown)\n"
+                                     "w,f_hz,mag,mag_db,phase_deg,re,im,sigma,coherence,valid\n"
+                                     "1,0.159,2,6.02,0,2,0,,,1\n"
+                                     "2,0.318,1,0,-90,0,-1,0.01,0.98,0\n"))
+                    .frd;
+  ASSERT_EQ(f.points.size(), 2u);
+  EXPECT_LT(f.points[0].sigma, 0);      // unknown
+  EXPECT_LT(f.points[0].coherence, 0);  // unknown
+  EXPECT_TRUE(f.points[0].valid);
+  EXPECT_EQ(f.points[1].sigma, 0.01);
+  EXPECT_EQ(f.points[1].coherence, 0.98);
+  EXPECT_FALSE(f.points[1].valid);
+  const std::string bad = write("bad_valid.csv", "w,mag,phase_deg,valid\n1,1,0,2\n");
+  EXPECT_THAT(error_of(bad), ::testing::HasSubstr(bad + ":2: valid must be 1 or 0"));
+}
+
 TEST(Readers, CsvErrorsNameFileAndLine) {
   std::string f = write("c.csv", "w,mag,phase_deg\n1,2,3\n2,x,3\n");
   EXPECT_THAT(error_of(f), ::testing::HasSubstr(f + ":3: \"x\" is not a number")) << error_of(f);
