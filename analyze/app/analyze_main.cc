@@ -9,14 +9,16 @@
 #include <iostream>
 
 #include "analyzer_node.h"
+#include "fralab/core/measure_dir.h"
 
 using namespace fralab;
 
 namespace {
 
 void write_frds(const std::vector<Frd>& frds, const std::string& out) {
-  std::filesystem::create_directories(out + "/frd");
-  for (const Frd& f : frds) save_frd(out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+  const MeasureDir dir(out);
+  std::filesystem::create_directories(dir.frd_dir());
+  for (const Frd& f : frds) save_frd(dir.frd(f.pair), f);
 }
 
 }  // namespace

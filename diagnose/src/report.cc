@@ -7,20 +7,22 @@
 #include <sstream>
 
 #include "fralab/analyze/bode_plot.h"
+#include "fralab/core/measure_dir.h"
 
 namespace fralab {
 
 namespace fs = std::filesystem;
 
 std::vector<MeasuredPair> read_measured_dir(const std::string& dir) {
-  if (!fs::exists(dir + "/frd")) throw InputError(dir + ": not a measure folder (no frd/ inside)");
+  const MeasureDir md(dir);
+  if (!fs::exists(md.frd_dir())) throw InputError(dir + ": not a measure folder (no frd/ inside)");
   std::vector<MeasuredPair> v;
-  for (const auto& e : fs::directory_iterator(dir + "/frd")) {
+  for (const auto& e : fs::directory_iterator(md.frd_dir())) {
     if (e.path().extension() != ".json") continue;
     MeasuredPair m;
     m.frd = load_frd(e.path().string());
     m.pair = m.frd.pair;
-    const std::string val = dir + "/validation/frd/" + e.path().filename().string();
+    const std::string val = md.validation().frd_dir() + "/" + e.path().filename().string();
     if (fs::exists(val)) m.validation = load_frd(val);
     v.push_back(m);
   }

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <map>
 
+#include "fralab/core/measure_dir.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/lcm_io.h"
 
@@ -63,8 +64,7 @@ int main(int argc, char** argv) {
     if (!from_frd.empty()) {
       if (pairs.empty()) throw InputError("--from-frd " + from_frd + ": no --pair given");
       std::vector<Frd> curves;
-      for (const std::string& p : pairs)
-        curves.push_back(load_frd(from_frd + "/frd/" + pair_file_stem(p) + ".json"));
+      for (const std::string& p : pairs) curves.push_back(load_frd(MeasureDir(from_frd).frd(p)));
       std::sort(curves.begin(), curves.end(),
                 [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
       fit_and_write(curves, o, out, title);

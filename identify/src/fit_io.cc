@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "fralab/core/measure_dir.h"
 #include "fralab/identify/readers.h"
 #include "fralab/identify/state_model.h"
 
@@ -30,13 +31,14 @@ void parse_delay_option(const std::string& text, FitOptions* o) {
 
 std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOptions& o,
                                      const std::string& dir, const std::string& title) {
-  std::filesystem::create_directories(dir + "/tf");
+  const MeasureDir md_dir(dir);
+  std::filesystem::create_directories(md_dir.tf_dir());
   std::vector<FitResult> fits;
   std::vector<MatrixEntry> entries;
   Json actuators = Json::array();
   for (const Frd& f : curves) {
     FitResult r = fit_tf(f.points, o);
-    json_save_file(dir + "/tf/" + pair_file_stem(f.pair) + ".json", fit_to_json(r, f.pair));
+    json_save_file(md_dir.tf(f.pair), fit_to_json(r, f.pair));
     auto [e1, e2] = split_pair(f.pair);
     if (e1.rfind("u_", 0) == 0 && e1.substr(2) == e2) {
       Json a = fit_to_json(r, f.pair);
@@ -55,8 +57,8 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   j["state_model"] = state_model_json(sm);
   j["actuators"] = actuators;
   j["title"] = title;
-  json_save_file(dir + "/transfer_matrix.json", j);
-  std::ofstream md(dir + "/transfer_matrix.md");
+  json_save_file(md_dir.transfer_matrix_json(), j);
+  std::ofstream md(md_dir.transfer_matrix_md());
   md << transfer_matrix_markdown(m, title);
   md << state_model_markdown(sm);
   md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/core/measure_dir.h"
 #include "tape_analysis.h"
 
 namespace fralab {
@@ -18,8 +19,9 @@ struct AnalyzeCommand {
 
 void run(const AnalyzeCommand& c) {
   const auto frds = analyze_tape_file(c.log, c.pairs, c.options);
-  std::filesystem::create_directories(c.out + "/frd");
-  for (const Frd& f : frds) save_frd(c.out + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+  const MeasureDir out(c.out);
+  std::filesystem::create_directories(out.frd_dir());
+  for (const Frd& f : frds) save_frd(out.frd(f.pair), f);
   std::printf("fralab: analysed %zu pairs from %s into %s/frd\n", frds.size(), c.log.c_str(),
               c.out.c_str());
 }

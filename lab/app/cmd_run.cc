@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/core/measure_dir.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -42,16 +43,17 @@ void run(const RunCommand& c) {
   std::printf("fralab: measuring %s and diagnosing %s ...\n", c.measure.engine.c_str(),
               sim.c_str());
   const DiagnoseResult res = run_diagnose(d);
-  const Json rj = json_load_file(c.measure.out + "/measure/run.json");
   const std::string m = c.measure.out + "/measure";
-  std::string tapes = m + "/tape.lcmlog";
+  const MeasureDir md(m);
+  const Json rj = json_load_file(md.run_json());
+  std::string tapes = md.tape();
   if (rj.value("excitation", "") == "auto") {
-    tapes = m + "/multisine/tape.lcmlog";
+    tapes = md.multisine().tape();
     if (!rj["sine"]["inputs"].empty()) {
       std::string ins;
       for (const auto& x : rj["sine"]["inputs"])
         ins += (ins.empty() ? "" : ",") + x.get<std::string>();
-      tapes += " and " + m + "/sine/tape.lcmlog";
+      tapes += " and " + md.sine().tape();
       std::printf(
           "fralab: auto campaign: orthogonal multisine %.0f s, sine for %s (it distorts at the "
           "multisine's level) %.0f s\n",

@@ -6,6 +6,7 @@
 
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
+#include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/plant/embedded_models.h"
@@ -57,13 +58,13 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   m.out = opt.out + "/multisine";
   const MeasureResult mr = run_measure(m);
   res.multisine_engine_s = mr.engine_time_s;
-  const Json mrun = json_load_file(m.out + "/run.json");
+  const Json mrun = json_load_file(MeasureDir(m.out).run_json());
   // 2. Which actuators distort at the multisine's level.
   std::string sine_inputs;
   double act_tc = 0;
   for (int i : excite) {
     const std::string x = model.inputs[i].name;
-    const std::string file = m.out + "/frd/" + pair_file_stem("u_" + x + ":" + x) + ".json";
+    const std::string file = MeasureDir(m.out).frd("u_" + x + ":" + x);
     const double nl = fs::exists(file) ? actuator_distortion(load_frd(file), a.max_rel_sigma) : -1;
     res.nl[x] = nl;
     if (nl > a.nl_threshold) {
@@ -93,7 +94,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
     s.out = opt.out + "/sine";
     const MeasureResult sr = run_measure(s);
     res.sine_engine_s = sr.engine_time_s;
-    sine_run = json_load_file(s.out + "/run.json");
+    sine_run = json_load_file(MeasureDir(s.out).run_json());
     // 4. Merge: the sine's actuator curve replaces the multisine's; the multisine's u_X:O go.
     std::vector<Frd> merged;
     for (const Frd& f : curves) {
@@ -102,14 +103,15 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
         merged.push_back(f);
     }
     for (const std::string& x : res.sine_inputs)
-      merged.push_back(load_frd(s.out + "/frd/" + pair_file_stem("u_" + x + ":" + x) + ".json"));
+      merged.push_back(load_frd(MeasureDir(s.out).frd("u_" + x + ":" + x)));
     curves = std::move(merged);
   }
   // DIR/frd holds exactly the merged curves: an earlier run's frd files there go (its tapes stay).
-  if (fs::exists(opt.out + "/frd"))
-    for (const auto& e : fs::directory_iterator(opt.out + "/frd"))
+  const MeasureDir dir(opt.out);
+  if (fs::exists(dir.frd_dir()))
+    for (const auto& e : fs::directory_iterator(dir.frd_dir()))
       if (e.path().extension() == ".json") fs::remove(e.path());
-  save_model(opt.out + "/engine.json", model);
+  save_model(dir.engine(), model);
   const std::string fit_failure =
       save_curves_and_fit(curves, opt.out, opt.fit_delay,
                           model.name + ": measured transfer matrix (auto campaign)", opt.timeout_s);
@@ -145,13 +147,13 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   run["nl_threshold"] = a.nl_threshold;
   if (mrun.contains("measurement_chain")) run["measurement_chain"] = mrun["measurement_chain"];
   run["pairs"] = res.measure.pairs;
-  json_save_file(opt.out + "/run.json", run);
+  json_save_file(dir.run_json(), run);
   return res;
 }
 
 MeasureResult resume_auto_campaign(const std::string& dir) {
   const RunLock lock(dir, "fralab measure --resume");
-  Json run = json_load_file(dir + "/run.json");
+  Json run = json_load_file(MeasureDir(dir).run_json());
   const std::string state = run.value("state", "");
   if (state == "complete")
     throw InputError(dir + ": the run is complete; there is nothing to resume");
@@ -161,7 +163,7 @@ MeasureResult resume_auto_campaign(const std::string& dir) {
                      "/multisine` (or /sine)");
   std::vector<Frd> curves;
   for (const MeasuredPair& p : read_measured_dir(dir)) curves.push_back(p.frd);
-  const Model model = load_model(dir + "/engine.json");
+  const Model model = load_model(MeasureDir(dir).engine());
   MeasureResult r;
   for (const Frd& f : curves) r.pairs.push_back(f.pair);
   r.engine_time_s = run.value("engine_time_s", 0.0);
@@ -173,7 +175,7 @@ MeasureResult resume_auto_campaign(const std::string& dir) {
                           model.name + ": measured transfer matrix (auto campaign)");
   record_fit_outcome(run, r, fit_failure, dir);
   run["resumed"] = run.value("resumed", 0) + 1;
-  json_save_file(dir + "/run.json", run);
+  json_save_file(MeasureDir(dir).run_json(), run);
   return r;
 }
 

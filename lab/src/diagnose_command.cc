@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lcm_io.h"
@@ -39,7 +40,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     MeasureOptions v = m;
     v.seed = m.seed + 1;
     v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
-    v.out = c.out + "/measure/validation";
+    v.out = MeasureDir(m.out).validation().root;
     if (const MeasureResult r = run_measure(v); r.partial())
       res.partial.push_back(partial_run_message(r, v.out));
     data_dir = m.out;
@@ -49,7 +50,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   auto data = read_measured_dir(data_dir);
   // The lab's measurement chain, as the measurement recorded it (else an ideal one).
   DiagnoseOptions opt;
-  const std::string run_file = data_dir + "/run.json";
+  const std::string run_file = MeasureDir(data_dir).run_json();
   bool chain_known = false;
   if (fs::exists(run_file)) {
     const Json run = json_load_file(run_file);
@@ -59,7 +60,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     }
   }
   // Else the tape's own record of it (the start event's message), when the folder has the tape.
-  const std::string tape = data_dir + "/tape.lcmlog";
+  const std::string tape = MeasureDir(data_dir).tape();
   if (!chain_known && fs::exists(tape)) {
     for (const StatusEvent& e : read_tape_run(tape).events)
       if (e.state == RunState::kStart)

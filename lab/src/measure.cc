@@ -13,6 +13,7 @@
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
+#include "fralab/core/measure_dir.h"
 #include "fralab/core/text.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/lab/auto_campaign.h"
@@ -134,7 +135,9 @@ namespace {
 // The run's record, DIR/run.json: written when the run starts (state "running", with what is
 // needed to resume it), and again when it ends ("complete", "failed" with the reason,
 // "interrupted").
-void save_run(const std::string& out, const Json& run) { json_save_file(out + "/run.json", run); }
+void save_run(const std::string& out, const Json& run) {
+  json_save_file(MeasureDir(out).run_json(), run);
+}
 
 // The options of the run recorded in DIR/run.json (--resume DIR).
 MeasureOptions options_from_run(const std::string& dir, const Json& run) {
@@ -143,7 +146,7 @@ MeasureOptions options_from_run(const std::string& dir, const Json& run) {
   o.resume = true;
   try {
     const Json& opt = run.at("options");
-    o.engine = dir + "/engine.json";
+    o.engine = MeasureDir(dir).engine();
     o.seed = opt.at("seed").get<uint64_t>();
     o.no_noise = opt.at("no_noise").get<bool>();
     o.fit_delay = opt.at("fit_delay").get<std::string>();
@@ -169,9 +172,10 @@ std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir
                                 double timeout_s) {
   std::sort(curves.begin(), curves.end(),
             [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
-  fs::create_directories(dir + "/frd");
-  fs::create_directories(dir + "/logs");
-  for (const Frd& f : curves) save_frd(dir + "/frd/" + pair_file_stem(f.pair) + ".json", f);
+  const MeasureDir md(dir);
+  fs::create_directories(md.frd_dir());
+  fs::create_directories(md.logs_dir());
+  for (const Frd& f : curves) save_frd(md.frd(f.pair), f);
   FitOptions fo;
   parse_delay_option(fit_delay, &fo);  // a bad --delay is the caller's error, not a failed fit
   std::vector<std::string> args = {module_path("fralab-identify"),
@@ -185,7 +189,7 @@ std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir
                                    title};
   for (const Frd& f : curves) args.insert(args.end(), {"--pair", f.pair});
   Supervisor sup;
-  sup.start({"identify", args, dir + "/logs/identify.log", /*host=*/""});
+  sup.start({"identify", args, md.log("identify"), /*host=*/""});
   try {
     sup.wait_for({"identify"}, timeout_s);
   } catch (const Interrupted&) {
@@ -224,8 +228,9 @@ MeasureResult run_measure(const MeasureOptions& given) {
     o.auto_campaign = false;  // its runs are plain ones
     return run_auto_campaign(o).measure;
   }
-  if (given.resume && !fs::exists(given.out + "/run.json")) {
-    if (fs::exists(given.out + "/multisine/run.json"))
+  const MeasureDir given_dir(given.out);
+  if (given.resume && !fs::exists(given_dir.run_json())) {
+    if (fs::exists(given_dir.multisine().run_json()))
       throw InputError(given.out +
                        ": an auto campaign that did not end resumes its runs one by one: "
                        "`fralab measure --resume " +
@@ -234,14 +239,14 @@ MeasureResult run_measure(const MeasureOptions& given) {
                      "/run.json: no such file: --resume needs the folder of a run started by "
                      "`fralab measure`");
   }
-  if (given.resume && json_load_file(given.out + "/run.json").value("excitation", "") == "auto")
+  if (given.resume && json_load_file(given_dir.run_json()).value("excitation", "") == "auto")
     return resume_auto_campaign(given.out);
   // The folder is this run's until it ends: a second run or a resume on it is refused.
   const RunLock lock(given.out, given.resume ? "fralab measure --resume" : "fralab measure");
   Json run;
   MeasureOptions o = given;
   if (given.resume) {
-    run = json_load_file(given.out + "/run.json");
+    run = json_load_file(given_dir.run_json());
     if (run.value("state", "") == "complete")
       throw InputError(given.out + ": the run is complete; there is nothing to resume");
     o = options_from_run(given.out, run);
@@ -249,9 +254,10 @@ MeasureResult run_measure(const MeasureOptions& given) {
   Model model = load_model_or_embedded(o.engine);
   o.acquire.validate();
   std::vector<int> excite = select_inputs(model, o.acquire.inputs);
-  fs::create_directories(o.out + "/frd");
-  fs::create_directories(o.out + "/logs");
-  const std::string engine_file = o.out + "/engine.json";
+  const MeasureDir dir(o.out);
+  fs::create_directories(dir.frd_dir());
+  fs::create_directories(dir.logs_dir());
+  const std::string engine_file = dir.engine();
   if (!o.resume) save_model(engine_file, model);  // the exact model measured, beside its tape
 
   MeasureResult r;
@@ -267,7 +273,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
   url = resolve_lcm_url(url);  // ttl=1 needs FRALAB_NETWORK=1
   r.run_id =
       o.resume ? run.at("run_id").get<std::string>() : "run-" + std::to_string(salt % 1000000007u);
-  const std::string tape = o.out + "/tape.lcmlog";
+  const std::string tape = dir.tape();
   std::string inputs_csv;
   for (int i : excite) inputs_csv += (inputs_csv.empty() ? "" : ",") + model.inputs[i].name;
   AcquireOptions ao = o.acquire;
@@ -321,7 +327,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
   run["lcm_url"] = url;
   run["state"] = "running";
   save_run(o.out, run);
-  auto log = [&](const std::string& n) { return o.out + "/logs/" + n + ".log"; };
+  auto log = [&](const std::string& n) { return dir.log(n); };
 
   Supervisor::catch_stop_signals();
   // Deputies for the processes on other hosts (declared before the supervisor: it uses them until
@@ -435,7 +441,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
                                       "--first-status",
                                       std::to_string(rp.first_status),
                                       "--summary",
-                                      o.out + "/acquire.json",
+                                      dir.acquire_summary(),
                                       "--chain",
                                       chain.dump()};
       for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
@@ -545,8 +551,8 @@ MeasureResult run_measure(const MeasureOptions& given) {
   }
   const auto camp = make_campaign(model, ao, r.run_id);
   double engine_total = double(camp->total_samples()) / o.acquire.sample_rate_hz;
-  if (fs::exists(o.out + "/acquire.json")) {
-    Json acq_summary = json_load_file(o.out + "/acquire.json");
+  if (fs::exists(dir.acquire_summary())) {
+    Json acq_summary = json_load_file(dir.acquire_summary());
     // The adaptive campaign grew while running: its length is the summary's.
     if (ao.adaptive.enabled())
       engine_total = acq_summary.at("samples").get<double>() / o.acquire.sample_rate_hz;
@@ -557,8 +563,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
   if (ao.adaptive.enabled()) {  // each step as decided, from the curves (a resumed run's too)
     std::vector<Frd> curves;
     for (const std::string& p : r.pairs)
-      if (const std::string f = o.out + "/frd/" + pair_file_stem(p) + ".json"; fs::exists(f))
-        curves.push_back(load_frd(f));
+      if (const std::string f = dir.frd(p); fs::exists(f)) curves.push_back(load_frd(f));
     const auto& adaptive = dynamic_cast<const AdaptiveSineCampaign&>(*camp);
     std::vector<int> limits;
     for (int g = 0; g < adaptive.n_steps(); ++g) limits.push_back(adaptive.limit(g));
