@@ -11,7 +11,8 @@
 //   - a stopped (SIGSTOP) analyser: the run fails naming it as silent;
 //   - two runs sharing one port: neither takes the other's messages;
 //   - a resume or a second run on a live run's folder: refused, the live run completes;
-//   - a tape with a damaged stretch: read past it, and resume measures again what it held.
+//   - a tape with a damaged stretch: read past it, and resume measures again what it held;
+//   - an identifier that crashes after measuring: a partial run, diagnosed, then fitted by resume.
 // FRALAB_FAULT_HOG_RUNS sets the number of runs under CPU hogs (default 20).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -307,6 +308,45 @@ TEST(Faults, ADamagedStretchOfTapeIsPassedOverAndResumeMeasuresItAgain) {
   EXPECT_THAT(c.output, HasSubstr("damaged stretch: bytes "));
   EXPECT_THAT(c.output, HasSubstr("resuming run"));
   expect_identical(d);
+}
+
+// An identifier that crashes after everything is measured (a stand-in fralab-identify that kills
+// itself with SIGSEGV, beside a copy of the driver: the launcher starts the modules beside itself):
+// the diagnosis of an auto campaign still runs on the curves, the measurement ends partial with the
+// crash named (exit status 3), and `--resume` with the real identifier fits it whole.
+TEST(Faults, AnIdentifierThatCrashesAfterMeasuringLeavesAPartialRunThatIsDiagnosed) {
+  const std::string bin = tmpdir("crashing_identifier_bin"), d = tmpdir("crashing_identifier");
+  for (const char* m :
+       {"fralab", "fralab-plant", "fralab-acquire", "fralab-analyze", "fralab-record"})
+    fs::copy_file(kBin + "/" + m, bin + "/" + m);
+  {
+    std::ofstream f(bin + "/fralab-identify");
+    f << "#!/bin/sh\nkill -SEGV $$\n";
+  }
+  fs::permissions(bin + "/fralab-identify", fs::perms::owner_all, fs::perm_options::add);
+  auto c = sh("(" + bin +
+              "/fralab diagnose --simulation j85_95_sim --engine j85_95 --input Wf,A8 --band 0.5:20"
+              " --points-per-decade 3 --seed 3 --excitation auto --no-plots --out " +
+              d + "; echo exit=$?)");
+  EXPECT_THAT(c.output, HasSubstr("exit=3")) << c.output;
+  EXPECT_THAT(c.output, HasSubstr(d + "/measure: partial run: everything was measured"));
+  EXPECT_THAT(c.output, HasSubstr("identify was killed by signal 11"));
+  const Json diagnosis = json_load_file(d + "/diagnosis.json");
+  EXPECT_GE(diagnosis["findings"].size(), 2u)
+      << "the curves were diagnosed";  // A8's pole, backlash
+  Json run = json_load_file(d + "/measure/run.json");
+  EXPECT_EQ(run["state"], "partial");
+  EXPECT_EQ(run["failed_step"]["step"], "identify");
+  EXPECT_FALSE(fs::exists(d + "/measure/transfer_matrix.json"));
+  c = sh(kBin + "/fralab measure --resume " + d + "/measure");
+  ASSERT_EQ(c.status, 0) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("fitting its"));
+  run = json_load_file(d + "/measure/run.json");
+  EXPECT_EQ(run["state"], "complete");
+  EXPECT_FALSE(run.contains("failed_step"));
+  EXPECT_TRUE(fs::exists(d + "/measure/transfer_matrix.json"));
+  for (const auto& f : fs::directory_iterator(d + "/measure/frd"))
+    EXPECT_TRUE(fs::exists(d + "/measure/tf/" + f.path().filename().string())) << f.path();
 }
 
 TEST(Faults, AStoppedAnalyserIsNamedAsSilent) {
