@@ -1,9 +1,26 @@
-// The linear catalogue: its order (BIC ties go to the first) and lookup by kind.
+// The catalogue: every cause's unit, the order linear candidates are tried in (BIC ties go to the
+// first), and lookup by kind. A new cause is its own unit (causes/<cause>.cc), its accessor
+// declared and listed here (docs/development.md, "Adding a cause to the diagnosis"). Beside it,
+// what every linear unit shares: where a finding's factor goes, and the consistency test.
 #include <cmath>
 
 #include "cause.h"
 
 namespace fralab::diag {
+
+// Each cause's unit (diagnose/src/causes/<cause>.cc).
+const LinearCause& gain_mismatch_cause();
+const LinearCause& time_delay_cause();
+const LinearCause& missing_lag_cause();
+const LinearCause& missing_lead_cause();
+const LinearCause& missing_resonance_cause();
+const LinearCause& pole_shift_cause();
+const LinearCause& damping_error_cause();
+const LinearCause& sign_error_cause();
+const CauseUnit& hysteresis_cause();
+const CauseUnit& deadband_cause();
+const CauseUnit& measurement_coupling_cause();
+const CauseUnit& missing_path_cause();
 
 const std::vector<const LinearCause*>& linear_catalogue() {
   static const std::vector<const LinearCause*> v{&gain_mismatch_cause(),     &time_delay_cause(),
@@ -13,10 +30,41 @@ const std::vector<const LinearCause*>& linear_catalogue() {
   return v;
 }
 
-const LinearCause* linear_cause(CauseKind kind) {
-  for (const LinearCause* c : linear_catalogue())
+const std::vector<const CauseUnit*>& cause_units() {
+  static const std::vector<const CauseUnit*> v = [] {
+    std::vector<const CauseUnit*> all(linear_catalogue().begin(), linear_catalogue().end());
+    for (const CauseUnit* u : {&hysteresis_cause(), &deadband_cause(),
+                               &measurement_coupling_cause(), &missing_path_cause()})
+      all.push_back(u);
+    return all;
+  }();
+  return v;
+}
+
+const CauseUnit* cause_unit(CauseKind kind) {
+  for (const CauseUnit* c : cause_units())
     if (c->kind() == kind) return c;
   return nullptr;
+}
+
+void LinearCause::apply(Model& m, const Finding& f) const {
+  if (f.scope == Scope::kInput && f.output.empty() && f.pairs.size() == 1 &&
+      split_pair(f.pairs[0]).first == "u_" + f.input) {
+    ModelInput& in = m.inputs[m.input_index(f.input)];
+    if (!in.actuator) in.actuator = Tf{};
+    extend(*in.actuator, f);
+  } else if (f.scope == Scope::kOutput) {
+    ModelOutput& out = m.outputs[m.output_index(f.output)];
+    if (!out.sensor) out.sensor = Tf{};
+    extend(*out.sensor, f);
+  } else {
+    for (auto& p : m.paths) {
+      if (f.scope == Scope::kPlant || (f.scope == Scope::kInput && p.input == f.input) ||
+          (f.scope == Scope::kPath && p.input == f.input && p.output == f.output)) {
+        extend(p.tf, f);
+      }
+    }
+  }
 }
 
 bool params_within(const Cause& a, const Cause& b, const std::vector<std::string>& keys,

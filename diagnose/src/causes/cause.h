@@ -1,10 +1,18 @@
-// Internal to the diagnosis: the interface every linear cause of the catalogue implements, one
-// file per cause in diagnose/src/causes/. A linear cause is a factor F(s; theta) multiplying the
-// simulated response (diagnose.h states each factor and its parameters); the nonlinear causes
-// (hysteresis, deadband: describing functions) and the measurement coupling are fitted jointly
-// over several pairs and live in nonlinear.h and coupling.h beside this file.
+// Internal to the diagnosis: the interface every cause of the catalogue implements, one unit per
+// cause in diagnose/src/causes/ (docs/method/diagnosis.md, "The catalogue"). A unit says all the
+// diagnosis needs to know of its cause: its word in diagnosis.json, its primary parameter (whose
+// 1-sigma interval is reported and whose simulated value decides whether the data resolve it), the
+// domain that interval is searched in, and how a finding of it extends a model.
+//
+// A linear cause (LinearCause) is a factor F(s; theta) multiplying the simulated response
+// (diagnose.h states each factor and its parameters), fitted pair by pair; a finding of it extends
+// the actuator, the sensor or the paths its scope covers. The nonlinear causes (hysteresis,
+// deadband: describing functions, nonlinear.h), the measurement coupling (measurement_coupling.h)
+// and a missing path (missing_path.h) are fitted jointly over several pairs by the functions
+// beside this file, and extend the model in their own way.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,39 +22,64 @@
 
 namespace fralab::diag {
 
-class LinearCause {
+/// A finding's primary parameter (docs/formats.md §6 key; "" when the cause has no continuous
+/// parameter, as a sign error or a whole missing path) and its value in the simulation: nullopt
+/// when the simulation lacks what the finding adds, so that "the simulation's value" is the
+/// finding's absence.
+struct PrimaryParameter {
+  std::string key;
+  std::optional<double> simulated;
+};
+
+/// Where the interval search brackets the primary parameter: a scale (a corner, a frequency, a
+/// width) stays positive; `floor` is the least first step of the bracket, in the parameter's units.
+struct IntervalDomain {
+  bool positive = false;
+  double floor = 1e-6;
+};
+
+class CauseUnit {
  public:
-  virtual ~LinearCause() = default;
+  virtual ~CauseUnit() = default;
   virtual CauseKind kind() const = 0;
-  /// Fits the cause to what remains of the pair (p.factor applied) and appends its candidates
-  /// (none, one, or one per simulated pole), each with chi2 and F filled in.
-  virtual void fit(const Model& sim, const PairFit& p, const DiagnoseOptions& opt,
-                   std::vector<Cause>* out) const = 0;
-  /// Whether two fits of this cause on different pairs are the same effect (scope grouping).
-  virtual bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const = 0;
-  /// Extends a transfer function (path, actuator or sensor) by the finding's factor.
-  virtual void extend(Tf& t, const Finding& f) const = 0;
+  /// The cause's word, the `cause` of diagnosis.json. Part of the format: add, never rename.
+  virtual const char* name() const = 0;
+  virtual PrimaryParameter primary_parameter(const Finding& f) const = 0;
+  virtual IntervalDomain interval_domain() const { return {}; }
+  /// Extends the model by the finding.
+  virtual void apply(Model& m, const Finding& f) const = 0;
+  /// Whether two fits of this cause on different pairs are the same effect (scope grouping). A
+  /// cause fitted jointly over several pairs is never grouped.
+  virtual bool consistent(const Cause&, const Cause&, const DiagnoseOptions&) const {
+    return false;
+  }
   /// What the residual shows, for the report (scope is added by the caller).
   virtual std::string explain(const Finding& f) const = 0;
 };
 
-/// The catalogue in the order candidates are tried (a tie in BIC goes to the first).
+class LinearCause : public CauseUnit {
+ public:
+  /// Fits the cause to what remains of the pair (p.factor applied) and appends its candidates
+  /// (none, one, or one per simulated pole), each with chi2 and F filled in.
+  virtual void fit(const Model& sim, const PairFit& p, const DiagnoseOptions& opt,
+                   std::vector<Cause>* out) const = 0;
+  bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override = 0;
+  /// Extends a transfer function (path, actuator or sensor) by the finding's factor.
+  virtual void extend(Tf& t, const Finding& f) const = 0;
+  /// Extends by scope: a finding of the actuator pair u_X:X alone extends X's actuator, one of an
+  /// output its sensor, else every path the scope covers (docs/method/diagnosis.md, "Scope").
+  void apply(Model& m, const Finding& f) const final;
+};
+
+/// The linear causes in the order candidates are tried (a tie in BIC goes to the first).
 const std::vector<const LinearCause*>& linear_catalogue();
-/// The unit of one linear cause; nullptr for hysteresis, deadband and measurement_coupling.
-const LinearCause* linear_cause(CauseKind kind);
+/// Every cause: the linear catalogue, then the causes fitted jointly.
+const std::vector<const CauseUnit*>& cause_units();
+/// The unit of a cause (nullptr: none, which no CauseKind is).
+const CauseUnit* cause_unit(CauseKind kind);
 
 /// |v - u| <= tol_rel |v| for every key of `a` in `keys` (both must carry it).
 bool params_within(const Cause& a, const Cause& b, const std::vector<std::string>& keys,
                    double tol_rel);
-
-// Each cause's unit (diagnose/src/causes/<cause>.cc).
-const LinearCause& gain_mismatch_cause();
-const LinearCause& time_delay_cause();
-const LinearCause& missing_lag_cause();
-const LinearCause& missing_lead_cause();
-const LinearCause& missing_resonance_cause();
-const LinearCause& pole_shift_cause();
-const LinearCause& damping_error_cause();
-const LinearCause& sign_error_cause();
 
 }  // namespace fralab::diag

@@ -30,6 +30,11 @@ std::vector<Root> chain_pairs(const Model& m, const PairFit& p) {
 class DampingError final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kDampingError; }
+  const char* name() const override { return "damping_error"; }
+  // to_zeta, in the simulation the pole pair's own damping from_zeta.
+  PrimaryParameter primary_parameter(const Finding& f) const override {
+    return {"to_zeta", f.parameters.at("from_zeta")};
+  }
   void fit(const Model& m, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
     constexpr int kGrid = 80;

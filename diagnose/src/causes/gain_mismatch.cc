@@ -10,6 +10,10 @@ namespace {
 class GainMismatch final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kGainMismatch; }
+  const char* name() const override { return "gain_mismatch"; }
+  // gain_db, 0 dB in the simulation; its interval's bracket starts at least 1e-3 dB wide.
+  PrimaryParameter primary_parameter(const Finding&) const override { return {"gain_db", 0.0}; }
+  IntervalDomain interval_domain() const override { return {false, 1e-3}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
     double num = 0, den = 0;

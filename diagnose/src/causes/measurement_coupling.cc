@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "cause.h"
+
 namespace fralab::diag {
 
 std::optional<Finding> fit_measurement_coupling(const Model& sim, const ModelInput& in,
@@ -79,6 +81,30 @@ std::optional<Finding> fit_measurement_coupling(const Model& sim, const ModelInp
     }
   }
   return f;
+}
+
+namespace {
+
+// The coupling as a cause: the finding's position channel records its coupled output times the
+// gain, which is 0 in the simulation (the primary parameter). The explanation is written when
+// fitted.
+class MeasurementCoupling final : public CauseUnit {
+ public:
+  CauseKind kind() const override { return CauseKind::kMeasurementCoupling; }
+  const char* name() const override { return "measurement_coupling"; }
+  PrimaryParameter primary_parameter(const Finding&) const override { return {"gain", 0.0}; }
+  void apply(Model& m, const Finding& f) const override {
+    m.inputs[m.input_index(f.input)].measurement_coupling.push_back(
+        {f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
+  }
+  std::string explain(const Finding& f) const override { return f.explanation; }
+};
+
+}  // namespace
+
+const CauseUnit& measurement_coupling_cause() {
+  static const MeasurementCoupling c;
+  return c;
 }
 
 }  // namespace fralab::diag

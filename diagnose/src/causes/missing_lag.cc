@@ -1,20 +1,14 @@
-// missing_lag: F = 1 / (1 + s/a), a real pole the simulation lacks, corner_rad_s = a
-// (corner.h: the search). Consistent across pairs within DiagnoseOptions::consistent_rel.
+// missing_lag: F = 1 / (1 + s/a), a real pole the simulation lacks, corner_rad_s = a (corner.h:
+// the search, consistency and primary parameter it shares with missing_lead).
 #include "corner.h"
 
 namespace fralab::diag {
 namespace {
 
-class MissingLag final : public LinearCause {
+class MissingLag final : public CornerCause {
  public:
   CauseKind kind() const override { return CauseKind::kMissingLag; }
-  void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
-           std::vector<Cause>* out) const override {
-    out->push_back(fit_corner(kind(), false, p, opt));
-  }
-  bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    return params_within(a, b, {"corner_rad_s"}, opt.consistent_rel);
-  }
+  const char* name() const override { return "missing_lag"; }
   void extend(Tf& t, const Finding& f) const override {
     t.poles.push_back(Root::Real(-f.parameters.at("corner_rad_s")));
   }
@@ -22,6 +16,9 @@ class MissingLag final : public LinearCause {
     return "a -20 dB/decade corner at " + fmt(f.parameters.at("corner_rad_s")) +
            " rad/s with its -90 deg phase, absent from the simulation";
   }
+
+ protected:
+  bool lead() const override { return false; }
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "cause.h"
 #include "fralab/identify/tfns.h"
 #include "fralab/identify/transfer_matrix.h"
 
@@ -73,6 +74,32 @@ std::optional<Finding> fit_missing_path(const Model& sim, const PairFit& p,
                   " against zero over " + std::to_string(N) + " points): the path " +
                   tf_to_text(r.tf) + " fitted";
   return f;
+}
+
+namespace {
+
+// The missing path as a cause: the fitted tf added as the path X:O (unless the model has one), its
+// gain the finding's. A whole path has no one primary parameter: it is resolved by its absence and
+// carries no interval. The explanation is written when fitted.
+class MissingPath final : public CauseUnit {
+ public:
+  CauseKind kind() const override { return CauseKind::kMissingPath; }
+  const char* name() const override { return "missing_path"; }
+  PrimaryParameter primary_parameter(const Finding&) const override { return {"", std::nullopt}; }
+  void apply(Model& m, const Finding& f) const override {
+    if (m.path(f.output, f.input) || !f.tf) return;
+    Tf t = *f.tf;
+    t.gain = f.parameters.at("gain");
+    m.paths.push_back({f.output, f.input, t, Json::object()});
+  }
+  std::string explain(const Finding& f) const override { return f.explanation; }
+};
+
+}  // namespace
+
+const CauseUnit& missing_path_cause() {
+  static const MissingPath c;
+  return c;
 }
 
 }  // namespace fralab::diag

@@ -15,6 +15,13 @@ namespace {
 class MissingResonance final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kMissingResonance; }
+  const char* name() const override { return "missing_resonance"; }
+  // wn_rad_s: the simulation lacks the resonance (its value there is its absence); a frequency
+  // stays positive.
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {"wn_rad_s", std::nullopt};
+  }
+  IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
     const double wlo = p.w.front(), whi = p.w.back();

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "cause.h"
 #include "fralab/plant/nonlinearity.h"
 
 namespace fralab::diag {
@@ -113,6 +114,42 @@ std::string explain_nonlinearity(const PairFit& p, const Cause& nl, const std::v
      << fmt(std::abs(n0), 3) << " at +-" << fmt(p.amp[low[0]], 3) << " (describing function of a "
      << to_string(nl.cause) << " of width " << fmt(nl.params.at("width"), 3) << ")";
   return ex.str();
+}
+
+namespace {
+
+// hysteresis and deadband as causes: an element in the actuator of the finding's input, of
+// `width` in input units, which the simulation lacks (its primary parameter, a positive scale).
+// The explanation is written when fitted (explain_nonlinearity).
+class Nonlinearity final : public CauseUnit {
+ public:
+  Nonlinearity(CauseKind kind, const char* name) : kind_(kind), name_(name) {}
+  CauseKind kind() const override { return kind_; }
+  const char* name() const override { return name_; }
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {"width", std::nullopt};
+  }
+  IntervalDomain interval_domain() const override { return {true, 1e-6}; }
+  void apply(Model& m, const Finding& f) const override {
+    m.inputs[m.input_index(f.input)].nonlinearity.push_back({name_, f.parameters.at("width")});
+  }
+  std::string explain(const Finding& f) const override { return f.explanation; }
+
+ private:
+  CauseKind kind_;
+  const char* name_;
+};
+
+}  // namespace
+
+const CauseUnit& hysteresis_cause() {
+  static const Nonlinearity c(CauseKind::kHysteresis, "hysteresis");
+  return c;
+}
+
+const CauseUnit& deadband_cause() {
+  static const Nonlinearity c(CauseKind::kDeadband, "deadband");
+  return c;
 }
 
 }  // namespace fralab::diag

@@ -28,6 +28,12 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
 class PoleShift final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kPoleShift; }
+  const char* name() const override { return "pole_shift"; }
+  // to_rad_s, in the simulation the pole's own frequency from_rad_s; a frequency stays positive.
+  PrimaryParameter primary_parameter(const Finding& f) const override {
+    return {"to_rad_s", f.parameters.at("from_rad_s")};
+  }
+  IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   void fit(const Model& m, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
     constexpr int kGrid = 120;

@@ -9,6 +9,9 @@ namespace {
 class SignError final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kSignError; }
+  const char* name() const override { return "sign_error"; }
+  // No continuous parameter: no interval, and resolved against its absence.
+  PrimaryParameter primary_parameter(const Finding&) const override { return {"", std::nullopt}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
     Cause c{kind(), {{"sign", -1.0}}, std::vector<C>(p.w.size(), C(-1, 0)), 0, 1, ""};

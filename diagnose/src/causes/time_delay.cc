@@ -13,6 +13,11 @@ constexpr double kGridStepS = 0.25e-3;  // the grid before Brent's method (9 deg
 class TimeDelay final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kTimeDelay; }
+  const char* name() const override { return "time_delay"; }
+  // delay_s, 0 in the simulation (an added delay); its interval's bracket starts at least 10 us
+  // wide.
+  PrimaryParameter primary_parameter(const Finding&) const override { return {"delay_s", 0.0}; }
+  IntervalDomain interval_domain() const override { return {false, 1e-5}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
     auto F = [&](double tau) { return factor_of(p.w, [&](C s) { return std::exp(-s * tau); }); };

@@ -1,0 +1,80 @@
+// Stage 1, prepare (docs/method/diagnosis.md, "The stages"): the multisines that excited each
+// input, and every pair's usable points with the simulation's response through the lab's chain
+// there. Pairs of a path the simulation lacks are set aside for the missing-path fit.
+#include <algorithm>
+#include <cmath>
+
+#include "../causes/missing_path.h"
+#include "stages.h"
+
+namespace fralab::diag {
+namespace {
+
+bool is_actuator_pair(const std::string& e1, const std::string& e2) { return e1 == "u_" + e2; }
+
+// The input a pair's excitation drives: X of u_X:X, u_X:O or X:O.
+std::string input_of(const std::string& pair) {
+  const std::string e1 = split_pair(pair).first;
+  return e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
+}
+
+}  // namespace
+
+const MultisineExcitation* multisine_of(const DiagnosisRun& r, const std::string& pair,
+                                        double line_amplitude, bool validation) {
+  if (!(line_amplitude > 0)) return nullptr;
+  auto& set = validation ? r.ms_val : r.ms_fit;
+  auto it = set.find(input_of(pair));
+  return it == set.end() ? nullptr : &it->second;
+}
+
+void prepare(DiagnosisRun& r) {
+  const Model& sim = r.sim;
+  const DiagnoseOptions& opt = r.opt;
+  // Inputs excited by a multisine, from their actuator curve (else another curve of theirs): the
+  // fitting data's and the validation's (another amplitude).
+  for (bool actuator : {true, false})
+    for (const auto& mp : r.data) {
+      auto [e1, e2] = split_pair(mp.pair);
+      if (is_actuator_pair(e1, e2) != actuator) continue;
+      const std::string in = input_of(mp.pair);
+      if (!r.ms_fit.count(in))
+        if (auto ms = multisine_excitation(mp.frd)) r.ms_fit.emplace(in, std::move(*ms));
+      if (!r.ms_val.count(in))
+        if (auto ms = multisine_excitation(mp.validation)) r.ms_val.emplace(in, std::move(*ms));
+    }
+  // The pairs the simulation can speak to (and those it has no path for).
+  for (const auto& mp : r.data) {
+    auto [e1, e2] = split_pair(mp.pair);
+    PairFit p;
+    p.pair = mp.pair;
+    p.e1 = e1;
+    p.e2 = e2;
+    if (is_actuator_pair(e1, e2)) {
+      p.input = e2;
+    } else if (e1.rfind("u_", 0) != 0) {
+      p.input = e1;
+      p.output = e2;
+    } else {
+      continue;  // command-relative pairs repeat what X:O and u_X:X say
+    }
+    if (sim.input_index(p.input) < 0 || (!p.output.empty() && sim.output_index(p.output) < 0))
+      continue;
+    if (!p.output.empty() && !sim.path(p.output, p.input)) {  // a path the simulation lacks
+      r.absent.push_back(absent_pair_points(mp, opt));
+      continue;
+    }
+    for (const auto& pt : mp.frd.points) {
+      if (!usable(pt, opt)) continue;
+      const MultisineExcitation* ms = multisine_of(r, mp.pair, pt.line_amplitude, false);
+      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain, ms);
+      if (!s || std::abs(*s) == 0) continue;
+      add_point(p, pt, *s, opt);
+      if (ms) p.ms = ms;
+    }
+    if (p.w.size() >= 3) r.pairs.push_back(std::move(p));
+  }
+  r.original = r.pairs;  // before the findings (sigma_eff: fit_causes copies its own back)
+}
+
+}  // namespace fralab::diag

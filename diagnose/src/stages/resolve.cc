@@ -1,0 +1,116 @@
+// Stage 6, resolved by the data (docs/method/diagnosis.md, "The stages"): each finding's primary
+// parameter (its cause's unit names it) gets a 1-sigma interval, where chi2 over the finding's
+// pairs, every other finding in place and this parameter alone moved, rises by
+// s = max(1, chi2_min / N) above its minimum; a finding whose simulated value (or absence) does
+// not raise chi2 by more than s is dropped, said why.
+#include <algorithm>
+#include <array>
+#include <boost/math/tools/roots.hpp>
+#include <cmath>
+#include <functional>
+
+#include "stages.h"
+
+namespace fralab::diag {
+namespace {
+
+// The 1-sigma interval of a parameter: where g(v) = chi2(v) - (chi2_min + s) crosses zero on
+// each side of the fitted value v0 (g(v0) < 0). The bracket starts 1e-3 |v0| (or the domain's
+// floor, in the parameter's units) away and doubles, at most 60 times; the crossing is found by
+// TOMS 748. A positive domain (corners, frequencies, widths) stays positive. +-inf when g never
+// turns positive.
+std::array<double, 2> parameter_interval(const std::function<double(double)>& g, double v0,
+                                         const IntervalDomain& domain) {
+  const bool positive = domain.positive;
+  const double floor = domain.floor;
+  std::array<double, 2> out{-INFINITY, INFINITY};
+  for (int side = 0; side < 2; ++side) {
+    const double dir = side ? 1.0 : -1.0;
+    double step = std::max(1e-3 * std::abs(v0), floor);
+    double inner = v0, outer = v0;
+    bool found = false;
+    for (int k = 0; k < 60; ++k) {
+      outer = v0 + dir * step;
+      if (positive && outer <= 0) outer = v0 * std::pow(0.5, k + 1);  // toward 0, never at it
+      if (g(outer) > 0) {
+        found = true;
+        break;
+      }
+      inner = outer;
+      step *= 2;
+    }
+    if (!found) continue;
+    boost::uintmax_t iters = 60;
+    try {
+      const auto r =
+          boost::math::tools::toms748_solve(g, std::min(inner, outer), std::max(inner, outer),
+                                            boost::math::tools::eps_tolerance<double>(30), iters);
+      out[size_t(side)] = 0.5 * (r.first + r.second);
+    } catch (const std::exception&) {  // a profile too flat to bracket cleanly: the bracket's edge
+      out[size_t(side)] = outer;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void resolve(DiagnosisRun& r) {
+  const DiagnoseOptions& opt = r.opt;
+  std::vector<Finding>& findings = r.findings;
+  std::vector<Finding> kept;
+  for (size_t i = 0; i < findings.size(); ++i) {
+    Finding& f = findings[i];
+    // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
+    std::vector<const PairFit*> mine;
+    size_t n = 0;
+    for (const std::vector<PairFit>* set : {&r.original, &r.absent})
+      for (const auto& p : *set)
+        if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) {
+          mine.push_back(&p);
+          n += p.w.size();
+        }
+    auto chi2_of_model = [&](const Model& m) {
+      double c = 0;
+      for (const PairFit* p : mine)
+        for (size_t q = 0; q < p->w.size(); ++q) {
+          const C g =
+              model_pair_response(m, p->pair, p->w[q], p->amp[q], opt.chain, p->ms).value_or(0.0);
+          c += std::norm(p->meas[q] - g) / (p->sig[q] * p->sig[q]);
+        }
+      return c;
+    };
+    const double c_min = chi2_of_model(extended_by(r, findings, findings.size()));
+    const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+    const CauseUnit& unit = *cause_unit(f.cause);
+    const auto [key, sim_value] = unit.primary_parameter(f);
+    double c_sim = 0;
+    if (sim_value) {
+      std::vector<Finding> moved = findings;
+      moved[i].parameters[key] = *sim_value;
+      c_sim = chi2_of_model(extended_by(r, moved, findings.size()));
+    } else {
+      c_sim = chi2_of_model(extended_by(r, findings, i));  // the simulation lacks it: without it
+    }
+    if (!key.empty()) {
+      auto chi2_at = [&](double v) {
+        std::vector<Finding> moved = findings;
+        moved[i].parameters[key] = v;
+        return chi2_of_model(extended_by(r, moved, findings.size())) - (c_min + s);
+      };
+      f.intervals[key] = parameter_interval(chi2_at, f.parameters.at(key), unit.interval_domain());
+    }
+    if (c_sim - c_min > s) {
+      kept.push_back(f);
+      continue;
+    }
+    std::string why = "not resolved by the data: chi2 over its pairs is " + fmt(c_min) +
+                      " with it and " + fmt(c_sim) + " at the simulation's " +
+                      (sim_value ? key + " = " + fmt(*sim_value) : std::string("(without it)")) +
+                      ", less than " + fmt(s) + " apart";
+    r.d.dropped.push_back({f, why});
+  }
+  findings = kept;
+}
+
+}  // namespace fralab::diag

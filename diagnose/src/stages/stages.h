@@ -1,0 +1,90 @@
+// Internal to the diagnosis: the state diagnose() passes from stage to stage, and the stages, one
+// file each in this folder, in the order docs/method/diagnosis.md ("The stages") describes them:
+// prepare the pairs, fit the causes, scope, resolve, earn their place, summarise. Frequencies
+// rad/s, s = jw.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../causes/cause.h"
+#include "../pair_fit.h"
+#include "fralab/diagnose/diagnose.h"
+
+namespace fralab::diag {
+
+/// A cause fitted on one pair (an index into DiagnosisRun::pairs), before scope groups it.
+struct PairCause {
+  size_t pair;
+  Cause c;
+};
+
+/// Everything one diagnosis carries between its stages. It holds the multisines the pairs point
+/// into, so it is neither copied nor moved.
+struct DiagnosisRun {
+  DiagnosisRun(const Model& sim, const std::vector<MeasuredPair>& data, const DiagnoseOptions& opt)
+      : sim(sim), data(data), opt(opt) {}
+  DiagnosisRun(const DiagnosisRun&) = delete;
+  DiagnosisRun& operator=(const DiagnosisRun&) = delete;
+
+  const Model& sim;
+  const std::vector<MeasuredPair>& data;
+  const DiagnoseOptions& opt;
+
+  // prepare: per input excited by a multisine, its lines on the fitting (ms_fit) and the
+  // validation (ms_val) measurement.
+  std::map<std::string, MultisineExcitation> ms_fit, ms_val;
+  // prepare: the pairs the simulation can speak to (fit_causes extends their factor, and a
+  // multisine actuator curve's sigma_eff), those it has no path for, and `pairs` as prepared
+  // (fit_causes then copies the final sigma_eff into it; every later chi2 weighs by it).
+  std::vector<PairFit> pairs, absent, original;
+
+  // fit_causes: the causes found per pair, the findings fitted jointly over several pairs
+  // (measurement coupling, then missing paths), and per pair the best candidate refused and why.
+  std::vector<PairCause> raw;
+  std::vector<Finding> coupling_findings, path_findings;
+  std::map<size_t, std::string> refused;
+
+  // scope onward: the findings still standing.
+  std::vector<Finding> findings;
+
+  // What diagnose() returns: resolve and earn_place add what they drop, summarise the rest.
+  Diagnosis d;
+};
+
+/// The multisine a point of `pair` was measured by (nullptr: a sine).
+const MultisineExcitation* multisine_of(const DiagnosisRun& r, const std::string& pair,
+                                        double line_amplitude, bool validation);
+
+/// The simulation extended by every finding of `fs` but the one at `skip` (fs.size(): all).
+Model extended_by(const DiagnosisRun& r, const std::vector<Finding>& fs, size_t skip);
+
+/// The error metric of model m over the measured pairs `which` (all when empty), on the fitting or
+/// the validation measurement; -1 when no point counts.
+double error_over(const DiagnosisRun& r, const Model& m, const std::vector<std::string>& which,
+                  bool validation);
+
+/// The error metric of one pair under a response function (no response: the point counts as 0).
+double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
+                  const std::function<std::optional<C>(double, size_t)>& model);
+
+// The stages (docs/method/diagnosis.md, "The stages").
+/// 1. The usable points of every pair against the simulation, and the multisines.
+void prepare(DiagnosisRun& r);
+/// 2-4. The measurement coupling per input, the paths the simulation lacks, then per pair a
+/// nonlinear actuator and up to max_causes_per_path linear causes.
+void fit_causes(DiagnosisRun& r);
+/// 5. Consistent fits of one cause over every path into an output, from an input, or everywhere
+/// become one finding there; the rest stay with their path.
+void scope(DiagnosisRun& r);
+/// 6. Each finding's primary parameter gets its 1-sigma interval; the unresolved are dropped.
+void resolve(DiagnosisRun& r);
+/// 7. On the validation measurement, the findings that do not lower its error are dropped.
+void earn_place(DiagnosisRun& r);
+/// 8-9. The extended model, the errors, each finding's explanation, and the per-pair report.
+void summarise(DiagnosisRun& r);
+
+}  // namespace fralab::diag

@@ -1,0 +1,101 @@
+// Stages 8-9, summarise (docs/method/diagnosis.md, "The stages"): the extended model (the
+// simulation with every finding kept), each finding's errors alone and its explanation, the
+// findings ordered by what they gain, the errors of simulation and extended model on the fitting
+// and validation data, and per pair its chi2 and errors, with what the catalogue leaves
+// unexplained said, not forced onto a cause.
+#include <algorithm>
+#include <cmath>
+
+#include "stages.h"
+
+namespace fralab::diag {
+namespace {
+
+// The report's explanation of a finding: what the residual shows, and what its scope says.
+std::string explain(const Finding& f) {
+  std::string ex = cause_unit(f.cause)->explain(f);
+  if (f.scope == Scope::kOutput) ex += "; common to every path into " + f.output + ": its sensor";
+  const bool own = f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input;
+  if (f.scope == Scope::kInput)
+    ex += own ? "; in the actuator's own response " + f.pairs[0]
+              : "; common to every path from " + f.input + ": its actuator or calibration";
+  if (f.scope == Scope::kPlant) ex += "; common to every path: a plant state";
+  return ex;
+}
+
+// The pair's report: the measured, simulated and extended responses, chi2 and the errors of both
+// models; an `unexplained` entry when it stays beyond its uncertainty under the extended model.
+PairReport pair_report(DiagnosisRun& r, const PairFit& p) {
+  const Model& ext = r.d.extended;
+  PairReport pr;
+  pr.pair = p.pair;
+  pr.w = p.w;
+  pr.meas = p.meas;
+  pr.sim = p.sim;
+  for (size_t q = 0; q < p.w.size(); ++q) {
+    pr.ext.push_back(
+        model_pair_response(ext, p.pair, p.w[q], p.amp[q], r.opt.chain, p.ms).value_or(0.0));
+    pr.sigma.push_back(p.sig[q]);
+    pr.chi2_sim += std::norm(p.meas[q] - p.sim[q]) / (p.sig[q] * p.sig[q]);
+    pr.chi2_ext += std::norm(p.meas[q] - pr.ext.back()) / (p.sig[q] * p.sig[q]);
+  }
+  pr.beyond = pr.chi2_sim > p.w.size() + 4 * std::sqrt(double(p.w.size()));
+  pr.error_sim =
+      pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(p.sim[i]); });
+  pr.error_ext =
+      pair_error(p.w, p.meas, [&](double, size_t i) { return std::optional<C>(pr.ext[i]); });
+  // What the catalogue does not explain is said, not forced.
+  const double n = double(p.w.size());
+  if (pr.chi2_ext > n + 4 * std::sqrt(n)) {
+    Unexplained u;
+    u.pair = p.pair;
+    double lo = INFINITY, hi = 0;
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const double z = std::abs(p.meas[q] - pr.ext[q]) / p.sig[q];
+      if (z < 3) continue;
+      lo = std::min(lo, p.w[q] / (2 * M_PI));
+      hi = std::max(hi, p.w[q] / (2 * M_PI));
+      u.residual = std::max(u.residual, std::abs(std::log(p.meas[q] / pr.ext[q])));
+    }
+    u.band_hz = {std::isfinite(lo) ? lo : 0.0, hi};
+    u.chi2 = pr.chi2_ext;
+    for (const auto& [k, why] : r.refused)
+      if (r.pairs[k].pair == p.pair) u.explanation = why;
+    if (u.explanation.empty())
+      u.explanation = "no cause of the catalogue lowers chi2 enough to be accepted";
+    r.d.unexplained.push_back(u);
+  }
+  return pr;
+}
+
+}  // namespace
+
+void summarise(DiagnosisRun& r) {
+  Diagnosis& d = r.d;
+  std::vector<Finding>& findings = r.findings;
+  bool have_val = false;
+  for (const auto& mp : r.data) have_val |= !mp.validation.points.empty();
+  d.extended = extended_by(r, findings, findings.size());
+  for (auto& f : findings) {
+    Model one = r.sim;  // the simulation plus this finding alone
+    cause_unit(f.cause)->apply(one, f);
+    f.error_before = error_over(r, r.sim, f.pairs, false);
+    f.error_after = error_over(r, one, f.pairs, false);
+    if (f.explanation.empty()) f.explanation = explain(f);
+  }
+  for (auto& x : d.dropped)
+    if (x.finding.explanation.empty()) x.finding.explanation = explain(x.finding);
+  std::sort(findings.begin(), findings.end(), [](const Finding& a, const Finding& b) {
+    return a.error_before - a.error_after > b.error_before - b.error_after;
+  });
+  d.findings = findings;
+  d.error_before = error_over(r, r.sim, {}, false);
+  d.error_after = error_over(r, d.extended, {}, false);
+  if (have_val) {
+    d.validation_before = error_over(r, r.sim, {}, true);
+    d.validation_after = error_over(r, d.extended, {}, true);
+  }
+  for (const auto& p : r.original) d.pairs.push_back(pair_report(r, p));
+}
+
+}  // namespace fralab::diag
