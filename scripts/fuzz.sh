@@ -26,15 +26,18 @@ cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]}" >build-fuzz/build
   { tail -30 build-fuzz/build.log; exit 2; }
 bad=0
 for r in "${readers[@]}"; do
-  # A "shapes" input builds a whole state model (up to 8 x 8 paths): fewer runs.
-  n=$runs
-  [ "$r" = shapes ] && n=$((runs < ${FUZZ_SHAPES_RUNS:-1000} ? runs : ${FUZZ_SHAPES_RUNS:-1000}))
+  # A "shapes" input builds a whole state model (up to 8 x 8 paths, 0.1-1 s optimised, tens of
+  # seconds under the sanitizers for the largest): fewer runs, a longer timeout.
+  n=$runs timeout=20
+  if [ "$r" = shapes ]; then
+    n=$((runs < ${FUZZ_SHAPES_RUNS:-1000} ? runs : ${FUZZ_SHAPES_RUNS:-1000})) timeout=180
+  fi
   work=$(mktemp -d)
   cp tests/fuzz/corpus/"$r"/* "$work"/
   mkdir -p build-fuzz/crashes/"$r"
   t0=$(date +%s)
   ASAN_OPTIONS=detect_leaks=0:allocator_may_return_null=1 \
-    build-fuzz/bin/fuzz_"$r" -runs="$n" -seed="$seed" -max_len=16384 -rss_limit_mb=2048 -timeout=20 \
+    build-fuzz/bin/fuzz_"$r" -runs="$n" -seed="$seed" -max_len=16384 -rss_limit_mb=2048 -timeout="$timeout" \
     -artifact_prefix=build-fuzz/crashes/"$r"/ "$work" >build-fuzz/fuzz_"$r".log 2>&1
   rc=$?
   t1=$(date +%s)

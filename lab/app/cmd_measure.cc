@@ -69,7 +69,7 @@ void add_measure_command(CLI::App& app) {
       if (engine->count() == 0) throw CLI::RequiredError("--engine");
       if (out->count() == 0) throw CLI::RequiredError("--out");
     }
-    const MeasureResult r = run_measure(*mo);
+    const MeasureResult r = measure(*mo);
     print_measure(r, mo->out);
     if (r.partial()) throw_if_partial({partial_run_message(r, mo->out)});
   });

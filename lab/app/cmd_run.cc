@@ -30,7 +30,7 @@ void run(const RunCommand& c) {
       if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
   }
   if (sim.empty()) {
-    const MeasureResult r = run_measure(c.measure);
+    const MeasureResult r = measure(c.measure);
     print_measure(r, c.measure.out);
     if (r.partial()) throw_if_partial({partial_run_message(r, c.measure.out)});
     return;

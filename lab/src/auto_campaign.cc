@@ -50,8 +50,10 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   AutoCampaignResult res;
   // The campaign's folder is its own until it ends (each run below takes its own sub-folder too).
   const RunLock lock(opt.out, "fralab measure --excitation auto");
+  MeasureOptions plain = opt;  // the campaign's runs are plain ones
+  plain.auto_campaign = false;
   // 1. The orthogonal multisine over every selected input.
-  MeasureOptions m = opt;
+  MeasureOptions m = plain;
   m.acquire.excitation = Excitation::kMultisine;
   m.acquire.multisine_design = MultisineOptions::Design::kOrthogonal;
   m.acquire.min_cycles = a.multisine_periods;
@@ -82,7 +84,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   };
   Json sine_run;
   if (!res.sine_inputs.empty()) {
-    MeasureOptions s = opt;
+    MeasureOptions s = plain;
     s.acquire.excitation = Excitation::kStepped;
     s.acquire.inputs = sine_inputs;
     s.acquire.points_per_decade = a.sine_points_per_decade;

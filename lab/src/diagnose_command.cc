@@ -33,7 +33,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
         m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
     }
     m.out = c.out + "/measure";
-    if (const MeasureResult r = run_measure(m); r.partial())
+    if (const MeasureResult r = measure(m); r.partial())
       res.partial.push_back(partial_run_message(r, m.out));
     // An independent measurement for validation, not used for fitting: another noise seed and a
     // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
@@ -41,7 +41,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     v.seed = m.seed + 1;
     v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
     v.out = MeasureDir(m.out).validation().root;
-    if (const MeasureResult r = run_measure(v); r.partial())
+    if (const MeasureResult r = measure(v); r.partial())
       res.partial.push_back(partial_run_message(r, v.out));
     data_dir = m.out;
     data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) +

@@ -74,7 +74,7 @@ ResumePoint plan_adaptive_resume(const std::string& tape, const std::string& run
 
 ResumePoint plan_resume(const std::string& tape, const std::string& run_id, const Campaign& c,
                         int block) {
-  std::set<int64_t> seqs;
+  std::set<int64_t> seqs, status_seqs;
   bool done = false;
   read_tape_file(tape, [&](const TapeEvent& ev) {
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
@@ -88,6 +88,7 @@ ResumePoint plan_resume(const std::string& tape, const std::string& run_id, cons
       } else if (ev.channel == kStatusChannel) {
         const excitation_status_t m = decode_checked<excitation_status_t>(&rb, ev.channel);
         done |= m.run_id == run_id && from_msg(m).state == RunState::kDone;
+        if (m.run_id == run_id && m.seq >= 0) status_seqs.insert(m.seq);
       }
     } catch (const InputError& e) {
       throw InputError(tape + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
@@ -96,8 +97,15 @@ ResumePoint plan_resume(const std::string& tape, const std::string& run_id, cons
   ResumePoint r;
   while (seqs.count(r.blocks_on_tape)) ++r.blocks_on_tape;
   const int64_t nblocks = command_block_count(c, block);
-  const int64_t end = std::min(c.total_samples(), r.blocks_on_tape * block);
   const auto& ev = c.events();
+  int64_t end = std::min(c.total_samples(), r.blocks_on_tape * block);
+  // A status event lost (a damaged stretch of tape) while the blocks around it are there: the run
+  // stands no further than that event, so its step is measured again and the event sent again.
+  int64_t first_missing_status = 0;
+  while (status_seqs.count(first_missing_status)) ++first_missing_status;
+  if (first_missing_status < int64_t(ev.size()) &&
+      first_missing_status < int64_t(status_seqs.size()))
+    end = std::min(end, ev[size_t(first_missing_status)].sample);
   size_t e = 0;
   while (e < ev.size() &&
          !(ev[e].state == RunState::kIntegrate && ev[e].sample + ev[e].n_samples > end))

@@ -66,7 +66,12 @@ int run(const std::string& reader, const uint8_t* data, size_t size) {
     } else if (reader == "shapes") {  // the bytes choose a set's shape: matrix and state model
       const auto set = testing::random_shape_set_from_bytes(data, size);
       const TransferMatrix m = build_transfer_matrix(set.entries);
-      const StateModel sm = build_state_model(m, set.data);
+      // Every code path of the state model with few sweeps: the default 500 take seconds per
+      // draw under the sanitizers (identify_shapes_test runs the defaults, optimised).
+      StateModelOptions so;
+      so.max_sweeps = 12;
+      so.rank_trial_sweeps = 4;
+      const StateModel sm = build_state_model(m, set.data, so);
       state_model_json(sm);
       state_model_markdown(sm);
     } else {

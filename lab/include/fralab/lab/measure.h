@@ -42,7 +42,8 @@ struct MeasureOptions {
   std::string deputy_url;  // "" = kDefaultDeputyUrl
   bool progress = true;    // the progress line on stderr when it is a terminal (lab/progress.h)
   /// `--excitation auto`: the campaign that decides itself (lab/auto_campaign.h), an orthogonal
-  /// multisine and a sine for the inputs that distort at its level.
+  /// multisine and a sine for the inputs that distort at its level. measure() runs it;
+  /// run_measure, which runs one plain measurement, refuses it.
   bool auto_campaign = false;
 };
 
@@ -81,7 +82,16 @@ std::vector<std::string> pairs_for_input(const std::string& input,
 /// (plant/simulator.h). run.json records it as "measurement_chain".
 MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
 
+/// One plain run into opt.out (or its continuation, opt.resume): the recorder, plant, analysers,
+/// identifier and acquisition started as plan_processes says (lab/process_plan.h) and supervised,
+/// the tape verified, DIR/run.json completed. InputError for an auto campaign, which measure()
+/// runs.
 MeasureResult run_measure(const MeasureOptions& opt);
+
+/// What `fralab measure`, `fralab run` and `fralab diagnose --engine` run: the auto campaign when
+/// opt.auto_campaign (run_auto_campaign, whose runs are plain ones), the refit of a partial auto
+/// campaign on --resume of its folder (resume_auto_campaign), else run_measure.
+MeasureResult measure(const MeasureOptions& opt);
 
 /// A measurement's results from its curves, as the live analysers and identifier leave them:
 /// the curves in pair order (sorted in place), each to DIR/frd/<stem>.json, then fitted
