@@ -15,8 +15,8 @@ namespace fralab::fuzz {
 /// (load_frd), "csv" (read_frd_csv), "tfns" (read_tfns_deck, then read_fit_input's checks),
 /// "series" (a CSV recording: read_csv_series, to_time_series, schedule_from_reference),
 /// "schedule" (load_schedule), "shapes" (the bytes steer a random identification set,
-/// tests/util/random_shapes.h, built into a transfer matrix and a state model of few sweeps). Returns 0 when the
-/// input was read, 1 when it was refused with an InputError.
+/// tests/util/random_shapes.h, built into a transfer matrix and a state model of few sweeps).
+/// Returns 0 when the input was read, 1 when it was refused with an InputError.
 int run(const std::string& reader, const uint8_t* data, size_t size);
 
 }  // namespace fralab::fuzz
