@@ -111,7 +111,15 @@ Json AcquisitionNode::run() {
     excitation_status_t m = to_status_msg(e);
     data.publish(kStatusChannel, &m);
   };
+  // Free-running, the command blocks from the campaign's last on (its final flag cleared, the
+  // play-out's idle blocks, the repeated steps) are not the campaign's blocks of their seq: kept as
+  // published, so that a retransmission sends them again as they were.
+  std::map<int64_t, command_block_t> sent_free;
   auto publish_command = [&](int64_t b) {
+    if (const auto it = sent_free.find(b); it != sent_free.end()) {
+      data.publish(kCmdChannel, &it->second);
+      return;
+    }
     command_block_t m =
         to_command_msg(command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id));
     data.publish(kCmdChannel, &m);
@@ -249,6 +257,7 @@ Json AcquisitionNode::run() {
     if (new_status)
       wait_until([&] { return flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus); });
     command_block_t m = to_command_msg(blk);
+    if (free && b == command_block_count(campaign, o.block) - 1) sent_free[b] = m;
     data.publish(kCmdChannel, &m);
     flow.published(Stream::kCommand, b);
     next_block = b + 1;
@@ -265,6 +274,7 @@ Json AcquisitionNode::run() {
       c.seq = cmd_seq++;
       wait_until([&] { return c.start_sample - tape_->played < lead_samples; });
       command_block_t m = to_command_msg(c);
+      sent_free[c.seq] = m;
       data.publish(kCmdChannel, &m);
       flow.published(Stream::kCommand, c.seq);
     };

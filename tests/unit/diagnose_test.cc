@@ -1,13 +1,15 @@
 // The diagnosis on synthetic residuals, without processes: a truth model (the simulation with one
-// hidden effect) gives exact frequency-response data; the diagnosis must name the effect, its scope
-// and its parameter within named tolerances, extend the model so the error falls, and report
-// nothing when nothing is hidden. One test per cause of the catalogue.
+// hidden effect) gives exact frequency-response data to fit and an independent validation
+// measurement (another amplitude, noise of its sigma); the diagnosis must name the effect, its
+// scope and its parameter within named tolerances, extend the model so the error falls on both,
+// and report nothing when nothing is hidden. One test per cause of the catalogue.
 #include "fralab/diagnose/diagnose.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 
 #include "fralab/plant/lti.h"
@@ -27,6 +29,14 @@ using ::testing::IsEmpty;
 
 constexpr double kRelSigma = 0.002;  // the data's sigma, relative to |G|
 constexpr double kAmplitude = 0.02;  // excitation amplitude, input units
+// The validation measurement: another amplitude (a nonlinearity's describing function changes
+// with it), noise of the data's sigma drawn with this seed.
+constexpr double kValidationAmplitude = 0.03;
+constexpr uint64_t kValidationSeed = 2;
+// A model that is the truth predicts the validation measurement to its noise: the error metric
+// (rms of |ln(G_model / G_measured)|) of complex noise of relative sigma kRelSigma is kRelSigma
+// (to 1/sqrt(points)); within this factor of it.
+constexpr double kAtTheNoise = 1.5;
 
 Tf tf(double gain, std::vector<Root> poles, std::vector<Root> zeros = {}) {
   Tf t;
@@ -58,29 +68,42 @@ Model simulation() {
   return m;
 }
 
-// Exact data of `truth` for u:y, u:z and the actuator u_u:u, 0.05-200 rad/s at 10 per decade;
-// `h3` is the odd-harmonic level recorded on the actuator's points (the nonlinearity's trigger).
+// The value g with complex noise of standard deviation `sigma` (sigma^2 = E|e|^2, an frd's sigma).
+Complex with_noise(Complex g, double sigma, std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, sigma / std::sqrt(2.0));
+  const double re = n(rng);
+  return g + Complex(re, n(rng));
+}
+
+// Data of `truth` for u:y, u:z and the actuator u_u:u, 0.05-200 rad/s at 10 per decade: exact at
+// kAmplitude to fit; the validation at kValidationAmplitude with noise of the points' sigma (seed
+// kValidationSeed). `h3` is the odd-harmonic level recorded on the actuator's points (the
+// nonlinearity's trigger).
 std::vector<MeasuredPair> measure(const Model& truth, double h3 = 0.0,
                                   const std::vector<std::string>& pairs = {"u:y", "u:z", "u_u:u"}) {
+  std::mt19937_64 rng(kValidationSeed);
   std::vector<MeasuredPair> out;
   for (const std::string& pair : pairs) {
     MeasuredPair mp;
-    mp.pair = pair;
-    mp.frd.pair = pair;
-    for (int k = 0; k <= 36; ++k) {
-      const double w = 0.05 * std::pow(10.0, k / 10.0);
-      const auto g = model_pair_response(truth, pair, w, kAmplitude);
-      FrdPoint p;
-      p.w = w;
-      p.mag = std::abs(*g);
-      p.phase_deg = std::arg(*g) * 180 / M_PI;
-      p.sigma = kRelSigma * p.mag;
-      p.amplitude = kAmplitude;
-      p.input = "u";
-      p.h3_rel = pair == "u_u:u" ? h3 : 0.0;
-      mp.frd.points.push_back(p);
+    mp.pair = mp.frd.pair = mp.validation.pair = pair;
+    for (const bool validation : {false, true}) {
+      const double amplitude = validation ? kValidationAmplitude : kAmplitude;
+      for (int k = 0; k <= 36; ++k) {
+        const double w = 0.05 * std::pow(10.0, k / 10.0);
+        Complex g = *model_pair_response(truth, pair, w, amplitude);
+        const double sigma = kRelSigma * std::abs(g);
+        if (validation) g = with_noise(g, sigma, rng);
+        FrdPoint p;
+        p.w = w;
+        p.mag = std::abs(g);
+        p.phase_deg = std::arg(g) * 180 / M_PI;
+        p.sigma = sigma;
+        p.amplitude = amplitude;
+        p.input = "u";
+        p.h3_rel = pair == "u_u:u" ? h3 : 0.0;
+        (validation ? mp.validation : mp.frd).points.push_back(p);
+      }
     }
-    mp.validation = mp.frd;
     out.push_back(mp);
   }
   return out;
@@ -92,11 +115,16 @@ ModelPath& path(Model& m, const std::string& out) {
   throw std::runtime_error("no path");
 }
 
-// The one finding of a diagnosis, with the extended model closer to the data than the simulation.
+// The one finding of a diagnosis, with the extended model closer to the data than the simulation
+// and predicting the independent validation measurement to its noise (neither beyond it nor, on
+// another draw, below it), where the simulation is beyond it.
 Finding only_finding(const Diagnosis& d) {
   EXPECT_EQ(d.findings.size(), 1u);
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
   EXPECT_LT(d.validation_after, 0.2 * d.validation_before);
+  EXPECT_LT(d.validation_after, kAtTheNoise * kRelSigma);
+  EXPECT_GT(d.validation_after, kRelSigma / kAtTheNoise);
+  EXPECT_GT(d.validation_before, 5 * kAtTheNoise * kRelSigma);
   return d.findings.at(0);
 }
 
@@ -105,6 +133,10 @@ TEST(Diagnose, NothingHiddenNothingFound) {
   const Diagnosis d = diagnose(sim, measure(sim));
   EXPECT_THAT(d.findings, IsEmpty());
   EXPECT_LT(d.error_before, 1e-9);
+  // The validation measurement is another draw: the simulation errs there by its noise alone.
+  EXPECT_GT(d.validation_before, kRelSigma / kAtTheNoise);
+  EXPECT_LT(d.validation_before, kAtTheNoise * kRelSigma);
+  EXPECT_EQ(d.validation_after, d.validation_before);
 }
 
 TEST(Diagnose, TimeDelayInOnePath) {
@@ -262,6 +294,10 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   EXPECT_NEAR(f.parameters.at("width"), 0.012, 0.05 * 0.012);
   EXPECT_THAT(f.explanation, HasSubstr("describing function of a hysteresis"));
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
+  // Validated at another amplitude, where the describing function is another: the width found
+  // predicts it too, to its noise.
+  EXPECT_LT(d.validation_after, 0.2 * d.validation_before);
+  EXPECT_LT(d.validation_after, kAtTheNoise * kRelSigma);
 }
 
 // A backlash measured by a multisine is fitted with its best linear approximation under
@@ -413,7 +449,7 @@ TEST(Diagnose, AFindingTheValidationDoesNotConfirmIsDropped) {
   path(seen, "y").tf.gain *= std::pow(10.0, 1.0 / 20);
   auto data = measure(seen);
   const auto truth = measure(simulation());
-  for (size_t i = 0; i < data.size(); ++i) data[i].validation = truth[i].frd;
+  for (size_t i = 0; i < data.size(); ++i) data[i].validation = truth[i].validation;
   const Diagnosis d = diagnose(simulation(), data);
   EXPECT_THAT(d.findings, IsEmpty());
   ASSERT_EQ(d.dropped.size(), 1u);
@@ -448,13 +484,16 @@ TEST(Diagnose, WhatTheCatalogueCannotExplainIsSaid) {
 
 // Data as fralab's plant emulator measures an engine identical to the simulation: every chain held
 // by the first-order hold at 1 kHz and sampled (lti.h's exact sampled response, images included),
-// 0.1-100 Hz, clean channels (sigma 0.1 %).
+// 0.1-100 Hz, clean channels (sigma 0.1 %): exact to fit, the validation at kValidationAmplitude
+// with noise of that sigma (seed kValidationSeed).
+constexpr double kEmulatedRelSigma = 1e-3;
 std::vector<MeasuredPair> emulated(const Model& m) {
   const Tf act = *m.inputs[0].actuator;
+  std::mt19937_64 rng(kValidationSeed);
   std::vector<MeasuredPair> out;
   for (const std::string pair : {"u:y", "u:z", "u_u:u"}) {
     MeasuredPair mp;
-    mp.pair = mp.frd.pair = pair;
+    mp.pair = mp.frd.pair = mp.validation.pair = pair;
     const auto [e1, e2] = split_pair(pair);
     for (int k = 0; k <= 30; ++k) {
       const double w = 2 * M_PI * 0.1 * std::pow(10.0, k / 10.0);
@@ -469,11 +508,15 @@ std::vector<MeasuredPair> emulated(const Model& m) {
       p.w = w;
       p.mag = std::abs(g);
       p.phase_deg = std::arg(g) * 180 / M_PI;
-      p.sigma = 1e-3 * p.mag;
+      p.sigma = kEmulatedRelSigma * p.mag;
       p.amplitude = kAmplitude;
       mp.frd.points.push_back(p);
+      const Complex v = with_noise(g, p.sigma, rng);
+      p.mag = std::abs(v);
+      p.phase_deg = std::arg(v) * 180 / M_PI;
+      p.amplitude = kValidationAmplitude;
+      mp.validation.points.push_back(p);
     }
-    mp.validation = mp.frd;
     out.push_back(mp);
   }
   return out;
@@ -491,8 +534,13 @@ TEST(Diagnose, TheLabsOwnHoldIsNeverAFinding) {
   EXPECT_THAT(d.findings, IsEmpty());
   for (const auto& p : d.pairs) EXPECT_FALSE(p.beyond) << p.pair;
   EXPECT_EQ(diagnosis_to_json(d)["measurement_chain"]["hold"], "first_order");
+  // With the chain, the simulation predicts the validation measurement to its noise.
+  EXPECT_LT(d.validation_before, kAtTheNoise * kEmulatedRelSigma);
+  EXPECT_GT(d.validation_before, kEmulatedRelSigma / kAtTheNoise);
   const Diagnosis ideal = diagnose(sim, data);
   EXPECT_FALSE(ideal.findings.empty());  // the artefact the chain removes
+  // Compared ideally, the hold is beyond the noise of the validation measurement too.
+  EXPECT_GT(ideal.validation_before, 2 * kAtTheNoise * kEmulatedRelSigma);
 }
 
 TEST(Diagnose, HoldFactorsAreTheHeadersEquations) {
