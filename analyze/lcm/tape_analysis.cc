@@ -1,6 +1,7 @@
 #include "tape_analysis.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace fralab {
 
@@ -71,8 +72,14 @@ bool TapeFeeder::all_done() const {
 
 int64_t TapeFeeder::flush() {
   int64_t lost = 0;
+  // Saturating sums: a corrupt status event (no checksum) may carry a seq near the largest
+  // int64_t, and the gap before it with it.
+  const auto add = [](int64_t a, int64_t b) {
+    return b > std::numeric_limits<int64_t>::max() - a ? std::numeric_limits<int64_t>::max()
+                                                       : a + b;
+  };
   while (status_.held() || tape_.held()) {
-    lost += status_.skip_gap() + tape_.skip_gap();
+    lost = add(lost, add(status_.skip_gap(), tape_.skip_gap()));
     deliver();
   }
   for (auto& a : an_) a->flush();

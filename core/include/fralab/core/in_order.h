@@ -45,7 +45,10 @@ class InOrder {
   int64_t skip_gap() {
     if (held_.empty()) return 0;
     const int64_t skipped = held_.begin()->first - next_;
-    skipped_ += skipped;
+    // Saturating: a corrupt status event (no checksum) may carry a seq near the largest int64_t.
+    skipped_ = skipped > std::numeric_limits<int64_t>::max() - skipped_
+                   ? std::numeric_limits<int64_t>::max()
+                   : skipped_ + skipped;
     next_ = held_.begin()->first;
     return skipped;
   }
