@@ -16,9 +16,12 @@
 #include <vector>
 
 #include "fit_data.h"
+#include "test_util.h"
 
 using namespace fralab;
 using namespace fralab::tfns_detail;
+using fralab::testing::root_error;
+using fralab::testing::worst_error;
 
 namespace {
 
@@ -78,25 +81,6 @@ Data data_of(const Tf& t, double rel_noise = 0, Normal* n = nullptr, bool with_s
     d.W.push_back(d.has_sigma ? 1.0 / (sigma * sigma) : 1.0 / std::norm(g));
   }
   return d;
-}
-
-// Distance of a fitted root from the truth's relative to |truth| (the upper location of a pair);
-// infinite when one is real and the other a pair.
-double root_error(const Root& fit, const Root& want) {
-  if (fit.pair != want.pair) return INFINITY;
-  auto upper = [](const Root& r) {
-    const C l = r.locations()[0];
-    return l.imag() < 0 ? std::conj(l) : l;
-  };
-  return std::abs(upper(fit) - upper(want)) / std::abs(upper(want));
-}
-
-// The largest root_error over two lists in listing order (infinite when their sizes differ).
-double worst_error(const std::vector<Root>& fit, const std::vector<Root>& want) {
-  if (fit.size() != want.size()) return INFINITY;
-  double worst = 0;
-  for (size_t i = 0; i < fit.size(); ++i) worst = std::max(worst, root_error(fit[i], want[i]));
-  return worst;
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "test_util.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -184,6 +185,22 @@ Eigen::MatrixXd graded_triangular_factor(int rows, int k, unsigned seed, double 
   for (int j = 0; j < k; ++j) A.col(j) *= std::pow(10.0, -decades * j / std::max(1, k - 1));
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
   return qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+}
+
+double root_error(const Root& fit, const Root& want) {
+  if (fit.pair != want.pair) return INFINITY;
+  auto upper = [](const Root& r) {
+    const std::complex<double> l = r.locations()[0];
+    return l.imag() < 0 ? std::conj(l) : l;
+  };
+  return std::abs(upper(fit) - upper(want)) / std::abs(upper(want));
+}
+
+double worst_error(const std::vector<Root>& fit, const std::vector<Root>& want) {
+  if (fit.size() != want.size()) return INFINITY;
+  double worst = 0;
+  for (size_t i = 0; i < fit.size(); ++i) worst = std::max(worst, root_error(fit[i], want[i]));
+  return worst;
 }
 
 }  // namespace fralab::testing

@@ -72,4 +72,10 @@ double wrap_deg(double d);
 Eigen::MatrixXd graded_triangular_factor(int rows, int k, unsigned seed, double decades,
                                          bool dependent = false, double perturb = 0);
 
+/// Distance of a fitted root from the truth's relative to |truth| (the upper location of a pair);
+/// infinite when one is real and the other a pair.
+double root_error(const Root& fit, const Root& want);
+/// The largest root_error over two lists in listing order (infinite when their sizes differ).
+double worst_error(const std::vector<Root>& fit, const std::vector<Root>& want);
+
 }  // namespace fralab::testing
