@@ -7,6 +7,17 @@
 
 namespace fralab::tfns_detail {
 
+double delay_ambiguity(const std::vector<double>& w) {
+  std::vector<double> v(w);
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  if (v.size() < 2) return INFINITY;
+  std::vector<double> dw(v.size() - 1);
+  for (size_t i = 0; i + 1 < v.size(); ++i) dw[i] = v[i + 1] - v[i];
+  std::nth_element(dw.begin(), dw.begin() + dw.size() / 2, dw.end());
+  return 2 * M_PI / dw[dw.size() / 2];
+}
+
 namespace {
 
 // The coarse grid's runner-up is kept when its error is within this factor of the best's: a grid

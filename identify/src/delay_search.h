@@ -13,6 +13,14 @@
 
 namespace fralab::tfns_detail {
 
+// The longest delay the grid w (rad/s) can tell apart from a shorter one: 2 pi / the median spacing
+// of its sorted distinct frequencies (seconds; +inf with fewer than 2). On a uniform grid of
+// spacing dw, the delays tau and tau + 2 pi / dw differ at every point by a whole turn times the
+// point's index, a constant phase over a zoom band: a delay longer than this is an alias (a VNA's
+// 100 MHz grid cannot see 10 ns). The median, not the smallest spacing: one close pair of points
+// does not resolve a delay the rest of the grid aliases.
+double delay_ambiguity(const std::vector<double>& w);
+
 // A delay shows as right-half-plane zeros or as a misfit. It is searched at a low order first
 // (coarse: a short rational cannot imitate a large high-frequency phase lag, so the error has a
 // clear minimum near the delay), then per order around that (starts: the joint refinement's

@@ -76,7 +76,7 @@ void OrderSearch::evaluate(Candidate& c) {
   c.s = score(d_, c.tf);
   c.params = n_params(c.tf, c.free_delay);
   c.misfit = misfit(d_, c.s, c.params, o_, &c.chi2dof);
-  c.nonphysical = nonphysical(c.tf);
+  c.nonphysical = nonphysical(c.tf, d_.w);
   c.adequate = c.misfit <= 1.0 && !c.nonphysical;
   c.rank = c.s.sse * (c.nonphysical ? 1e6 : 1.0);
   c.crit = d_.has_sigma ? c.s.chi2 + kappa_ * c.params : double(c.params);
@@ -239,6 +239,7 @@ Candidate OrderSearch::order_loop(double tau0, bool free_delay, int max_params, 
 // The candidates of denominator order n, numerator orders m from n down: the order's best
 // (adequate first, then the criterion; else the smallest error).
 Candidate OrderSearch::fit_order(Loop& l, int n) {
+  top_tried_ = std::max(top_tried_, n);
   Candidate best_n;
   std::vector<double> cur_rank(size_t(n) + 1, INFINITY);
   bool vf_won = false;  // a candidate from VF's start was this order's best at a higher m
@@ -418,7 +419,10 @@ std::optional<Candidate> OrderSearch::conclude_order(Loop& l, int n, Candidate& 
   // Two orders in a row without a 5 % error improvement: higher orders only chase noise or a
   // nonlinearity (e.g. a backlash's describing function); stop raising.
   if (n > 3 && l.best.ok && !best_n.adequate && best_n.rank > 0.95 * l.best.rank) {
-    if (++l.stalled >= 2) return l.best;
+    if (++l.stalled >= 2) {
+      stalled_at_ = std::max(stalled_at_, n);
+      return l.best;
+    }
   } else {
     l.stalled = 0;
   }
@@ -495,12 +499,32 @@ void OrderSearch::simplify() {
 }
 
 void OrderSearch::annotate(FitResult& res) const {
+  // Not adequate: why the search stopped, the maximum order only when it was tried.
+  std::string why;
+  if (!passes() || sigma_scale_ != 1) {
+    const std::string was = res.status_str();
+    res.status = top_tried_ >= max_n_ ? FitResult::Status::kMaxOrderReached
+                                      : FitResult::Status::kNotAdequate;
+    if (res.message.compare(0, was.size(), was) == 0)
+      res.message = res.status_str() + res.message.substr(was.size());
+    char buf[200];
+    if (top_tried_ >= max_n_)
+      std::snprintf(buf, sizeof buf, "; orders tried up to the maximum, %d", max_n_);
+    else if (stalled_at_ > 0)
+      std::snprintf(buf, sizeof buf,
+                    "; the search stopped at order %d: two orders in a row lowered the error by "
+                    "less than 5 %% (the maximum is %d)",
+                    stalled_at_, max_n_);
+    else
+      std::snprintf(buf, sizeof buf, "; no order up to %d adequate (the maximum is %d)", top_tried_,
+                    max_n_);
+    why = buf;
+  }
   if (!by_crit_note_.empty() && sigma_scale_ == 1) res.message += by_crit_note_;
   if (sigma_scale_ != 1) {  // figures against the sigma given (or estimated); the status too
     const double scaled = res.chi2_per_dof;
     res.sigma_scale = sigma_scale_;
     res.chi2_per_dof = scaled * sigma_scale_ * sigma_scale_;
-    res.status = FitResult::Status::kMaxOrderReached;
     char buf[320];
     std::snprintf(buf, sizeof buf,
                   "%s: order %d/%d, chi2/dof %.3g, delay %.4g s, %d SK iterations; no order meets "
@@ -511,7 +535,7 @@ void OrderSearch::annotate(FitResult& res) const {
                   scaled);
     res.message = buf;
   }
-  res.message += lag_note_;
+  res.message += why + lag_note_;
 }
 
 }  // namespace fralab::tfns_detail

@@ -109,6 +109,8 @@ class OrderSearch {
   };
   std::vector<VfPoles> vf_cache_;
 
+  int top_tried_ = 0;       // the highest denominator order any order loop tried
+  int stalled_at_ = 0;      // the order at which a loop stopped for want of improvement (0: none)
   Candidate fin_;           // the chosen model
   double sigma_scale_ = 1;  // sigma's scale in the pass that chose it
   bool by_crit_ = false;    // chosen by the criterion over an adequate candidate

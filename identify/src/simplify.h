@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "fit_data.h"
 #include "fralab/identify/tfns.h"
@@ -15,15 +16,16 @@ namespace fralab::tfns_detail {
 // 1e-6; a real pole's to -|p|, at least 1e-9 from 0); returns how many.
 int reflect_unstable(Tf& t);
 
-// A model the data cannot support physically: an (almost) undamped pole or zero pair (|zeta| <
-// 1e-3: the refinement's floor is 1e-9; a resonance that sharp between two points of a grid is not
-// resolved by them), or a pole and zero of the same kind within 1e-3 of each other, relative to the
-// pole's modulus (a cancelling dipole). Such candidates are refused: any physical candidate is
-// preferred.
-bool nonphysical(const Tf& t);
+// A model the data cannot support physically: a light pole or zero pair (|zeta| < 1e-3) the grid
+// w (rad/s) does not resolve (fewer than 2 points within 2 zeta wn of wn: a resonance that sharp
+// between two points is noise fitted, the refinement's floor being 1e-9), or a cancelling dipole: a
+// pole and zero of the same kind within 1e-3 of each other relative to the pole's modulus, or, when
+// either is a light pair, within 1 % of the larger of their real parts. Such candidates are
+// refused: any physical candidate is preferred.
+bool nonphysical(const Tf& t, const std::vector<double>& w);
 
-// Removes from t each zero and pole of one kind within 1e-3 of each other (nonphysical's dipole),
-// the closest couples first; true when any was removed.
+// Removes from t each cancelling dipole of nonphysical's, the closest couples first; true when any
+// was removed.
 bool remove_dipoles(Tf& t);
 
 // A reduced model keeps the orders the options ask for (min_num_order, den_order_start) and stays

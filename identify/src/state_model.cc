@@ -28,8 +28,7 @@ StateModelPathCheck check_path(const std::vector<FrdPoint>& pts, const FitResult
     if (p.valid && p.mag > 0) sigma = sigma && p.sigma > 0;
   std::vector<Cx> model, meas;
   double chi2 = 0, fit_chi2 = 0;
-  const bool has_tf = fit.status == FitResult::Status::kConverged ||
-                      fit.status == FitResult::Status::kMaxOrderReached;
+  const bool has_tf = fit.has_model();
   for (const auto& p : pts) {
     if (!p.valid || !(p.mag > 0)) continue;
     ++c.points;
@@ -313,7 +312,7 @@ StateModel build_state_model(const TransferMatrix& m,
       // response into every path, so a path left out is predicted by factors nothing holds there
       // (on the J85 lab's run, 1e22 chi2 per point on the P5 paths that reached the maximum
       // order). A path with no response is fitted too (its data, noise, by its sigma).
-      const bool mor = fit.status == FitResult::Status::kMaxOrderReached;
+      const bool mor = fit.has_model() && !converged;
       const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
       if (pts.empty() || !(converged || mor || zero)) continue;
       all_sigma = all_sigma && sigma;

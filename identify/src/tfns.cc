@@ -14,6 +14,7 @@
 
 #include "delay_search.h"
 #include "fit_data.h"
+#include "fralab/identify/pole_set_fit.h"
 #include "noise_estimate.h"
 #include "order_search.h"
 #include "output_error.h"
@@ -81,13 +82,83 @@ void fill_result(FitResult& res, const Data& d, const Tf& tf, bool free_delay, c
     res.pole_info[i].rel_sigma = sg.poles[i];
   res.gain_rel_sigma = sg.gain;
   res.delay_sigma_s = sg.delay;
-  res.status = adequate ? FitResult::Status::kConverged : FitResult::Status::kMaxOrderReached;
+  res.status = adequate ? FitResult::Status::kConverged : FitResult::Status::kNotAdequate;
   char buf[256];
   std::snprintf(buf, sizeof buf, "%s: order %d/%d, %s %.3g, delay %.4g s, %d SK iterations",
                 res.status_str().c_str(), res.num_order, res.den_order,
                 d.has_sigma ? "chi2/dof" : "E_N", d.has_sigma ? res.chi2_per_dof : res.e_n,
                 res.tf.delay_s, res.iterations);
   res.message = buf;
+}
+
+// Step 6b: the order search ran up to its maximum without an adequate order. Either the data
+// hold more modes than that maximum, or they scatter more than their sigma (a nonlinearity, a
+// sigma too small) and no order is adequate: the lowest chi^2/dof a model reaches tells the
+// scatter's level, and the order search's own (at its capped order) overstates it when modes are
+// left. So a pole set (vector fitting with adding and skimming) is fitted against the sigma given
+// or estimated; the lowest chi^2/dof of it and of the order search's candidates sets the scale;
+// the pole set is fitted again with sigma so scaled (its size chosen by the criterion against the
+// scatter, as the order search chooses its orders), with the order search's delay, and replaces
+// the order search's fit when its
+// criterion chi^2 / scale^2 + ln(2N) p is lower. On the J85 lab's command paths through an
+// actuator's hysteresis the scale is the scatter's and the order search's fits stand; on an impact
+// hammer's 20 light modes the pole set wins.
+void prefer_pole_set(FitResult& res, const Data& d, const FitOptions& o, const Tf& chosen,
+                     bool free_delay) {
+  if (res.status != FitResult::Status::kMaxOrderReached || !d.has_sigma ||
+      o.max_poles <= o.max_den_order) {
+    return;
+  }
+  // d's weights are scaled by 1 / sigma_scale^2 when the order was chosen against the scatter.
+  const double given = res.sigma_scale * res.sigma_scale;
+  std::vector<double> W = d.W;
+  for (double& x : W) x *= given;
+  // The delay is the order search's (removed from the data, kept in the model).
+  std::vector<C> g = d.g;
+  for (size_t i = 0; i < g.size(); ++i) g[i] *= std::polar(1.0, d.w[i] * chosen.delay_s);
+  PoleSetFitOptions po;
+  po.max_poles = o.max_poles;
+  const PoleSetFit first = fit_pole_set(d.w, {g}, {W}, po);
+  if (first.status == PoleSetFit::Status::kFailed) return;
+  const double N = double(d.w.size()), kappa = std::log(2.0 * N);
+  // The order search's lowest chi^2/dof: its scale squared when it chose against the scatter.
+  const double classic = res.sigma_scale != 1 ? given : res.chi2_per_dof;
+  const double scale2 = std::max(1.0, std::min(first.chi2_per_dof, classic));
+  PoleSetFit ps = first;
+  if (scale2 > 1) {
+    for (double& x : W) x /= scale2;
+    ps = fit_pole_set(d.w, {g}, {W}, po);
+    if (ps.status == PoleSetFit::Status::kFailed) return;
+  }
+  Tf t = ps.to_tf(0);
+  t.delay_s = chosen.delay_s;
+  const Score s = score(d, t), s0 = score(d, chosen);
+  const int p = n_params(t, free_delay), p0 = n_params(chosen, free_delay);
+  const double crit = s.chi2 * given / scale2 + kappa * p;
+  const double crit0 = s0.chi2 * given / scale2 + kappa * p0;
+  if (!(crit < crit0) || !std::isfinite(s.chi2)) return;
+  const double chi2dof = s.chi2 * given / std::max(1.0, N - p / 2.0);
+  const bool adequate = chi2dof <= (1.0 + 3.0 / std::sqrt(N)) * d.chi2_slack;
+  const int before_num = res.num_order, before_den = res.den_order;
+  const double noise_rel = res.noise_rel, noise_abs = res.noise_abs;
+  fill_result(res, d, t, free_delay, s, chi2dof, adequate, 0, 0, 0);
+  res.noise_rel = noise_rel, res.noise_abs = noise_abs;
+  res.sigma_scale = adequate ? 1 : std::sqrt(scale2);
+  if (!adequate) {
+    const std::string was = res.status_str();
+    res.status = ps.order >= std::min(o.max_poles, int(d.w.size()) - 2)
+                     ? FitResult::Status::kMaxOrderReached
+                     : FitResult::Status::kNotAdequate;
+    res.message = res.status_str() + res.message.substr(was.size());
+  }
+  char buf[360];
+  std::snprintf(buf, sizeof buf,
+                "; a pole set of %d poles (vector fitting, %d added, %d skimmed; sigma x%.3g) "
+                "replaces the order search's %d/%d, which reached its maximum (criterion %.6g "
+                "against %.6g)",
+                ps.order, ps.added, ps.skimmed, std::sqrt(scale2), before_num, before_den, crit,
+                crit0);
+  res.message += buf;
 }
 
 }  // namespace
@@ -105,6 +176,7 @@ void FitOptions::validate() const {
   if (!(max_delay_s > 0)) bad("max_delay_s must be > 0");
   if (!(tolerance >= 0) || !(noise_floor > 0)) bad("tolerance must be >= 0, noise_floor > 0");
   if (min_num_order < 0) bad("min_num_order must be >= 0");
+  if (max_poles < 0 || max_poles > 400) bad("max_poles must be in [0, 400]");
 }
 
 std::string FitResult::status_str() const {
@@ -115,6 +187,8 @@ std::string FitResult::status_str() const {
       return "max_order_reached";
     case Status::kNoResponse:
       return "no_response";
+    case Status::kNotAdequate:
+      return "not_adequate";
     default:
       return "failed";
   }
@@ -169,11 +243,17 @@ std::vector<PadeSet> find_pade_sets(const Tf& tf, double tol) {
 // The steps of the method (docs/method/identifier.md): the valid points and their weights; without
 // sigma, the noise level the stop rule judges against; the order search over the delay hypotheses;
 // the chosen model's simplification; its figures and message.
-FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
-  o.validate();
+FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& opt) {
+  opt.validate();
   Data d;
   FitResult res;
-  if (!prepare_data(pts, o, d, res)) return res;
+  if (!prepare_data(pts, opt, d, res)) return res;
+  // The delay is searched only where the grid resolves it (otherwise an identical copy of the
+  // options: the same fit to the bit).
+  FitOptions o = opt;
+  const double ambiguity = delay_ambiguity(d.w);
+  const bool bounded = o.delay == FitOptions::Delay::kAuto && ambiguity < o.max_delay_s;
+  if (bounded) o.max_delay_s = ambiguity;
   d.max_delay = o.max_delay_s;
   DelaySearch delays(d, o);
   if (!d.has_sigma && (o.estimate_noise || o.tolerance > 0) && !estimate_noise(d, o, delays, res))
@@ -189,6 +269,14 @@ FitResult fit_tf(const std::vector<FrdPoint>& pts, const FitOptions& o) {
   fill_result(res, d, fit.tf, fit.free_delay, fit.s, fit.chi2dof, search.passes(), fit.iterations,
               fit.e_phi, fit.reflected);
   search.annotate(res);
+  prefer_pole_set(res, d, o, fit.tf, fit.free_delay);
+  if (bounded) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "; delay searched up to %.4g s, the grid's ambiguity (2 pi / its median spacing)",
+                  ambiguity);
+    res.message += buf;
+  }
   res.message += noise_note(res);
   return res;
 }

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/identify/common_poles.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
 
@@ -13,6 +14,7 @@ namespace fralab {
 namespace {
 
 struct FitCommand {
+  std::vector<std::string> ins;
   std::string in, out, delay = "auto", plot;
   std::vector<std::string> deletions;
   int max_order = -1;
@@ -20,9 +22,30 @@ struct FitCommand {
   double tolerance = -1;   // < 0: estimated without sigma
   int min_num_order = -1;  // < 0: any relative degree
   bool no_noise_estimate = false;
+  bool common_poles = false;
+  int max_poles = -1;  // < 0: the default (FitOptions, PoleSetFitOptions)
 };
 
-void run(const FitCommand& c) {
+// --common-poles: every --frd with one pole set (docs/formats.md §25).
+void run_common(const FitCommand& c) {
+  std::vector<Frd> curves;
+  for (const std::string& f : c.ins) curves.push_back(read_fit_input(f).frd);
+  PoleSetFitOptions o;
+  if (c.max_poles > 0) o.max_poles = c.max_poles;
+  const CommonPoleResult r = fit_common_poles(curves, c.ins, o);
+  json_save_file(c.out, common_poles_to_json(r));
+  std::printf("fralab: %zu curves -> %s: %s; rms error over all %.4g\n", c.ins.size(),
+              c.out.c_str(), r.fit.message.c_str(), r.rms_total);
+  for (const CommonPoleCurve& k : r.curves)
+    std::printf("  %s: rms error %.4g (%.3g of its rms)\n", k.source.c_str(), k.rms_error,
+                k.rms_error / std::max(k.rms_value, 1e-300));
+}
+
+void run(FitCommand c) {
+  if (c.common_poles) return run_common(c);
+  if (c.ins.size() != 1)
+    throw InputError("fit: several --frd need --common-poles (one pole set for all)");
+  c.in = c.ins[0];
   const FitInput in = read_fit_input(c.in);
   FitOptions o = in.has_control ? in.options : FitOptions{};
   parse_delay_option(c.delay, &o);
@@ -31,6 +54,7 @@ void run(const FitCommand& c) {
   if (c.tolerance >= 0) o.tolerance = c.tolerance;
   if (c.min_num_order >= 0) o.min_num_order = c.min_num_order;
   if (c.no_noise_estimate) o.estimate_noise = false;
+  if (c.max_poles >= 0) o.max_poles = c.max_poles;
   const FitResult r = fit_tf(in.frd.points, o);
   if (r.status == FitResult::Status::kFailed) throw InputError(c.in + ": " + r.message);
   std::vector<std::string> del = in.deletions;
@@ -59,8 +83,17 @@ void add_fit_command(CLI::App& app) {
   auto fc = std::make_shared<FitCommand>();
   auto* c = app.add_subcommand(
       "fit", "identification alone: a transfer function from frequency-response data");
-  c->add_option("--frd", fc->in, "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck")
+  c->add_option("--frd", fc->ins,
+                "fralab-frd/1 JSON, CSV with named columns, or a TFNS card deck (several with "
+                "--common-poles)")
       ->required();
+  c->add_flag("--common-poles", fc->common_poles,
+              "fit every --frd (one frequency grid) with one pole set: residues per curve, one "
+              "criterion over all (docs/formats.md §25)");
+  c->add_option("--max-poles", fc->max_poles,
+                "most poles of a pole set: with --common-poles, and when the order search reaches "
+                "--max-order without an adequate fit (default 40; 0: no pole set)")
+      ->check(CLI::Range(0, 400));
   c->add_option("--delay", fc->delay, "auto, none or SECONDS (subtracted)")->capture_default_str();
   c->add_option("--out", fc->out, "tf JSON (docs/formats.md §1) plus fit figures, roots, Pade sets")
       ->required();

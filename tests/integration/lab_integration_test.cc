@@ -161,6 +161,52 @@ TEST(Lab, FitCrossPlotsTheDataAgainstTheFit) {
       << c.output;
 }
 
+// `fralab fit --common-poles`: two sensors of one structure (the same two modes, residues of their
+// own) written as CSV with a sigma column: one pole set holds both, each curve's tf in the output
+// (docs/formats.md §25) evaluates to its data within the noise. Several --frd without the flag, and
+// curves on different grids, are refused with the reason.
+TEST(Lab, FitWithCommonPolesFitsSeveralCurvesWithOnePoleSet) {
+  std::string t = tmpdir("common_poles");
+  Tf a, b;
+  a.gain = 1.0, b.gain = -0.5;
+  a.poles = b.poles = {Root::Pair(30.0, 0.01), Root::Pair(70.0, 0.02)};
+  a.zeros = {Root::Pair(50.0, 0.05)};
+  b.zeros = {Root::Real(-20.0)};
+  auto write = [&](const Tf& tf, const std::string& name, double w_hi) {
+    std::ofstream csv(t + "/" + name);
+    csv.precision(17);
+    csv << "# two modes, sigma 1e-6\nw,re,im,sigma\n";
+    for (int i = 0; i < 400; ++i) {
+      const double w = 5 + (w_hi - 5) * i / 399.0;
+      csv << w << "," << tf.at(w).real() << "," << tf.at(w).imag() << ",1e-6\n";
+    }
+  };
+  write(a, "a.csv", 120);
+  write(b, "b.csv", 120);
+  write(b, "c.csv", 130);
+  Cmd c = sh(kBin + "/fralab fit --common-poles --frd " + t + "/a.csv --frd " + t +
+             "/b.csv --out " + t + "/cp.json");
+  ASSERT_EQ(c.status, 0) << c.output;
+  Json j = json_load_file(t + "/cp.json");
+  EXPECT_EQ(j["format"], "fralab-common-poles/1");
+  EXPECT_EQ(j["fit"]["status"], "adequate") << c.output;
+  ASSERT_EQ(j["curves"].size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const Tf fit = tf_from_json(j["curves"][k]["tf"], JsonWhere{"cp.json"});
+    const Tf& truth = k == 0 ? a : b;
+    for (double w : {10.0, 30.0, 55.0, 70.0, 100.0})
+      EXPECT_LT(std::abs(fit.at(w) - truth.at(w)), 1e-4 * std::abs(truth.at(w))) << k << " " << w;
+  }
+  c = sh(kBin + "/fralab fit --frd " + t + "/a.csv --frd " + t + "/b.csv --out " + t + "/x.json");
+  EXPECT_NE(c.status, 0);
+  EXPECT_THAT(c.output, ::testing::HasSubstr("several --frd need --common-poles")) << c.output;
+  c = sh(kBin + "/fralab fit --common-poles --frd " + t + "/a.csv --frd " + t + "/c.csv --out " +
+         t + "/x.json");
+  EXPECT_NE(c.status, 0);
+  EXPECT_THAT(c.output, ::testing::HasSubstr("c.csv: point 2 at")) << c.output;
+  EXPECT_THAT(c.output, ::testing::HasSubstr("common poles need one frequency grid")) << c.output;
+}
+
 // Hears the analyser's "ready" acknowledgement (seq -1) on the control URL.
 struct ReadyListener {
   bool seen = false;

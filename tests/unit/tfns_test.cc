@@ -192,7 +192,8 @@ TEST(Tfns, PolesAreAlwaysStable) {
   for (const Root& p : r.tf.poles) EXPECT_TRUE(p.stable()) << fit_to_json(r, "").dump();
   // A stable model cannot reproduce that phase: the fit says so instead of returning an unstable
   // pole.
-  EXPECT_EQ(r.status, FitResult::Status::kMaxOrderReached) << r.message;
+  EXPECT_NE(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_TRUE(r.has_model()) << r.message;
 }
 
 TEST(Tfns, FailurePathsSayWhy) {
@@ -529,8 +530,7 @@ TEST(Tfns, TheOrderAboveAnAdequateFitStartsNestedInIt) {
 // sigma halved, as a multisine BLA's sigma below a weak path's scatter): no order is adequate, and
 // chosen by the smallest error every fit goes to the highest order tried (0 of 32 at their orders).
 // The order is chosen with sigma scaled by the scatter's level instead: the true orders come back,
-// the status stays max_order_reached against the sigma given, and the scale is reported (the
-// truth: 2).
+// the status stays not adequate against the sigma given, and the scale is reported (the truth: 2).
 TEST(Tfns, DataThatScatterMoreThanTheirSigmaAreFittedAtTheirOrders) {
   constexpr int kCases = 16;
   constexpr double kMinOrdersRight = 0.9;           // measured: 16 of 16
@@ -542,7 +542,9 @@ TEST(Tfns, DataThatScatterMoreThanTheirSigmaAreFittedAtTheirOrders) {
     const FitResult r = fit_tf(c.points, FitOptions{});
     const std::string name = c.category + " " + std::to_string(i) + ": " + r.message;
     right += r.num_order == c.truth.num_order() && r.den_order == c.truth.den_order();
-    EXPECT_EQ(r.status, FitResult::Status::kMaxOrderReached) << name;
+    EXPECT_THAT(r.status, ::testing::AnyOf(FitResult::Status::kMaxOrderReached,
+                                           FitResult::Status::kNotAdequate))
+        << name;
     EXPECT_GT(r.sigma_scale, kScaleLo) << name;
     EXPECT_LT(r.sigma_scale, kScaleHi) << name;
     EXPECT_GT(r.chi2_per_dof, kScaleLo * kScaleLo) << name;  // against the sigma given
@@ -730,4 +732,134 @@ TEST(Tfns, APathThatIsNoiseWithoutSigmaIsNoResponse) {
   EXPECT_EQ(rr.status, FitResult::Status::kConverged) << rr.message;
   EXPECT_LT(rr.noise_abs, 0) << rr.noise_abs;
   EXPECT_FALSE(fit_to_json(rr, "")["fit"].contains("noise_abs"));
+}
+
+namespace {
+
+// Points of tf on a uniform grid of n points over [w_lo, w_hi] rad/s with complex Gaussian noise of
+// absolute standard deviation sigma (sigma given with each point when sigma > 0).
+std::vector<FrdPoint> uniform_points(const Tf& tf, double w_lo, double w_hi, int n, double sigma,
+                                     uint64_t seed) {
+  std::mt19937_64 g(seed);
+  std::normal_distribution<double> nd(0.0, std::sqrt(0.5));
+  std::vector<FrdPoint> out;
+  for (int i = 0; i < n; ++i) {
+    FrdPoint p;
+    p.w = w_lo + (w_hi - w_lo) * i / (n - 1);
+    std::complex<double> v = tf.at(p.w);
+    if (sigma > 0) v += std::complex<double>(nd(g), nd(g)) * sigma, p.sigma = sigma;
+    p.mag = std::abs(v);
+    p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
+    out.push_back(p);
+  }
+  return out;
+}
+
+// The lightest pole pair of a fit (nullptr: none).
+const Root* lightest_pair(const Tf& t) {
+  const Root* best = nullptr;
+  for (const Root& p : t.poles)
+    if (p.pair && (!best || p.zeta < best->zeta)) best = &p;
+  return best;
+}
+
+}  // namespace
+
+// A resonance of Q 50 000 (zeta 1e-5) seen only in a zoom band 0.03 % wide around it, over the
+// background of a zero pair outside the band (a microwave resonator's sweep): the fit is the pole
+// pair at its frequency and damping. A pair that light was refused whatever the data showed; it
+// stands when the grid resolves it (points on its peak).
+TEST(Tfns, ALightResonanceInAZoomBandIsFittedAsItIs) {
+  constexpr double kZeta = 1e-5, kBand = 3e-4;  // half-power half-width 1e-5 of wn, band 3e-4
+  constexpr double kWnTol = 1e-7;               // relative; the half-width is 1e-5
+  constexpr double kZetaTol = 0.02;             // relative, at 1e-3 noise
+  Tf truth;
+  truth.gain = 0.5;
+  truth.poles = {Root::Pair(1.0, kZeta)};
+  truth.zeros = {Root::Pair(1.004, 0.01)};
+  const auto pts = uniform_points(truth, 1 - kBand / 2, 1 + kBand / 2, 201, 1e-3, 3);
+  FitOptions o;
+  o.delay = FitOptions::Delay::kNone;
+  const FitResult r = fit_tf(pts, o);
+  ASSERT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  const Root* p = lightest_pair(r.tf);
+  ASSERT_NE(p, nullptr) << r.message;
+  EXPECT_NEAR(p->wn, 1.0, kWnTol) << r.message;
+  EXPECT_NEAR(p->zeta / kZeta, 1.0, kZetaTol) << r.message;
+}
+
+// The same zoom-band data on an axis multiplied by any power of ten from 1e-6 to 1e12 give the
+// same fit, its roots scaled: nothing in the order search depends on where the band sits. (Without
+// a delay: a delay's search bounds are in seconds, and over a band this narrow a delay and the
+// rational's roots nearly trade, docs/method/identifier.md.)
+TEST(Tfns, AZoomBandFitDoesNotDependOnWhereTheAxisSits) {
+  constexpr double kRootTol = 1e-9;  // relative, against the fit at scale 1
+  Tf truth;
+  truth.gain = 0.5;
+  truth.poles = {Root::Pair(1.0, 1e-4), Root::Real(-0.3)};
+  truth.zeros = {Root::Pair(1.01, 0.02)};
+  const auto base = uniform_points(truth, 1 - 2e-3, 1 + 2e-3, 201, 1e-3, 5);
+  FitOptions o;
+  o.delay = FitOptions::Delay::kNone;
+  const FitResult r0 = fit_tf(base, o);
+  ASSERT_EQ(r0.status, FitResult::Status::kConverged) << r0.message;
+  const Root* p0 = lightest_pair(r0.tf);
+  ASSERT_NE(p0, nullptr) << r0.message;
+  EXPECT_NEAR(p0->wn, 1.0, 1e-6) << r0.message;
+  for (int e = -6; e <= 12; e += 3) {
+    const double k = std::pow(10.0, e);
+    auto pts = base;
+    for (FrdPoint& p : pts) p.w *= k;
+    const FitResult r = fit_tf(pts, o);
+    const std::string name = "axis x1e" + std::to_string(e) + ": " + r.message;
+    EXPECT_EQ(r.status, r0.status) << name;
+    ASSERT_EQ(r.num_order, r0.num_order) << name;
+    ASSERT_EQ(r.den_order, r0.den_order) << name;
+    const Root* p = lightest_pair(r.tf);
+    ASSERT_NE(p, nullptr) << name;
+    EXPECT_NEAR(p->wn / k / p0->wn, 1.0, kRootTol) << name;
+    EXPECT_NEAR(p->zeta / p0->zeta, 1.0, 1e-6) << name;
+    EXPECT_NEAR(r.tf.gain / r0.tf.gain, 1.0, 1e-6) << name;
+  }
+}
+
+// The status says why the search stopped. Data that scatter ten times more than their sigma says
+// are adequate at no order: with room to go (maximum 10) the error stops improving first and the
+// status is not_adequate, naming the order it stopped at; with the maximum at 2 the search runs
+// into it: max_order_reached. (Were light pairs between the log grid's points accepted, they would
+// fit single noisy points and carry the search on to the maximum.)
+TEST(Tfns, TheStatusSaysWhyTheSearchStopped) {
+  Tf truth;
+  truth.poles = {Root::Real(-1.0), Root::Real(-10.0)};
+  auto pts = tf_points(truth, 0.01, 10, 10, 0.05, 21);
+  for (FrdPoint& p : pts) p.sigma *= 0.1;
+  const FitResult room = fit_tf(pts, FitOptions{});
+  EXPECT_EQ(room.status, FitResult::Status::kNotAdequate) << room.message;
+  EXPECT_THAT(room.message, ::testing::HasSubstr("the search stopped at order")) << room.message;
+  EXPECT_TRUE(room.has_model());
+  FitOptions capped;
+  capped.max_den_order = 2;
+  const FitResult at_max = fit_tf(pts, capped);
+  EXPECT_EQ(at_max.status, FitResult::Status::kMaxOrderReached) << at_max.message;
+  EXPECT_THAT(at_max.message, ::testing::HasSubstr("up to the maximum, 2")) << at_max.message;
+  EXPECT_EQ(fit_to_json(room, "")["fit"]["status"], "not_adequate");
+}
+
+// On a uniform grid of spacing dw, delays tau and tau + 2 pi / dw are the same data: the delay is
+// searched below that ambiguity and the fit finds the true one, not an alias (a VNA's S12 came back
+// with 0.115 s on a 100 MHz grid).
+TEST(Tfns, TheDelayIsSearchedOnlyWhereTheGridResolvesIt) {
+  constexpr double kDelayTol = 1e-3;  // relative
+  Tf truth;
+  truth.poles = {Root::Real(-30.0)};
+  truth.delay_s = 0.9;
+  const double dw = 1.0;  // ambiguity 2 pi s
+  const auto pts = uniform_points(truth, 1, 60, 60, 1e-4, 8);
+  FitOptions o;
+  o.max_delay_s = 100;
+  const FitResult r = fit_tf(pts, o);
+  ASSERT_EQ(r.status, FitResult::Status::kConverged) << r.message;
+  EXPECT_NEAR(r.tf.delay_s, truth.delay_s, kDelayTol * truth.delay_s) << r.message;
+  EXPECT_LT(r.tf.delay_s, 2 * std::numbers::pi / dw) << r.message;
+  EXPECT_THAT(r.message, ::testing::HasSubstr("the grid's ambiguity")) << r.message;
 }

@@ -132,6 +132,7 @@ RandomShapeSet draw(Choices& c) {
       using St = FitResult::Status;
       e.fit.status = no_response ? St::kNoResponse
                      : kind == 5 ? St::kFailed
+                     : kind == 6 ? St::kNotAdequate
                      : kind <= 7 ? St::kMaxOrderReached
                                  : St::kConverged;
       if (e.fit.status == St::kNoResponse) e.fit.tf = Tf{};

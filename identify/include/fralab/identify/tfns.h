@@ -58,7 +58,12 @@
 //    fits): such a fit is kConverged, its message says it was chosen by the criterion.
 // 6. With sigma and no order adequate (the data scatter more than their sigma says), steps 2-5 run
 //    again with sigma scaled by sqrt of the lowest chi^2/dof any physical candidate reached; the
-//    status stays kMaxOrderReached, chi2_per_dof against the sigma given, sigma_scale the scale.
+//    status stays not adequate (kMaxOrderReached when the search went up to the maximum order,
+//    else kNotAdequate), chi2_per_dof against the sigma given, sigma_scale the scale.
+// 6b. With sigma (given or estimated) and the search run up to max_den_order without an adequate
+//    order, a pole set of up to max_poles poles (pole_set_fit.h) replaces the fit when its
+//    criterion chi^2 + ln(2N) p is lower (the message says so): many light modes, which the order
+//    search's capped sweep cannot hold.
 // 7. Pruning of the chosen fit: each zero with the nearest pole of its kind closer than half the
 //    pole's modulus, and each root whose relative sigma is >= 0.5, is removed in turn and the rest
 //    refined; the best (adequate first, then the criterion of 5) replaces the fit while better,
@@ -106,6 +111,10 @@ struct FitOptions {
   int min_num_order = 0;      // numerator orders tried at each n: n down to max(this, 0)
   bool refine = true;         // output-error refinement
   bool use_sigma = true;      // weight by 1/sigma^2 when present
+  // When the order search runs up to max_den_order without an adequate order (data of more modes
+  // than that), a pole set of up to this many poles is fitted too (pole_set_fit.h: vector fitting
+  // with poles added and skimmed) and kept when its criterion (step 5) is lower; 0: never.
+  int max_poles = 40;
   /// Throws InputError naming the bad option.
   void validate() const;
 };
@@ -128,9 +137,26 @@ struct PadeSet {
 };
 
 struct FitResult {
-  // kNoResponse: the data carry sigma and fewer than 3 points rise above it (sigma <= 0.3 |G|):
-  // the path is zero within the measurement (the report's matrix shows such paths as 0).
-  enum class Status { kConverged, kMaxOrderReached, kFailed, kNoResponse } status = Status::kFailed;
+  // kConverged: the model is adequate (consistent with the noise), or chosen by the criterion over
+  // an adequate one. kMaxOrderReached: no order is adequate and the search tried up to the highest
+  // denominator order allowed (max_den_order, or the number of points less one). kNotAdequate: no
+  // order is adequate and the search stopped below that maximum (the error stopped improving, or a
+  // refinement of given orders: refine_tf); the message says why. kNoResponse: the data carry
+  // sigma and fewer than 3 points rise above it (sigma <= 0.3 |G|): the path is zero within the
+  // measurement (the report's matrix shows such paths as 0). The best model is kept with
+  // kMaxOrderReached and kNotAdequate alike (has_model()).
+  enum class Status {
+    kConverged,
+    kMaxOrderReached,
+    kFailed,
+    kNoResponse,
+    kNotAdequate
+  } status = Status::kFailed;
+  /// A model was fitted: converged, max_order_reached or not_adequate.
+  bool has_model() const {
+    return status == Status::kConverged || status == Status::kMaxOrderReached ||
+           status == Status::kNotAdequate;
+  }
   std::string message;
   Tf tf;
   int num_order = 0, den_order = 0;
