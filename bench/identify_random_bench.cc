@@ -8,7 +8,8 @@
 // |G_true| over the band (median / p90, fralab and oracle), both orders right, search losses (wrong
 // orders whose truth the criterion prefers: the search missed it; the other wrong orders are ones
 // the data do not support), in-band roots within 2 % (fralab / oracle), 3-sigma coverage (in-band
-// roots within max(2 %, 3 of their own sigma)) over all cases and over the right-order ones,
+// roots within max(2 %, 3 of their own sigma)) over all cases and over the right-order ones, the
+// right-order ones' 2-sigma coverage (in-band roots within 2 of their sigma, no floor; with noise),
 // median and p90 milliseconds per fit (delay auto). Then Google Benchmark timings. --verbose: a
 // line per case, with both criteria.
 //   ./build/bin/fralab-bench-identify-random [--cases N] [--seed S] [--verbose] [benchmark flags]
@@ -60,7 +61,7 @@ double quantile(std::vector<double> v, double q) {
 // max(2 %, 3 sigma) of that root's own sigma.
 void root_counts(const std::vector<Root>& truth, const std::vector<Root>& fit,
                  const std::vector<RootInfo>& info, double lo, double hi, int* total, int* within,
-                 int* covered) {
+                 int* covered, int* covered2 = nullptr) {
   for (const Root& t : truth) {
     const double wt = t.pair ? t.wn : std::abs(t.real);
     if (wt < lo || wt > hi) continue;
@@ -76,6 +77,7 @@ void root_counts(const std::vector<Root>& truth, const std::vector<Root>& fit,
     ++*total;
     *within += best < 0.02;
     *covered += best < std::max(0.02, 3 * sig);
+    if (covered2) *covered2 += best < 2 * sig;
   }
 }
 
@@ -120,13 +122,13 @@ int main(int argc, char** argv) {
   std::printf(
       "| noise | sigma | fralab median / p90 | oracle median / p90 | ratio median / p90 | orders "
       "right (as with sigma) | search losses | roots within 2 %% (fralab / oracle) | 3-sigma "
-      "coverage | coverage, orders right | ms per fit median / p90 "
-      "|\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "coverage | coverage, orders right | 2-sigma coverage, orders right | ms per fit median / "
+      "p90 |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Condition& k : kConditions) {
     std::vector<double> ef, eo, ms, es;  // es: the fits with sigma (additive, no sigma)
     int right = 0, tot = 0, within = 0, covered = 0, tot_o = 0, within_o = 0, covered_o = 0;
     int losses = 0, as_sigma = 0;
-    int tot_r = 0, covered_r = 0;  // in the cases whose orders are right
+    int tot_r = 0, covered_r = 0, covered2_r = 0;  // in the cases whose orders are right
     const bool additive = k.kind == NoiseKind::kAdditive;
     for (int i = 0; i < n_cases; ++i) {
       const RandomFrdCase c = random_frd_case(i, k.noise, k.sigma, seed, k.kind);
@@ -153,10 +155,10 @@ int main(int argc, char** argv) {
       root_counts(c.truth.zeros, r.tf.zeros, r.zero_info, c.w_lo, c.w_hi, &tot, &within, &covered);
       if (ok) {  // the right-order cases' coverage: the sigmas' honesty apart from missed roots
         int w2 = 0;
-        root_counts(c.truth.poles, r.tf.poles, r.pole_info, c.w_lo, c.w_hi, &tot_r, &w2,
-                    &covered_r);
-        root_counts(c.truth.zeros, r.tf.zeros, r.zero_info, c.w_lo, c.w_hi, &tot_r, &w2,
-                    &covered_r);
+        root_counts(c.truth.poles, r.tf.poles, r.pole_info, c.w_lo, c.w_hi, &tot_r, &w2, &covered_r,
+                    &covered2_r);
+        root_counts(c.truth.zeros, r.tf.zeros, r.zero_info, c.w_lo, c.w_hi, &tot_r, &w2, &covered_r,
+                    &covered2_r);
       }
       root_counts(c.truth.poles, o.tf.poles, o.pole_info, c.w_lo, c.w_hi, &tot_o, &within_o,
                   &covered_o);
@@ -200,12 +202,16 @@ int main(int argc, char** argv) {
                     100.0 * as_sigma / n_cases, mf / quantile(es, 0.5), pf / quantile(es, 0.9));
     std::printf(
         "| %.1f %%%s | %s | %.2g / %.2g | %.2g / %.2g | %.2f / %.2f | %.0f %%%s | %s | %d / %d of "
-        "%d (%.0f %%) | %.0f %% (oracle %.0f %%) | %.0f %% | %.1f / %.1f |\n",
+        "%d (%.0f %%) | %.0f %% (oracle %.0f %%) | %.0f %% | %s | %.1f / %.1f |\n",
         100 * k.noise, additive ? " of the peak, additive" : "", k.sigma ? "yes" : "no", mf, pf, mo,
         po, mf / mo, pf / po, 100.0 * right / n_cases, as,
         k.sigma ? std::to_string(losses).c_str() : "-", within, within_o, tot,
         100.0 * within / std::max(1, within_o), 100.0 * covered / std::max(1, tot),
         100.0 * covered_o / std::max(1, tot_o), 100.0 * covered_r / std::max(1, tot_r),
+        k.noise > 0
+            ? (std::to_string(int(std::lround(100.0 * covered2_r / std::max(1, tot_r)))) + " %")
+                  .c_str()
+            : "-",
         quantile(ms, 0.5), quantile(ms, 0.9));
     std::fflush(stdout);
   }

@@ -444,9 +444,11 @@ Sigmas parameter_sigmas(const Data& d, const Tf& t, bool free_delay, double sse)
   for (int k = 0; k < J.cols(); ++k)
     if (unidentified[k]) cov(k, k) = INFINITY;
   const double var = sse / std::max(1.0, double(f.values() - f.inputs()));
-  // Without sigma: scaled by the residual variance; with sigma (measured or estimated), by the
-  // reduced chi^2 when it exceeds 1 (the data scatter more than sigma says).
-  cov *= d.has_sigma ? std::max(1.0, var) : var;
+  // Without sigma: scaled by the residual variance. With sigma (measured or estimated): each of
+  // the 2N real rows (real and imaginary parts of e_i / sigma_i, sigma_i the complex value's
+  // standard deviation) has variance 1/2, widened when the reduced chi^2 exceeds 1 (the data
+  // scatter more than sigma says; var = chi^2 / (2N - p) is then above 1/2).
+  cov *= d.has_sigma ? std::max(0.5, var) : var;
   auto sd = [&](int k) { return std::sqrt(std::max(0.0, cov(k, k))); };
   // A pair's location s = wn (-zeta +- j sqrt(1 - zeta^2)) moves by |ds|/wn = dzeta / sqrt(1 -
   // zeta^2): unbounded as zeta -> 1, where the two roots split on the real axis by sqrt(2 dzeta)
