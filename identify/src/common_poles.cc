@@ -21,7 +21,7 @@ double second_difference_noise(const std::vector<C>& g) {
 
 CommonPoleResult fit_common_poles(const std::vector<Frd>& curves,
                                   const std::vector<std::string>& sources,
-                                  const PoleSetFitOptions& o) {
+                                  const PoleSetFitOptions& o, bool unweighted) {
   if (curves.empty() || curves.size() != sources.size())
     throw InputError("common poles: no curve (or a curve without its source)");
   std::vector<double> w;
@@ -70,6 +70,21 @@ CommonPoleResult fit_common_poles(const std::vector<Frd>& curves,
                        "noise needs sigma, e.g. a column of a small constant)");
     }
     r.curves.push_back(info);
+  }
+  if (unweighted) {
+    double level = 0;
+    for (size_t c = 0; c < g.size(); ++c) {
+      const double n = second_difference_noise(g[c]);
+      level += n * n / double(g.size());
+    }
+    level = std::sqrt(level);
+    if (!(level > 0))
+      throw InputError("common poles: no noise seen in any curve's second differences");
+    for (size_t c = 0; c < g.size(); ++c) {
+      W[c].assign(w.size(), 1 / (level * level));
+      r.curves[c].sigma_given = false;
+      r.curves[c].noise = level;
+    }
   }
   r.fit = fit_pole_set(w, g, W, o);
   if (r.fit.status == PoleSetFit::Status::kFailed)

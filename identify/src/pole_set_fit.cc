@@ -428,6 +428,16 @@ PoleSetFit fit_pole_set(const std::vector<double>& w, const std::vector<std::vec
     out.skimmed += columns(best.poles) - columns(r.poles);
     best = r;
   }
+  // 6. Polish: more relocations of the chosen set, the best by the criterion kept (a relocation
+  // need not lower it: VF is a fixed point, not a descent).
+  {
+    std::vector<C> q = best.poles;
+    for (int r = 0; r < 3 * o.relocations; ++r) {
+      if (!relocate(P, q)) break;
+      Model m = evaluate(P, q);
+      if (m.crit < best.crit) best = m;
+    }
+  }
   // The result in rad/s.
   out.order = columns(best.poles);
   const int K = out.order;

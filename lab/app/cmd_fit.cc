@@ -22,7 +22,7 @@ struct FitCommand {
   double tolerance = -1;   // < 0: estimated without sigma
   int min_num_order = -1;  // < 0: any relative degree
   bool no_noise_estimate = false;
-  bool common_poles = false;
+  bool common_poles = false, unweighted = false;
   int max_poles = -1;  // < 0: the default (FitOptions, PoleSetFitOptions)
 };
 
@@ -32,7 +32,7 @@ void run_common(const FitCommand& c) {
   for (const std::string& f : c.ins) curves.push_back(read_fit_input(f).frd);
   PoleSetFitOptions o;
   if (c.max_poles > 0) o.max_poles = c.max_poles;
-  const CommonPoleResult r = fit_common_poles(curves, c.ins, o);
+  const CommonPoleResult r = fit_common_poles(curves, c.ins, o, c.unweighted);
   json_save_file(c.out, common_poles_to_json(r));
   std::printf("fralab: %zu curves -> %s: %s; rms error over all %.4g\n", c.ins.size(),
               c.out.c_str(), r.fit.message.c_str(), r.rms_total);
@@ -90,6 +90,9 @@ void add_fit_command(CLI::App& app) {
   c->add_flag("--common-poles", fc->common_poles,
               "fit every --frd (one frequency grid) with one pole set: residues per curve, one "
               "criterion over all (docs/formats.md §25)");
+  c->add_flag("--unweighted", fc->unweighted,
+              "with --common-poles: every point of every curve weighted alike (scikit-rf's vector "
+              "fitting), instead of each curve by its sigma or its estimated noise");
   c->add_option("--max-poles", fc->max_poles,
                 "most poles of a pole set: with --common-poles, and when the order search reaches "
                 "--max-order without an adequate fit (default 40; 0: no pole set)")

@@ -8,7 +8,8 @@
 // variance 6 sigma^2 for white complex noise, and |.|^2 is then exponential, whose median is
 // ln 2 times its mean: sigma^2 = median |second difference|^2 / (6 ln 2). The median keeps the
 // few points where the response itself bends (a resonance's peak) from raising it. With a level
-// estimated, "adequate" is judged against that level.
+// estimated, "adequate" is judged against that level. Unweighted (scikit-rf's vector fitting):
+// every point of every curve alike, sigma the rms of the curves' estimated levels.
 #pragma once
 
 #include <complex>
@@ -45,7 +46,7 @@ double second_difference_noise(const std::vector<std::complex<double>>& g);
 /// (relative 1e-9), naming the first point that differs.
 CommonPoleResult fit_common_poles(const std::vector<Frd>& curves,
                                   const std::vector<std::string>& sources,
-                                  const PoleSetFitOptions& o = {});
+                                  const PoleSetFitOptions& o = {}, bool unweighted = false);
 
 /// docs/formats.md §25.
 Json common_poles_to_json(const CommonPoleResult& r);

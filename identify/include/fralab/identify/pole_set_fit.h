@@ -24,6 +24,7 @@
 // 5. Skimming: while some pole's removal (residues refitted) raises chi^2 by less than kappa times
 //    the parameters it takes (2 for a pair plus its residues, per curve), the cheapest is removed
 //    and the rest relocated.
+// 6. Polishing: 3 x `relocations` more relocations of the chosen set; the best by the criterion.
 // The best model by the criterion over all rounds is returned.
 #pragma once
 
