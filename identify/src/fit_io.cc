@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "fralab/core/measure_dir.h"
 #include "fralab/identify/readers.h"
@@ -55,12 +56,36 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   for (const Frd& f : curves) data[f.pair] = f.points;
   StateModel sm = build_state_model(m, data);
   j["state_model"] = state_model_json(sm);
+  // The same from one pole set over the paths (docs/formats.md §10, "common_pole_set").
+  const CommonPoleMatrix cpm = common_pole_matrix(m, data);
+  std::optional<StateModel> sm_set;
+  if (cpm.fit.status != PoleSetFit::Status::kFailed && !cpm.matrix.clusters.empty()) {
+    sm_set = build_state_model(cpm.matrix, data);
+    Json c = transfer_matrix_json(cpm.matrix);
+    j["common_pole_set"] = {{"message", cpm.fit.message},
+                            {"order", cpm.fit.order},
+                            {"chi2_per_dof", cpm.fit.chi2_per_dof},
+                            {"paths", cpm.paths},
+                            {"common_poles", c["common_poles"]},
+                            {"state_count", c["state_count"]},
+                            {"state_model", state_model_json(*sm_set)}};
+  }
   j["actuators"] = actuators;
   j["title"] = title;
   json_save_file(md_dir.transfer_matrix_json(), j);
   std::ofstream md(md_dir.transfer_matrix_md());
   md << transfer_matrix_markdown(m, title);
   md << state_model_markdown(sm);
+  if (sm_set) {
+    md << "\n## One pole set over the paths\n\n"
+       << cpm.fit.message << ". " << cpm.matrix.clusters.size()
+       << " poles that some path needs; the state model from them:"
+       << "\n";
+    std::string sec = state_model_markdown(*sm_set);
+    const std::string head = "\n## State model\n\n";
+    if (sec.compare(0, head.size(), head) == 0) sec = "\n" + sec.substr(head.size());
+    md << sec;
+  }
   md << "\n## Actuators\n\n| pair | tf | fit |\n|---|---|---|\n";
   for (const auto& a : actuators) {
     md << "| " << a["pair"].get<std::string>() << " | " << a["text"].get<std::string>() << " | "

@@ -16,14 +16,15 @@ using C = std::complex<double>;
 using MatR = Eigen::MatrixXd;
 using VecR = Eigen::VectorXd;
 
-// The curves in scaled frequency (s = j w / ws), with square-root weights.
+// The curves in scaled frequency (s = j w / ws), each on its own grid, with square-root weights.
 struct Problem {
-  int M = 0, nc = 0;
+  int nc = 0, total = 0;  // curves, points over all curves
   double ws = 1, kappa = 0;
-  std::vector<C> s;
-  std::vector<double> spacing;  // local grid spacing, scaled
+  std::vector<std::vector<C>> s;             // [curve][point]
+  std::vector<std::vector<double>> spacing;  // local grid spacing, scaled
   const std::vector<std::vector<C>>* g = nullptr;
   std::vector<std::vector<double>> sw;
+  int M(int c) const { return int(s[size_t(c)].size()); }
 };
 
 int columns(const std::vector<C>& poles) {
@@ -62,7 +63,7 @@ VecR solve_scaled(const MatR& A, const VecR& b) {
 // Curve c's coefficients (K basis coefficients, then d) by weighted least squares; returns its
 // chi^2 (sum W |e|^2) and the coefficients in *x.
 double coefficients(const Problem& P, const Eigen::MatrixXcd& Phi, int c, VecR* x) {
-  const int M = P.M, K = int(Phi.cols());
+  const int M = P.M(c), K = int(Phi.cols());
   MatR A(2 * M, K + 1);
   VecR b(2 * M);
   const auto& g = (*P.g)[size_t(c)];
@@ -115,16 +116,19 @@ std::vector<C> tidy_roots(const Eigen::VectorXcd& ev, bool reflect) {
 // One VF relocation of the poles against every curve (the scaling function's unknowns from each
 // curve's equations reduced by QR, stacked with the relaxation row). False when it fails.
 bool relocate(const Problem& P, std::vector<C>& poles) {
-  const int M = P.M, K = columns(poles);
-  const Eigen::MatrixXcd Phi = basis(poles, P.s);
+  const int K = columns(poles);
   MatR stack(P.nc * (K + 1) + 1, K + 1);
   double gscale = 0;
+  VecR relax = VecR::Zero(K);
   for (int c = 0; c < P.nc; ++c)
-    for (int i = 0; i < M; ++i)
+    for (int i = 0; i < P.M(c); ++i)
       gscale += std::norm(P.sw[size_t(c)][size_t(i)] * (*P.g)[size_t(c)][size_t(i)]);
-  gscale = std::sqrt(gscale / (double(M) * P.nc));
+  gscale = std::sqrt(gscale / double(P.total));
   if (!(gscale > 0) || !std::isfinite(gscale)) return false;
   for (int c = 0; c < P.nc; ++c) {
+    const int M = P.M(c);
+    if (2 * M < 2 * K + 2) return false;
+    const Eigen::MatrixXcd Phi = basis(poles, P.s[size_t(c)]);
     const auto& g = (*P.g)[size_t(c)];
     const auto& sw = P.sw[size_t(c)];
     MatR A(2 * M, 2 * K + 2);
@@ -133,6 +137,7 @@ bool relocate(const Problem& P, std::vector<C>& poles) {
         const C a = sw[size_t(i)] * Phi(i, k), b = -sw[size_t(i)] * g[size_t(i)] * Phi(i, k);
         A(i, k) = a.real(), A(M + i, k) = a.imag();
         A(i, K + 1 + k) = b.real(), A(M + i, K + 1 + k) = b.imag();
+        relax(k) += Phi(i, k).real();
       }
       A(i, K) = sw[size_t(i)], A(M + i, K) = 0;
       const C b = -sw[size_t(i)] * g[size_t(i)];
@@ -147,15 +152,12 @@ bool relocate(const Problem& P, std::vector<C>& poles) {
     stack.block(c * (K + 1), 0, K + 1, K + 1) =
         R.block(K + 1, K + 1, K + 1, K + 1) * cn.tail(K + 1).asDiagonal();
   }
-  // Relaxation: Re sum_i sigma(s_i) = M, weighted like a data row.
-  for (int k = 0; k < K; ++k) {
-    double sum = 0;
-    for (int i = 0; i < M; ++i) sum += Phi(i, k).real();
-    stack(P.nc * (K + 1), k) = gscale * sum / M;
-  }
+  // Relaxation: Re sum sigma(s_i) over every point = the number of points, weighted like a data
+  // row.
+  for (int k = 0; k < K; ++k) stack(P.nc * (K + 1), k) = gscale * relax(k) / P.total;
   stack(P.nc * (K + 1), K) = gscale;
   VecR rhs = VecR::Zero(stack.rows());
-  rhs(P.nc * (K + 1)) = gscale * std::sqrt(double(M));
+  rhs(P.nc * (K + 1)) = gscale * std::sqrt(double(P.total));
   const VecR x = solve_scaled(stack, rhs);
   if (!x.allFinite()) return false;
   double dt = x(K);
@@ -185,63 +187,71 @@ struct Model {
 Model evaluate(const Problem& P, const std::vector<C>& poles) {
   Model m;
   m.poles = poles;
-  const Eigen::MatrixXcd Phi = basis(poles, P.s);
-  const int K = int(Phi.cols());
+  const int K = columns(poles);
   for (int c = 0; c < P.nc; ++c) {
     VecR x;
-    m.chi2.push_back(coefficients(P, Phi, c, &x));
+    m.chi2.push_back(coefficients(P, basis(poles, P.s[size_t(c)]), c, &x));
     m.x.push_back(x);
     m.total += m.chi2.back();
   }
   m.params = K + P.nc * (K + 1);
-  const double N = double(P.M) * P.nc;
+  const double N = double(P.total);
   m.chi2dof = m.total / std::max(1.0, N - m.params / 2.0);
   m.adequate = m.chi2dof <= 1 + 3 / std::sqrt(N);
   m.crit = m.total + P.kappa * m.params;
   return m;
 }
 
-// The weighted residual of a model per point, summed over curves, smoothed over +-2 points.
-std::vector<double> residual_profile(const Problem& P, const Model& m) {
-  const Eigen::MatrixXcd Phi = basis(m.poles, P.s);
-  const int K = int(Phi.cols());
-  std::vector<double> e(size_t(P.M), 0.0);
-  for (int c = 0; c < P.nc; ++c) {
-    for (int i = 0; i < P.M; ++i) {
-      C v = m.x[size_t(c)](K);
-      for (int k = 0; k < K; ++k) v += Phi(i, k) * m.x[size_t(c)](k);
-      e[size_t(i)] += std::norm(P.sw[size_t(c)][size_t(i)] * ((*P.g)[size_t(c)][size_t(i)] - v));
-    }
+// The weighted residual of a model on curve c per point, smoothed over +-2 points.
+std::vector<double> residual_profile(const Problem& P, const Model& m, int c) {
+  const Eigen::MatrixXcd Phi = basis(m.poles, P.s[size_t(c)]);
+  const int K = int(Phi.cols()), M = P.M(c);
+  std::vector<double> e(size_t(M), 0.0);
+  for (int i = 0; i < M; ++i) {
+    C v = m.x[size_t(c)](K);
+    for (int k = 0; k < K; ++k) v += Phi(i, k) * m.x[size_t(c)](k);
+    e[size_t(i)] = std::norm(P.sw[size_t(c)][size_t(i)] * ((*P.g)[size_t(c)][size_t(i)] - v));
   }
   std::vector<double> sm(e.size(), 0.0);
-  for (int i = 0; i < P.M; ++i) {
+  for (int i = 0; i < M; ++i) {
     int n = 0;
-    for (int j = std::max(0, i - 2); j <= std::min(P.M - 1, i + 2); ++j)
+    for (int j = std::max(0, i - 2); j <= std::min(M - 1, i + 2); ++j)
       sm[size_t(i)] += e[size_t(j)], ++n;
-    sm[size_t(i)] /= n * P.nc;
+    sm[size_t(i)] /= n;
   }
   return sm;
 }
 
-// New pairs at the largest peaks of the residual (at least 5 points apart), at most `room`.
+// New pairs at the largest peaks of the residual over every curve (at least 5 grid spacings
+// apart), at most `count`.
 std::vector<C> peaks_to_add(const Problem& P, const Model& m, int count) {
-  const std::vector<double> r = residual_profile(P, m);
-  std::vector<int> idx;
-  for (int i = 0; i < P.M; ++i) {
-    const bool left = i == 0 || r[size_t(i)] >= r[size_t(i - 1)];
-    const bool right = i == P.M - 1 || r[size_t(i)] >= r[size_t(i + 1)];
-    if (left && right) idx.push_back(i);
+  struct Peak {
+    double value, b, spacing;
+  };
+  std::vector<Peak> peaks;
+  for (int c = 0; c < P.nc; ++c) {
+    const std::vector<double> r = residual_profile(P, m, c);
+    const int M = P.M(c);
+    for (int i = 0; i < M; ++i) {
+      const bool left = i == 0 || r[size_t(i)] >= r[size_t(i - 1)];
+      const bool right = i == M - 1 || r[size_t(i)] >= r[size_t(i + 1)];
+      if (left && right)
+        peaks.push_back(
+            {r[size_t(i)], P.s[size_t(c)][size_t(i)].imag(), P.spacing[size_t(c)][size_t(i)]});
+    }
   }
-  std::sort(idx.begin(), idx.end(), [&](int a, int b) { return r[size_t(a)] > r[size_t(b)]; });
-  std::vector<int> chosen;
-  for (int i : idx) {
+  std::sort(peaks.begin(), peaks.end(),
+            [](const Peak& a, const Peak& b) { return a.value > b.value; });
+  std::vector<Peak> chosen;
+  for (const Peak& p : peaks) {
     if (int(chosen.size()) >= count) break;
     bool far = true;
-    for (int j : chosen) far = far && std::abs(i - j) >= 5;
-    if (far) chosen.push_back(i);
+    for (const Peak& q : chosen)
+      far = far && std::abs(p.b - q.b) >= 5 * std::max(p.spacing, q.spacing);
+    if (far) chosen.push_back(p);
   }
   std::vector<C> out;
-  for (int i : chosen) out.push_back(C(-2 * P.spacing[size_t(i)], P.s[size_t(i)].imag()));
+  for (const Peak& p : chosen) out.push_back(C(-2 * p.spacing, p.b));
   return out;
 }
 
@@ -346,49 +356,78 @@ Tf PoleSetFit::to_tf(size_t c) const {
 
 PoleSetFit fit_pole_set(const std::vector<double>& w, const std::vector<std::vector<C>>& g,
                         const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o) {
-  o.validate();
-  PoleSetFit out;
-  const int M = int(w.size());
-  if (M < 4 || g.empty() || g.size() != W.size()) {
-    out.message = "fewer than 4 points or no curve";
-    return out;
-  }
   for (size_t c = 0; c < g.size(); ++c) {
-    if (g[c].size() != w.size() || W[c].size() != w.size()) {
+    if (g[c].size() != w.size() || (c < W.size() && W[c].size() != w.size())) {
+      o.validate();
+      PoleSetFit out;
       out.message = "curve " + std::to_string(c) + " is not on the common grid";
       return out;
     }
   }
-  for (int i = 1; i < M; ++i) {
-    if (!(w[size_t(i)] > w[size_t(i - 1)]) || !(w[0] > 0)) {
-      out.message = "frequencies must be > 0 and increasing";
+  return fit_pole_set(std::vector<std::vector<double>>(g.size(), w), g, W, o);
+}
+
+PoleSetFit fit_pole_set(const std::vector<std::vector<double>>& w,
+                        const std::vector<std::vector<C>>& g,
+                        const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o) {
+  o.validate();
+  PoleSetFit out;
+  if (g.empty() || g.size() != W.size() || g.size() != w.size()) {
+    out.message = "no curve, or curves, grids and weights of different counts";
+    return out;
+  }
+  double lo = INFINITY, hi = 0;
+  int total = 0, smallest = std::numeric_limits<int>::max();
+  for (size_t c = 0; c < g.size(); ++c) {
+    const auto& wc = w[c];
+    if (g[c].size() != wc.size() || W[c].size() != wc.size()) {
+      out.message = "curve " + std::to_string(c) + ": values, weights and grid of different sizes";
       return out;
     }
+    if (wc.size() < 4) {
+      out.message = "curve " + std::to_string(c) + ": fewer than 4 points";
+      return out;
+    }
+    for (size_t i = 0; i < wc.size(); ++i) {
+      if (!(wc[i] > 0) || (i > 0 && !(wc[i] > wc[i - 1]))) {
+        out.message = "curve " + std::to_string(c) + ": frequencies must be > 0 and increasing";
+        return out;
+      }
+    }
+    lo = std::min(lo, wc.front()), hi = std::max(hi, wc.back());
+    total += int(wc.size());
+    smallest = std::min(smallest, int(wc.size()));
   }
   Problem P;
-  P.M = M;
   P.nc = int(g.size());
+  P.total = total;
   P.g = &g;
-  P.ws = std::sqrt(w.front() * w.back());
-  P.kappa = std::log(2.0 * M * P.nc);
-  for (int i = 0; i < M; ++i) {
-    P.s.push_back(C(0, w[size_t(i)] / P.ws));
-    const double lo = i > 0 ? w[size_t(i)] - w[size_t(i - 1)] : w[1] - w[0];
-    const double hi = i < M - 1 ? w[size_t(i + 1)] - w[size_t(i)] : lo;
-    P.spacing.push_back(0.5 * (lo + hi) / P.ws);
-  }
-  for (const auto& Wc : W) {
-    std::vector<double> sw;
-    for (double x : Wc) sw.push_back(std::sqrt(std::max(x, 0.0)));
+  P.ws = std::sqrt(lo * hi);
+  P.kappa = std::log(2.0 * total);
+  for (size_t c = 0; c < g.size(); ++c) {
+    const auto& wc = w[c];
+    const int M = int(wc.size());
+    std::vector<C> sc;
+    std::vector<double> spc, sw;
+    for (int i = 0; i < M; ++i) {
+      sc.push_back(C(0, wc[size_t(i)] / P.ws));
+      const double a = i > 0 ? wc[size_t(i)] - wc[size_t(i - 1)] : wc[1] - wc[0];
+      const double b = i < M - 1 ? wc[size_t(i + 1)] - wc[size_t(i)] : a;
+      spc.push_back(0.5 * (a + b) / P.ws);
+      sw.push_back(std::sqrt(std::max(W[c][size_t(i)], 0.0)));
+    }
+    P.s.push_back(sc);
+    P.spacing.push_back(spc);
     P.sw.push_back(sw);
   }
-  const int max_poles = std::min(o.max_poles, M - 2);
+  const double w_lo = lo, w_hi = hi;
+  const int max_poles = std::min(o.max_poles, smallest - 2);
   // 1. Start pairs spread linearly over the band.
   std::vector<C> poles;
   const int pairs = std::max(1, std::min(o.start_pairs, max_poles / 2));
   for (int k = 0; k < pairs; ++k) {
     const double f = (k + 0.5) / pairs;
-    const double b = (w.front() + f * (w.back() - w.front())) / P.ws;
+    const double b = (w_lo + f * (w_hi - w_lo)) / P.ws;
     poles.push_back(C(-b / 100, b));
   }
   if (max_poles < 2) poles = {C(-1, 0)};

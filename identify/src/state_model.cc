@@ -333,9 +333,16 @@ StateModel build_state_model(const TransferMatrix& m,
       }
       paths.push_back(pd);
       if (!converged) continue;
-      // The residues of this path's own clusters, alone (the start of the factors' fit).
+      // The residues of this path's own clusters, alone (the start of the factors' fit): those
+      // nearest its fit's poles, or with one pole set those it is a member of.
       std::vector<int> ks;
-      for (const Root& p : tf.poles) {
+      if (m.from_pole_set) {
+        for (int k = 0; k < nk; ++k) {
+          const auto& mem = m.clusters[size_t(k)].pairs;
+          if (std::find(mem.begin(), mem.end(), key) != mem.end()) ks.push_back(k);
+        }
+      }
+      for (const Root& p : m.from_pole_set ? std::vector<Root>{} : tf.poles) {
         int best = -1;
         double bd = INFINITY;
         for (int k = 0; k < nk; ++k) {

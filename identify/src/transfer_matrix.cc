@@ -23,6 +23,38 @@ double dist(const Root& a, const Root& b) {
   return std::abs(loc(a) - loc(b)) / std::abs(loc(b));
 }
 
+// The scope of each cluster of m over the fitted paths (input, output): "plant" when every one is
+// a member, "output" / "input" when every one into one output / from one input is (two or more),
+// else "path".
+void assign_scopes(TransferMatrix& m,
+                   const std::vector<std::pair<std::string, std::string>>& fitted) {
+  std::map<std::string, std::vector<std::string>> by_out, by_in;
+  std::vector<std::string> all;
+  for (const auto& [in, out] : fitted) {
+    const std::string name = in + ":" + out;
+    by_out[out].push_back(name);
+    by_in[in].push_back(name);
+    all.push_back(name);
+  }
+  auto covers = [](const std::vector<std::string>& members, const std::vector<std::string>& need) {
+    for (const auto& n : need)
+      if (std::find(members.begin(), members.end(), n) == members.end()) return false;
+    return need.size() >= 2;
+  };
+  for (auto& c : m.clusters) {
+    c.scope = "path";
+    if (covers(c.pairs, all)) {
+      c.scope = "plant";
+      continue;
+    }
+    for (const auto& [o, v] : by_out)
+      if (covers(c.pairs, v)) c.scope = "output", c.where = o;
+    if (c.scope != "path") continue;
+    for (const auto& [i, v] : by_in)
+      if (covers(c.pairs, v)) c.scope = "input", c.where = i;
+  }
+}
+
 }  // namespace
 
 std::string factor_text(const Root& r) {
@@ -78,38 +110,90 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
         best->pairs.push_back(name);
     }
   }
-  // Scope of each cluster.
-  std::map<std::string, std::vector<std::string>> by_out, by_in;
-  std::vector<std::string> all;
-  for (const auto& e : entries) {
-    if (e.fit.status != FitResult::Status::kConverged) continue;
-    const std::string name = e.input + ":" + e.output;
-    by_out[e.output].push_back(name);
-    by_in[e.input].push_back(name);
-    all.push_back(name);
-  }
-  auto covers = [](const std::vector<std::string>& members, const std::vector<std::string>& need) {
-    for (const auto& n : need)
-      if (std::find(members.begin(), members.end(), n) == members.end()) return false;
-    return need.size() >= 2;
-  };
-  for (auto& c : m.clusters) {
-    c.scope = "path";
-    if (covers(c.pairs, all)) {
-      c.scope = "plant";
-      continue;
-    }
-    for (const auto& [o, v] : by_out)
-      if (covers(c.pairs, v)) c.scope = "output", c.where = o;
-    if (c.scope != "path") continue;
-    for (const auto& [i, v] : by_in)
-      if (covers(c.pairs, v)) c.scope = "input", c.where = i;
-  }
+  std::vector<std::pair<std::string, std::string>> fitted;
+  for (const auto& e : entries)
+    if (e.fit.status == FitResult::Status::kConverged) fitted.push_back({e.input, e.output});
+  assign_scopes(m, fitted);
   for (const auto& c : m.clusters) m.state_count += c.mean.order();
   std::sort(m.clusters.begin(), m.clusters.end(), [](const PoleCluster& a, const PoleCluster& b) {
     return (a.mean.pair ? a.mean.wn : -a.mean.real) < (b.mean.pair ? b.mean.wn : -b.mean.real);
   });
   return m;
+}
+
+CommonPoleMatrix common_pole_matrix(const TransferMatrix& m,
+                                    const std::map<std::string, std::vector<FrdPoint>>& data,
+                                    const PoleSetFitOptions& o) {
+  CommonPoleMatrix out;
+  out.matrix = m;
+  out.matrix.clusters.clear();
+  out.matrix.state_count = 0;
+  out.matrix.from_pole_set = true;
+  std::vector<std::vector<double>> w, W;
+  std::vector<std::vector<std::complex<double>>> g;
+  std::vector<double> rms;
+  std::vector<std::pair<std::string, std::string>> fitted;
+  for (const auto& [key, fit] : m.fits) {
+    const auto& [output, input] = key;
+    const std::string name = input + ":" + output;
+    auto it = data.find(name);
+    if (!fit.has_model() || it == data.end()) continue;
+    std::vector<FrdPoint> pts;
+    bool sigma = true;
+    for (const FrdPoint& p : it->second) {
+      if (!p.valid || !(p.mag > 0)) continue;
+      pts.push_back(p);
+      sigma = sigma && p.sigma > 0;
+    }
+    std::sort(pts.begin(), pts.end(),
+              [](const FrdPoint& a, const FrdPoint& b) { return a.w < b.w; });
+    pts.erase(std::unique(pts.begin(), pts.end(),
+                          [](const FrdPoint& a, const FrdPoint& b) { return a.w == b.w; }),
+              pts.end());
+    if (pts.size() < 4) continue;
+    const double rel = fit.noise_rel > 0 ? fit.noise_rel : 0.01;
+    std::vector<double> wc, Wc;
+    std::vector<std::complex<double>> gc;
+    double e = 0;
+    for (const FrdPoint& p : pts) {
+      wc.push_back(p.w);
+      gc.push_back(p.value() * std::polar(1.0, p.w * fit.tf.delay_s));  // the fit's delay removed
+      const double s = sigma ? p.sigma : rel * p.mag;
+      Wc.push_back(1 / (s * s));
+      e += p.mag * p.mag;
+    }
+    w.push_back(wc), g.push_back(gc), W.push_back(Wc);
+    rms.push_back(std::sqrt(e / double(pts.size())));
+    out.paths.push_back(name);
+    fitted.push_back({input, output});
+  }
+  if (g.empty()) {
+    out.fit.message = "no path with a model and its curve";
+    return out;
+  }
+  out.fit = fit_pole_set(w, g, W, o);
+  if (out.fit.status == PoleSetFit::Status::kFailed) return out;
+  constexpr double kMember = 0.01;  // a pole's peak term against the path's rms |G|
+  for (size_t k = 0; k < out.fit.poles.size(); ++k) {
+    const std::complex<double> p = out.fit.poles[k];
+    PoleCluster c;
+    c.mean =
+        p.imag() == 0 ? Root::Real(p.real()) : Root::Pair(std::abs(p), -p.real() / std::abs(p));
+    for (size_t j = 0; j < out.paths.size(); ++j) {
+      const double peak = std::abs(out.fit.residues[j][k]) / std::max(std::abs(p.real()), 1e-300);
+      if (peak >= kMember * rms[j]) c.pairs.push_back(out.paths[j]);
+    }
+    if (c.pairs.empty()) continue;  // a pole no path needs
+    out.matrix.clusters.push_back(c);
+  }
+  assign_scopes(out.matrix, fitted);
+  for (const auto& c : out.matrix.clusters) out.matrix.state_count += c.mean.order();
+  std::sort(out.matrix.clusters.begin(), out.matrix.clusters.end(),
+            [](const PoleCluster& a, const PoleCluster& b) {
+              return (a.mean.pair ? a.mean.wn : -a.mean.real) <
+                     (b.mean.pair ? b.mean.wn : -b.mean.real);
+            });
+  return out;
 }
 
 Json transfer_matrix_json(const TransferMatrix& m) {

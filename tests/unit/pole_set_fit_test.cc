@@ -110,6 +110,33 @@ TEST(PoleSetFit, SeveralCurvesShareOnePoleSet) {
   }
 }
 
+// Curves on grids of their own (an orthogonal multisine gives each input its own lines): one pole
+// set from both, each curve's coefficients on its own points.
+TEST(PoleSetFit, CurvesOnTheirOwnGridsShareOnePoleSet) {
+  constexpr double kFreqTol = 1e-4;
+  Modes a, b;
+  a.wn = b.wn = {2 * std::numbers::pi * 40, 2 * std::numbers::pi * 90};
+  a.zeta = b.zeta = {0.02, 0.005};
+  a.amp = {1e4, 3e4};
+  b.amp = {-2e4, 1e4};
+  const auto wa = grid(2 * std::numbers::pi * 5, 2 * std::numbers::pi * 150, 300);
+  const auto wb = grid(2 * std::numbers::pi * 7.3, 2 * std::numbers::pi * 140, 211);
+  std::vector<std::vector<C>> g(2);
+  for (double x : wa) g[0].push_back(a.at(x));
+  for (double x : wb) g[1].push_back(b.at(x));
+  const std::vector<std::vector<double>> W = {std::vector<double>(wa.size(), 1e8),
+                                              std::vector<double>(wb.size(), 1e8)};
+  const PoleSetFit r = fit_pole_set({wa, wb}, g, W);
+  ASSERT_NE(r.status, PoleSetFit::Status::kFailed) << r.message;
+  for (double wn : a.wn) {
+    const C* p = nearest_pair(r, wn);
+    ASSERT_NE(p, nullptr) << wn << ": " << r.message;
+    EXPECT_NEAR(std::abs(*p) / wn, 1.0, kFreqTol) << r.message;
+  }
+  for (size_t i = 0; i < wb.size(); i += 23)
+    EXPECT_LT(std::abs(r.at(1, wb[i]) - b.at(wb[i])), 1e-6 * std::abs(b.at(wb[i])) + 1e-9);
+}
+
 TEST(PoleSetFit, BadGridsAreRefusedWithAReason) {
   const std::vector<C> g = {1, 2, 3, 4, 5};
   const std::vector<double> W(5, 1.0);

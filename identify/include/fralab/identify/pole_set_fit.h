@@ -1,5 +1,5 @@
-// One pole set for one or several frequency responses on a common grid, its size found from the
-// data: vector fitting (Gustavsen and Semlyen 1999; relaxed, Gustavsen 2006; several responses
+// One pole set for one or several frequency responses (each on its own grid), its size found from
+// the data: vector fitting (Gustavsen and Semlyen 1999; relaxed, Gustavsen 2006; several responses
 // with one pole set as in Deschrijver et al. 2008's fast VF) inside an adding and skimming loop
 // (Grivet-Talocia and Gustavsen, "Passive Macromodeling", 2016, sec. 7.4: poles are added where the
 // residual stands above the noise, and those whose removal does not raise the error by more than
@@ -65,8 +65,14 @@ struct PoleSetFit {
   Tf to_tf(size_t c) const;
 };
 
-/// The pole set of curves g[c][i] at w[i] (rad/s, > 0, increasing, shared by every curve), weights
-/// W[c][i] >= 0. Needs at least 4 points.
+/// The pole set of curves g[c][i] at w[c][i] (rad/s, > 0, increasing; each curve on its own grid),
+/// weights W[c][i] >= 0. Needs at least 4 points a curve; at most (the smallest curve's points - 2)
+/// poles. Status kFailed with a message naming the curve for a bad grid or mismatched sizes.
+PoleSetFit fit_pole_set(const std::vector<std::vector<double>>& w,
+                        const std::vector<std::vector<std::complex<double>>>& g,
+                        const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o = {});
+
+/// The same with one grid w shared by every curve.
 PoleSetFit fit_pole_set(const std::vector<double>& w,
                         const std::vector<std::vector<std::complex<double>>>& g,
                         const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o = {});

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/identify/pole_set_fit.h"
 #include "fralab/identify/tfns.h"
 
 namespace fralab {
@@ -34,6 +35,9 @@ struct TransferMatrix {
   std::map<std::pair<std::string, std::string>, FitResult> fits;  // (output, input)
   std::vector<PoleCluster> clusters;
   int state_count = 0;
+  // The clusters are one pole set's (common_pole_matrix): a path's states are the clusters it is
+  // a member of, not those nearest its own fit's poles (state_model.h, 1.).
+  bool from_pole_set = false;
 };
 
 /// One root as the report writes its factor: [s/a + 1] a stable real root (-a), [1 - s/a] a
@@ -45,6 +49,22 @@ std::string factor_text(const Root& r);
 std::string tf_to_text(const Tf& tf);
 
 TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, double rel_tol = 0.1);
+
+/// The matrix's states from one pole set (pole_set_fit.h) fitted over every path whose fit has a
+/// model, each curve on its own grid with its fit's delay removed, instead of each path's poles
+/// clustered after the fact. `data`: the measured curves keyed "input:output". The clusters are
+/// the set's poles; a path is a member of a pole when the pole's peak term |r| / |Re p| reaches 1 %
+/// of the path's rms |G|; scopes as build_transfer_matrix's. Weights: 1 / sigma^2 on a curve with
+/// sigma, else 1 / (noise_rel |G|)^2 with the path's fit's estimated relative noise (1 % when it
+/// has none). The fits stay each path's own.
+struct CommonPoleMatrix {
+  TransferMatrix matrix;           // from_pole_set; clusters from the pole set
+  PoleSetFit fit;                  // its curves in `paths`' order
+  std::vector<std::string> paths;  // "input:output"
+};
+CommonPoleMatrix common_pole_matrix(const TransferMatrix& m,
+                                    const std::map<std::string, std::vector<FrdPoint>>& data,
+                                    const PoleSetFitOptions& o = {});
 Json transfer_matrix_json(const TransferMatrix& m);
 std::string transfer_matrix_markdown(const TransferMatrix& m, const std::string& title);
 
