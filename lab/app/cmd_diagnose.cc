@@ -9,6 +9,10 @@ namespace fralab {
 
 void add_diagnose_command(CLI::App& app) {
   auto dc = std::make_shared<DiagnoseCommand>();
+  // With --engine it measures with the campaign that decides itself, as `fralab run` does
+  // (lab/auto_campaign.h); `--excitation stepped` keeps the report's procedure. (`fralab measure`
+  // keeps the report's test, one tape in its folder: docs/formats.md §5.)
+  dc->measure.auto_campaign = true;
   auto* c =
       app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
   c->add_option("--simulation", dc->simulation,

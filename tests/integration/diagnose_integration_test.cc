@@ -77,7 +77,8 @@ Json diagnose(const std::string& name, const Model& truth, bool plots = false,
   save_model(d + "/sim.json", simulation());
   save_model(d + "/truth.json", truth);
   const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
-                          "/truth.json --band 0.2:30 --points-per-decade 6 --min-integrate-s 2 " +
+                          "/truth.json --excitation stepped --band 0.2:30 --points-per-decade 6 "
+                          "--min-integrate-s 2 " +
                           (plots ? "" : "--no-plots ") + "--out " + d + "/out";
   if (out_dir) *out_dir = d + "/out";
   EXPECT_EQ(run(cmd), 0) << cmd << "\n" << d;
@@ -271,25 +272,25 @@ void expect_j85_95_findings(const Json& j) {
             0.2 * j["summary"]["validation_error_before"].get<double>());
 }
 
-// The default demonstration (stepped sine; 5 points per decade to keep CI short).
+// The report's demonstration (the stepped sine; 5 points per decade to keep CI short).
 TEST(Diagnose, J85DefaultDemonstrationRecoversTheReportsFindings) {
   const std::string d = fralab::testing::tmpdir("j85", "fralab_diag_") + "/out";
-  const std::string cmd =
-      kBin +
-      "/fralab diagnose --simulation j85_95_sim --engine j85_95 --points-per-decade 5 --out " + d;
+  const std::string cmd = kBin +
+                          "/fralab diagnose --simulation j85_95_sim --engine j85_95 --excitation "
+                          "stepped --points-per-decade 5 --out " +
+                          d;
   ASSERT_EQ(run(cmd), 0) << cmd;
   expect_j85_95_findings(json_load_file(d + "/diagnosis.json"));
 }
 
-// The auto campaign (orthogonal multisine over the four actuators, a sine for A8, whose
-// backlash distorts at the multisine's level) finds the same nine findings within the same
-// tolerances, at 10 points per decade, in at most 10 min of engine time (validation apart).
+// The auto campaign, `diagnose --engine`'s default (orthogonal multisine over the four actuators, a
+// sine for A8, whose backlash distorts at the multisine's level) finds the same nine findings
+// within the same tolerances, at 10 points per decade, in at most 10 min of engine time
+// (validation apart).
 TEST(Diagnose, J85AutoCampaignFindsTheSameInTenMinutesOfEngineTime) {
   const std::string d = fralab::testing::tmpdir("auto", "fralab_diag_") + "/out";
-  const std::string cmd = kBin +
-                          "/fralab diagnose --simulation j85_95_sim --engine j85_95 --excitation "
-                          "auto --min-cycles 2 --out " +
-                          d;
+  const std::string cmd =
+      kBin + "/fralab diagnose --simulation j85_95_sim --engine j85_95 --min-cycles 2 --out " + d;
   ASSERT_EQ(run(cmd), 0) << cmd;
   expect_j85_95_findings(json_load_file(d + "/diagnosis.json"));
   const Json run = json_load_file(d + "/measure/run.json");
