@@ -300,3 +300,51 @@ TEST(Diagnose, J85AutoCampaignFindsTheSameInTenMinutesOfEngineTime) {
   for (const char* x : {"Wf", "BLD", "IGV"})
     EXPECT_EQ(run["inputs"][x]["measured_by"], "multisine");
 }
+
+// `fralab envelope` on the J85 at 70, 85 and 95 % (Wf and A8, 5 points per decade to keep CI
+// short): the A8 actuator the simulation has at 3.14 rad/s everywhere is the engine's
+// 27.2, 32.4, 38.2 rad/s (the report's, within 2 %), rising with speed; the combustion delay on
+// Wf -> P3 is the report's 15, 14, 11 ms within 0.5 ms, falling. Run again, every point is kept;
+// with one point's diagnosis gone, that point alone is measured again.
+TEST(Envelope, TheJ85AcrossItsSpeedsJoinsTheFindingsWithTheirLaws) {
+  constexpr double kActuatorTol = 0.02, kDelayTol = 0.5e-3;
+  const std::string d = fralab::testing::tmpdir("envelope", "fralab_diag_") + "/out";
+  const std::string cmd = kBin +
+                          "/fralab envelope --engine j85 --simulation j85_sim --input Wf,A8 "
+                          "--points-per-decade 5 --no-plots --out " +
+                          d;
+  const fralab::testing::Cmd first = fralab::testing::sh(cmd);
+  ASSERT_EQ(first.status, 0) << first.output;
+  const Json env = json_load_file(d + "/envelope.json");
+  EXPECT_EQ(env["format"], "fralab-envelope/1");
+  ASSERT_EQ(env["points"].size(), 3u);
+  const Json* a8 = nullptr;
+  const Json* delay = nullptr;
+  for (const Json& f : env["findings"]) {
+    if (f["cause"] == "pole_shift" && f["input"] == "A8") a8 = &f;
+    if (f["cause"] == "time_delay" && f["input"] == "Wf" && f["output"] == "P3") delay = &f;
+  }
+  ASSERT_NE(a8, nullptr) << env.dump(1);
+  ASSERT_NE(delay, nullptr) << env.dump(1);
+  const double report_a8[3] = {27.2, 32.4, 38.2}, report_delay[3] = {0.015, 0.014, 0.011};
+  ASSERT_EQ((*a8)["values"].size(), 3u);
+  ASSERT_EQ((*delay)["values"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR((*a8)["values"][i]["value"].get<double>() / report_a8[i], 1.0, kActuatorTol);
+    EXPECT_NEAR((*delay)["values"][i]["value"].get<double>(), report_delay[i], kDelayTol);
+  }
+  EXPECT_GT((*a8)["law"]["b"].get<double>(), 0);
+  EXPECT_NE((*a8)["law"]["form"], "constant");
+  EXPECT_LT((*delay)["law"]["b"].get<double>(), 0);
+  const fralab::testing::Cmd again = fralab::testing::sh(cmd);
+  ASSERT_EQ(again.status, 0) << again.output;
+  EXPECT_THAT(again.output, ::testing::HasSubstr("speed_pct_85: done before, kept"));
+  EXPECT_THAT(again.output, ::testing::Not(::testing::HasSubstr("measuring")));
+  fs::remove(d + "/speed_pct_85/diagnosis.json");
+  const fralab::testing::Cmd resumed = fralab::testing::sh(cmd);
+  ASSERT_EQ(resumed.status, 0) << resumed.output;
+  EXPECT_THAT(resumed.output, ::testing::HasSubstr("speed_pct_85: an interrupted run's folder"));
+  EXPECT_THAT(resumed.output, ::testing::HasSubstr("measuring j85_85"));
+  EXPECT_THAT(resumed.output, ::testing::Not(::testing::HasSubstr("measuring j85_70")));
+  EXPECT_TRUE(fs::exists(d + "/speed_pct_85/diagnosis.json"));
+}

@@ -1,0 +1,134 @@
+// `fralab envelope`: an engine across its operating points (the report's Section III). Each point
+// is measured, identified and diagnosed into DIR/<point>/ exactly as `fralab run` does; then the
+// points' results are read back and joined:
+//
+// - States across paths and points. Within a point the states are the transfer matrix's poles
+//   from one pole set over the paths (transfer_matrix.json's `common_pole_set`, else its clustered
+//   `common_poles`), each with the paths that need it and its scope (every path: a plant state;
+//   the paths into one output: that sensor; from one input: that actuator). Across points a
+//   state's pole is followed into a track: points in the scheduling variable's order, each state
+//   joined to the track of its kind (real or pair) whose last root is nearest on a log scale,
+//   within a factor `track_ratio`, and that shares a path with it (a change of label, sensor T5 to
+//   plant, costs the whole factor: the spool's and the thermocouple's time constants cross
+//   between points); else it starts a track. Per
+//   point a track gives its root (time constant 1/|p| in s for a real pole; wn in rad/s and zeta
+//   for a pair), the spread over its member paths' own fits (their nearest root of the kind, within
+//   a factor 1.5) and their median relative sigma. A track absent at some points, or not monotone
+//   in the scheduling variable (successive steps of opposite sign, each larger than the two
+//   points' sigmas together), is flagged with the figures.
+// - Findings across points. A finding is keyed by cause, scope, input and output; per point its
+//   primary parameter (the key of its `intervals`: the 1-sigma interval; a missing side mirrored)
+//   and the simulation's value where the cause has one (`from_*`). A law in the scheduling
+//   variable x is chosen among constant (a), linear (a + b x) and power (a x^b, positive values)
+//   by weighted least squares and the criterion chi^2 + k ln(n) (k parameters, n points); the
+//   slope b with its sigma (the covariance scaled by chi^2/dof when above 1). A finding present at
+//   some points only says which.
+//
+// Units: rad/s, seconds; x in the operating point's units (speed_pct: % N/Nmax).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fralab/core/json_util.h"
+#include "fralab/lab/measure.h"
+
+namespace fralab {
+
+struct EnvelopeOptions {
+  std::string schedule_by = "speed_pct";  // a key of the models' operating_point
+  double track_ratio = 2.5;               // a track's root moves by less than this between points
+  /// Throws InputError naming the bad option.
+  void validate() const;
+};
+
+// One operating point's results, as read back from its folder.
+struct EnvelopePoint {
+  std::string name;      // its folder under DIR
+  double x = 0;          // the scheduling variable
+  Json transfer_matrix;  // DIR/<point>/measure/transfer_matrix.json (null: none)
+  Json diagnosis;        // DIR/<point>/diagnosis.json (null: none)
+};
+
+struct TrackValue {
+  std::string point;
+  double x = 0;
+  bool pair = false;
+  double value = 0;                     // tau_s (real) or wn_rad_s (pair)
+  double zeta = 0;                      // pairs
+  double spread_lo = 0, spread_hi = 0;  // the member paths' own roots, same units (= value: none)
+  double rel_sigma = -1;                // median over those paths (< 0: unknown)
+  std::string scope, where;
+  std::vector<std::string> paths;
+};
+
+struct StateTrack {
+  std::string label;  // "plant", "sensor T5", "actuator A8", "path Wf:N"
+  bool pair = false;
+  std::vector<TrackValue> values;  // in x order
+  bool at_every_point = true;
+  bool monotone = true;
+  std::string flags;  // the figures behind a flag ("" when none)
+};
+
+struct FindingLaw {
+  std::string cause, scope, input, output, parameter;
+  struct Value {
+    std::string point;
+    double x = 0, value = 0, sigma = -1;
+    double simulated = 0;
+    bool has_simulated = false;
+  };
+  std::vector<Value> values;     // in x order
+  std::string law = "constant";  // "constant", "linear", "power"
+  double a = 0, b = 0, b_sigma = -1, criterion = 0;
+  std::vector<std::string> missing_at;  // points where the finding is not
+  std::string text;                     // the sentence for the report
+};
+
+struct EnvelopeReport {
+  std::string schedule_by;
+  std::vector<EnvelopePoint> points;  // in x order
+  std::vector<StateTrack> tracks;
+  std::vector<FindingLaw> findings;
+};
+
+/// Joins the points' results (see above). Points in any order; sorted by x.
+EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOptions& o = {});
+
+/// `fralab-envelope/1` (docs/formats.md §26) and its markdown.
+Json envelope_json(const EnvelopeReport& r);
+std::string envelope_markdown(const EnvelopeReport& r);
+
+// The campaign.
+struct EnvelopeCommand {
+  std::string engine;      // SET: an embedded family (j85), a comma list of files, or a folder
+  std::string simulation;  // SET, paired with the engines by the scheduling variable
+  std::string out;
+  EnvelopeOptions options;
+  MeasureOptions measure;  // every measure flag (engine and out are set per point)
+  bool plots = true;
+};
+
+struct EnvelopeModel {
+  std::string spec;  // file path or embedded name
+  double x = 0;
+};
+
+/// The models a SET names, with their scheduling variable: an embedded family ("j85": j85_70,
+/// j85_85, j85_95; "j85_sim": the _sim models), a comma-separated list of files or embedded names,
+/// or a folder of model files. InputError naming the model without that operating-point key, or a
+/// SET that names nothing.
+std::vector<EnvelopeModel> envelope_models(const std::string& set, const std::string& schedule_by);
+
+/// The folder name of a point: "<schedule_by>_<x>" (x without trailing zeros).
+std::string envelope_point_name(const std::string& schedule_by, double x);
+
+/// Runs the campaign: each point whose DIR/<point>/diagnosis.json is missing is diagnosed (a
+/// folder left by an interrupted point is removed first), in x order; then the report is joined
+/// and written to DIR/envelope.json and DIR/envelope.md. `log` receives one line per step.
+EnvelopeReport run_envelope(const EnvelopeCommand& c,
+                            const std::function<void(const std::string&)>& log = {});
+
+}  // namespace fralab

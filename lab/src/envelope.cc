@@ -1,0 +1,539 @@
+#include "fralab/lab/envelope.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "fralab/core/error.h"
+#include "fralab/lab/diagnose_command.h"
+#include "fralab/plant/embedded_models.h"
+
+namespace fs = std::filesystem;
+
+namespace fralab {
+
+namespace {
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+// A root of transfer_matrix.json: {"real": p} or {"wn": w, "zeta": z}.
+struct R {
+  bool pair = false;
+  double value = 0;  // tau (real) or wn (pair)
+  double zeta = 0;
+};
+bool root_of(const Json& j, R* r) {
+  if (j.contains("wn") && j["wn"].is_number()) {
+    r->pair = true;
+    r->value = j["wn"].get<double>();
+    r->zeta = j.value("zeta", 0.0);
+    return r->value > 0;
+  }
+  if (j.contains("real") && j["real"].is_number() && j["real"].get<double>() != 0) {
+    r->pair = false;
+    r->value = 1 / std::abs(j["real"].get<double>());
+    return true;
+  }
+  return false;
+}
+
+// A path's own fit in transfer_matrix.json's `paths`, by "input:output".
+const Json* path_fit(const Json& tm, const std::string& key) {
+  if (!tm.contains("paths")) return nullptr;
+  for (const Json& p : tm["paths"])
+    if (p.value("input", "") + ":" + p.value("output", "") == key) return &p;
+  return nullptr;
+}
+
+// The states of one point.
+std::vector<TrackValue> point_states(const EnvelopePoint& pt) {
+  std::vector<TrackValue> out;
+  const Json& tm = pt.transfer_matrix;
+  if (!tm.is_object()) return out;
+  const Json* poles = nullptr;
+  if (tm.contains("common_poles"))
+    poles = &tm["common_poles"];
+  else if (tm.contains("common_pole_set") && tm["common_pole_set"].contains("common_poles"))
+    poles = &tm["common_pole_set"]["common_poles"];
+  if (!poles) return out;
+  for (const Json& c : *poles) {
+    R r;
+    if (!c.contains("pole") || !root_of(c["pole"], &r)) continue;
+    TrackValue v;
+    v.point = pt.name, v.x = pt.x, v.pair = r.pair, v.value = r.value, v.zeta = r.zeta;
+    v.scope = c.value("scope", "path"), v.where = c.value("where", "");
+    v.spread_lo = v.spread_hi = v.value;
+    std::vector<double> sig;
+    for (const Json& k : c.value("pairs", Json::array())) {
+      const std::string key = k.get<std::string>();
+      v.paths.push_back(key);
+      const Json* f = path_fit(tm, key);
+      if (!f || !f->contains("roots") || !(*f)["roots"].contains("poles")) continue;
+      double best = INFINITY, bv = 0, bs = -1;
+      for (const Json& q : (*f)["roots"]["poles"]) {
+        const bool qp = q.value("imag", 0.0) != 0;
+        if (qp != r.pair) continue;
+        const double qv =
+            qp ? q.value("wn", 0.0) : 1 / std::max(std::abs(q.value("real", 0.0)), 1e-300);
+        if (!(qv > 0)) continue;
+        const double d = std::abs(std::log(qv / r.value));
+        if (d < best) best = d, bv = qv, bs = q.value("rel_sigma", -1.0);
+      }
+      if (best > std::log(1.5)) continue;
+      v.spread_lo = std::min(v.spread_lo, bv), v.spread_hi = std::max(v.spread_hi, bv);
+      if (bs >= 0) sig.push_back(bs);
+    }
+    if (!sig.empty()) {
+      std::nth_element(sig.begin(), sig.begin() + long(sig.size() / 2), sig.end());
+      v.rel_sigma = sig[sig.size() / 2];
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::string label_of(const TrackValue& v) {
+  if (v.scope == "plant") return "plant";
+  if (v.scope == "output") return "sensor " + v.where;
+  if (v.scope == "input") return "actuator " + v.where;
+  std::string s = "path";
+  for (const auto& p : v.paths) s += " " + p;
+  return s;
+}
+
+bool share_path(const TrackValue& a, const TrackValue& b) {
+  for (const auto& p : a.paths)
+    if (std::find(b.paths.begin(), b.paths.end(), p) != b.paths.end()) return true;
+  return false;
+}
+
+// Weighted least squares y = X beta; returns chi^2 and the covariance (scaled when chi2/dof > 1).
+double wls(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Eigen::VectorXd& s,
+           Eigen::VectorXd* beta, Eigen::MatrixXd* cov) {
+  const Eigen::MatrixXd Xw = s.cwiseInverse().asDiagonal() * X;
+  const Eigen::VectorXd yw = y.cwiseQuotient(s);
+  *beta = Xw.colPivHouseholderQr().solve(yw);
+  const double chi2 = (Xw * *beta - yw).squaredNorm();
+  const Eigen::MatrixXd A = Xw.transpose() * Xw;
+  *cov = A.completeOrthogonalDecomposition().pseudoInverse();
+  const long dof = long(y.size()) - long(X.cols());
+  if (dof > 0 && chi2 / double(dof) > 1) *cov *= chi2 / double(dof);
+  return chi2;
+}
+
+void fit_law(FindingLaw& f) {
+  const int n = int(f.values.size());
+  if (n == 0) return;
+  Eigen::VectorXd x(n), y(n), s(n);
+  bool positive = true;
+  for (int i = 0; i < n; ++i) {
+    const auto& v = f.values[size_t(i)];
+    x(i) = v.x, y(i) = v.value;
+    s(i) = v.sigma > 0 ? v.sigma : std::max(1e-3 * std::abs(v.value), 1e-12);
+    positive = positive && v.value > 0 && v.x > 0;
+  }
+  const double ln_n = std::log(std::max(n, 1));
+  Eigen::VectorXd beta;
+  Eigen::MatrixXd cov;
+  // Constant.
+  {
+    Eigen::MatrixXd X = Eigen::MatrixXd::Ones(n, 1);
+    const double chi2 = wls(X, y, s, &beta, &cov);
+    f.law = "constant", f.a = beta(0), f.b = 0, f.b_sigma = -1, f.criterion = chi2 + 1 * ln_n;
+  }
+  if (n < 2) return;
+  // Linear.
+  {
+    Eigen::MatrixXd X(n, 2);
+    X.col(0).setOnes(), X.col(1) = x;
+    const double chi2 = wls(X, y, s, &beta, &cov);
+    const double crit = chi2 + 2 * ln_n;
+    if (crit < f.criterion)
+      f.law = "linear", f.a = beta(0), f.b = beta(1), f.b_sigma = std::sqrt(cov(1, 1)),
+      f.criterion = crit;
+  }
+  // Power: ln y = ln a + b ln x, sigma of ln y = sigma / y; chi^2 in y's units to first order.
+  if (positive) {
+    Eigen::MatrixXd X(n, 2);
+    X.col(0).setOnes(), X.col(1) = x.array().log().matrix();
+    const Eigen::VectorXd ly = y.array().log().matrix(), ls = s.cwiseQuotient(y);
+    const double chi2 = wls(X, ly, ls, &beta, &cov);
+    const double crit = chi2 + 2 * ln_n;
+    if (crit < f.criterion)
+      f.law = "power", f.a = std::exp(beta(0)), f.b = beta(1), f.b_sigma = std::sqrt(cov(1, 1)),
+      f.criterion = crit;
+  }
+}
+
+std::string finding_text(const FindingLaw& f) {
+  std::ostringstream t;
+  std::string where = f.scope == "input"    ? "input " + f.input
+                      : f.scope == "output" ? "output " + f.output
+                                            : f.input + " -> " + f.output;
+  t << f.cause << " at " << where << ", " << f.parameter << ":";
+  bool sim_all = !f.values.empty(), same_sim = true;
+  for (const auto& v : f.values) {
+    sim_all = sim_all && v.has_simulated;
+    same_sim = same_sim && v.has_simulated && v.simulated == f.values.front().simulated;
+  }
+  if (sim_all && same_sim)
+    t << " simulated " << num(f.values.front().simulated) << " at every point;";
+  t << " the engine's";
+  for (size_t i = 0; i < f.values.size(); ++i)
+    t << (i ? ", " : " ") << num(f.values[i].value) << " (" << num(f.values[i].x) << ")";
+  if (f.law == "constant") {
+    t << ": constant";
+  } else {
+    t << ": " << f.law << ", slope " << num(f.b);
+    if (f.b_sigma > 0) t << " +- " << num(f.b_sigma);
+    t << (f.b > 0 ? ", rising" : ", falling");
+  }
+  if (!f.missing_at.empty()) {
+    t << "; not found at";
+    for (const auto& m : f.missing_at) t << " " << m;
+  }
+  return t.str();
+}
+
+}  // namespace
+
+void EnvelopeOptions::validate() const {
+  if (schedule_by.empty()) throw InputError("envelope: --schedule-by must name a key");
+  if (!(track_ratio > 1)) throw InputError("envelope: track_ratio must be > 1");
+}
+
+EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOptions& o) {
+  o.validate();
+  std::sort(points.begin(), points.end(),
+            [](const EnvelopePoint& a, const EnvelopePoint& b) { return a.x < b.x; });
+  EnvelopeReport r;
+  r.schedule_by = o.schedule_by;
+  r.points = points;
+  // States into tracks.
+  for (const EnvelopePoint& pt : points) {
+    std::vector<TrackValue> states = point_states(pt);
+    std::vector<bool> taken(r.tracks.size(), false);
+    // The closest (state, track) couples first.
+    struct Couple {
+      double d;
+      size_t s, t;
+    };
+    std::vector<Couple> cs;
+    for (size_t s = 0; s < states.size(); ++s) {
+      for (size_t t = 0; t < r.tracks.size(); ++t) {
+        const StateTrack& tr = r.tracks[t];
+        const TrackValue& last = tr.values.back();
+        if (tr.pair != states[s].pair || last.point == pt.name) continue;
+        const double d = std::abs(std::log(states[s].value / last.value));
+        if (!(d < std::log(o.track_ratio)) || !share_path(states[s], last)) continue;
+        // A state keeps its label (sensor T5 stays T5's) unless another is much nearer: a change
+        // of label costs the whole tracking window.
+        const double cost =
+            d + (label_of(states[s]) == label_of(last) ? 0 : std::log(o.track_ratio));
+        cs.push_back({cost, s, t});
+      }
+    }
+    std::sort(cs.begin(), cs.end(), [](const Couple& a, const Couple& b) { return a.d < b.d; });
+    std::vector<bool> used(states.size(), false);
+    for (const Couple& c : cs) {
+      if (used[c.s] || taken[c.t]) continue;
+      used[c.s] = taken[c.t] = true;
+      r.tracks[c.t].values.push_back(states[c.s]);
+    }
+    for (size_t s = 0; s < states.size(); ++s) {
+      if (used[s]) continue;
+      StateTrack t;
+      t.pair = states[s].pair;
+      t.values.push_back(states[s]);
+      r.tracks.push_back(t);
+    }
+  }
+  for (StateTrack& t : r.tracks) {
+    std::map<std::string, int> votes;
+    for (const auto& v : t.values) ++votes[label_of(v)];
+    int best = -1;
+    for (const auto& [l, n] : votes)
+      if (n > best) best = n, t.label = l;
+    std::ostringstream fl;
+    t.at_every_point = t.values.size() == points.size();
+    if (!t.at_every_point) {
+      fl << "found at " << t.values.size() << " of " << points.size() << " points (";
+      for (size_t i = 0; i < t.values.size(); ++i) fl << (i ? ", " : "") << t.values[i].point;
+      fl << ")";
+    }
+    int sign = 0;
+    for (size_t i = 1; i < t.values.size(); ++i) {
+      const auto &a = t.values[i - 1], &b = t.values[i];
+      const double step = b.value - a.value;
+      const double sa = a.rel_sigma > 0 ? a.rel_sigma * a.value : 0;
+      const double sb = b.rel_sigma > 0 ? b.rel_sigma * b.value : 0;
+      if (std::abs(step) <= sa + sb) continue;
+      const int sg = step > 0 ? 1 : -1;
+      if (sign != 0 && sg != sign) {
+        t.monotone = false;
+        fl << (fl.tellp() > 0 ? "; " : "") << "not monotone: " << num(a.value) << " at " << num(a.x)
+           << " then " << num(b.value) << " at " << num(b.x);
+      }
+      sign = sg;
+    }
+    t.flags = fl.str();
+  }
+  // Findings across points.
+  std::map<std::string, FindingLaw> laws;
+  for (const EnvelopePoint& pt : points) {
+    if (!pt.diagnosis.is_object() || !pt.diagnosis.contains("findings")) continue;
+    for (const Json& f : pt.diagnosis["findings"]) {
+      if (!f.contains("intervals") || !f["intervals"].is_object() || f["intervals"].empty())
+        continue;
+      const std::string param = f["intervals"].begin().key();
+      if (!f.contains("parameters") || !f["parameters"].contains(param)) continue;
+      auto str = [&](const char* k) {
+        return f.contains(k) && f[k].is_string() ? f[k].get<std::string>() : std::string();
+      };
+      const std::string key =
+          str("cause") + "|" + str("scope") + "|" + str("input") + "|" + str("output");
+      FindingLaw& l = laws[key];
+      l.cause = str("cause"), l.scope = str("scope"), l.input = str("input"),
+      l.output = str("output"), l.parameter = param;
+      FindingLaw::Value v;
+      v.point = pt.name, v.x = pt.x, v.value = f["parameters"][param].get<double>();
+      const Json& iv = f["intervals"][param];
+      if (iv.is_array() && iv.size() == 2) {
+        const bool lo = iv[0].is_number(), hi = iv[1].is_number();
+        if (lo && hi)
+          v.sigma = (iv[1].get<double>() - iv[0].get<double>()) / 2;
+        else if (lo)
+          v.sigma = v.value - iv[0].get<double>();
+        else if (hi)
+          v.sigma = iv[1].get<double>() - v.value;
+      }
+      for (auto it = f["parameters"].begin(); it != f["parameters"].end(); ++it) {
+        if (it.key().rfind("from_", 0) == 0 && it.value().is_number()) {
+          v.simulated = it.value().get<double>(), v.has_simulated = true;
+          break;
+        }
+      }
+      l.values.push_back(v);
+    }
+  }
+  for (auto& [k, l] : laws) {
+    for (const EnvelopePoint& pt : points) {
+      bool here = false;
+      for (const auto& v : l.values) here = here || v.point == pt.name;
+      if (!here) l.missing_at.push_back(pt.name);
+    }
+    fit_law(l);
+    l.text = finding_text(l);
+    r.findings.push_back(l);
+  }
+  return r;
+}
+
+Json envelope_json(const EnvelopeReport& r) {
+  Json j;
+  j["format"] = "fralab-envelope/1";
+  j["schedule_by"] = r.schedule_by;
+  j["points"] = Json::array();
+  for (const auto& p : r.points) j["points"].push_back({{"name", p.name}, {"x", p.x}});
+  j["states"] = Json::array();
+  for (const auto& t : r.tracks) {
+    Json tj{{"label", t.label},
+            {"kind", t.pair ? "pair" : "real"},
+            {"at_every_point", t.at_every_point},
+            {"monotone", t.monotone},
+            {"flags", t.flags},
+            {"values", Json::array()}};
+    for (const auto& v : t.values) {
+      Json vj{{"point", v.point}, {"x", v.x}, {"scope", v.scope}, {"paths", v.paths}};
+      if (v.where.size()) vj["where"] = v.where;
+      if (v.pair) {
+        vj["wn_rad_s"] = v.value, vj["zeta"] = v.zeta;
+      } else {
+        vj["tau_s"] = v.value;
+      }
+      vj["spread"] = {v.spread_lo, v.spread_hi};
+      if (v.rel_sigma >= 0) vj["rel_sigma"] = v.rel_sigma;
+      tj["values"].push_back(vj);
+    }
+    j["states"].push_back(tj);
+  }
+  j["findings"] = Json::array();
+  for (const auto& f : r.findings) {
+    Json fj{{"cause", f.cause},
+            {"scope", f.scope},
+            {"input", f.input},
+            {"output", f.output},
+            {"parameter", f.parameter},
+            {"text", f.text},
+            {"law", {{"form", f.law}, {"a", f.a}, {"b", f.b}, {"criterion", f.criterion}}},
+            {"missing_at", f.missing_at},
+            {"values", Json::array()}};
+    if (f.b_sigma >= 0) fj["law"]["b_sigma"] = f.b_sigma;
+    for (const auto& v : f.values) {
+      Json vj{{"point", v.point}, {"x", v.x}, {"value", v.value}};
+      if (v.sigma >= 0) vj["sigma"] = v.sigma;
+      if (v.has_simulated) vj["simulated"] = v.simulated;
+      fj["values"].push_back(vj);
+    }
+    j["findings"].push_back(fj);
+  }
+  return j;
+}
+
+std::string envelope_markdown(const EnvelopeReport& r) {
+  std::ostringstream md;
+  md << "# Envelope\n\nOperating points by " << r.schedule_by << ":";
+  for (const auto& p : r.points) md << " " << num(p.x) << " (`" << p.name << "/`)";
+  md << ".\n\n## States across paths and points\n\nEach state's root per point: a real pole as "
+        "its time constant (s), a pair as wn (rad/s) and zeta; in brackets the spread over its "
+        "paths' own fits; sigma the paths' median relative sigma.\n\n| state | kind |";
+  for (const auto& p : r.points) md << " " << num(p.x) << " |";
+  md << " flags |\n|---|---|";
+  for (size_t i = 0; i < r.points.size(); ++i) md << "---|";
+  md << "---|\n";
+  for (const auto& t : r.tracks) {
+    md << "| " << t.label << " | " << (t.pair ? "pair" : "real") << " |";
+    for (const auto& p : r.points) {
+      const TrackValue* v = nullptr;
+      for (const auto& x : t.values)
+        if (x.point == p.name) v = &x;
+      if (!v) {
+        md << " - |";
+        continue;
+      }
+      md << " " << num(v->value);
+      if (v->pair) md << ", " << num(v->zeta);
+      if (v->spread_hi > v->spread_lo)
+        md << " [" << num(v->spread_lo) << "-" << num(v->spread_hi) << "]";
+      if (v->rel_sigma >= 0) md << " +-" << num(100 * v->rel_sigma) << "%";
+      md << " |";
+    }
+    md << " " << t.flags << " |\n";
+  }
+  md << "\n## Findings across points\n\n";
+  if (r.findings.empty()) md << "None.\n";
+  for (const auto& f : r.findings) md << "- " << f.text << "\n";
+  return md.str();
+}
+
+std::vector<EnvelopeModel> envelope_models(const std::string& set, const std::string& schedule_by) {
+  std::vector<std::string> specs;
+  if (set.find(',') != std::string::npos) {
+    std::stringstream ss(set);
+    for (std::string s; std::getline(ss, s, ',');)
+      if (!s.empty()) specs.push_back(s);
+  } else if (fs::is_directory(set)) {
+    for (const auto& e : fs::directory_iterator(set))
+      if (e.path().extension() == ".json") specs.push_back(e.path().string());
+    std::sort(specs.begin(), specs.end());
+  } else {
+    // An embedded family: "j85" -> j85_<digits>, "j85_sim" -> j85_<digits>_sim.
+    const bool sim = set.size() > 4 && set.compare(set.size() - 4, 4, "_sim") == 0;
+    const std::string base = sim ? set.substr(0, set.size() - 4) : set;
+    const std::regex family(
+        "^" + std::regex_replace(base, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") + "_[0-9]+" +
+        (sim ? "_sim" : "") + "\\.json$");
+    for (const auto& e : embedded_models())
+      if (std::regex_match(e.name, family))
+        specs.push_back(std::string(e.name).substr(0, std::string(e.name).size() - 5));
+    if (specs.empty()) specs.push_back(set);  // one model: a file or an embedded name
+  }
+  std::vector<EnvelopeModel> out;
+  for (const std::string& s : specs) {
+    const Model m = load_model_or_embedded(s);
+    double x = 0;
+    if (schedule_by == "speed_pct") {
+      if (!(m.speed_pct > 0)) throw InputError(s + ": no operating_point.speed_pct to schedule by");
+      x = m.speed_pct;
+    } else {
+      const Json& op = m.operating_point_extra;
+      if (!op.is_object() || !op.contains(schedule_by) || !op[schedule_by].is_number())
+        throw InputError(s + ": no number operating_point." + schedule_by + " to schedule by");
+      x = op[schedule_by].get<double>();
+    }
+    out.push_back({s, x});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const EnvelopeModel& a, const EnvelopeModel& b) { return a.x < b.x; });
+  for (size_t i = 1; i < out.size(); ++i) {
+    if (out[i].x == out[i - 1].x)
+      throw InputError(out[i - 1].spec + " and " + out[i].spec + ": the same " + schedule_by +
+                       " (" + num(out[i].x) + ")");
+  }
+  return out;
+}
+
+std::string envelope_point_name(const std::string& schedule_by, double x) {
+  return schedule_by + "_" + num(x);
+}
+
+EnvelopeReport run_envelope(const EnvelopeCommand& c,
+                            const std::function<void(const std::string&)>& log) {
+  c.options.validate();
+  auto say = [&](const std::string& s) {
+    if (log) log(s);
+  };
+  const auto engines = envelope_models(c.engine, c.options.schedule_by);
+  const auto sims = envelope_models(c.simulation, c.options.schedule_by);
+  std::vector<std::pair<EnvelopeModel, EnvelopeModel>> pairs;
+  for (const auto& e : engines) {
+    const EnvelopeModel* s = nullptr;
+    for (const auto& q : sims)
+      if (q.x == e.x) s = &q;
+    if (!s)
+      throw InputError(e.spec + ": no simulation at " + c.options.schedule_by + " " + num(e.x) +
+                       " in " + c.simulation);
+    pairs.push_back({e, *s});
+  }
+  fs::create_directories(c.out);
+  std::vector<EnvelopePoint> points;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const auto& [e, s] = pairs[i];
+    const std::string name = envelope_point_name(c.options.schedule_by, e.x);
+    const std::string dir = c.out + "/" + name;
+    if (fs::exists(dir + "/diagnosis.json")) {
+      say("point " + std::to_string(i + 1) + " of " + std::to_string(pairs.size()) + ", " + name +
+          ": done before, kept");
+    } else {
+      if (fs::exists(dir)) {
+        say("point " + name + ": an interrupted run's folder, measured again");
+        fs::remove_all(dir);
+      }
+      say("point " + std::to_string(i + 1) + " of " + std::to_string(pairs.size()) + ", " + name +
+          ": measuring " + e.spec + " and diagnosing " + s.spec + " ...");
+      DiagnoseCommand d;
+      d.simulation = s.spec;
+      d.engine = e.spec;
+      d.out = dir;
+      d.measure = c.measure;
+      d.measure.engine = e.spec;
+      d.plots = c.plots;
+      const DiagnoseResult res = run_diagnose(d);
+      say("point " + name + ": " + res.summary);
+    }
+    EnvelopePoint p;
+    p.name = name;
+    p.x = e.x;
+    if (fs::exists(dir + "/measure/transfer_matrix.json"))
+      p.transfer_matrix = json_load_file(dir + "/measure/transfer_matrix.json");
+    if (fs::exists(dir + "/diagnosis.json")) p.diagnosis = json_load_file(dir + "/diagnosis.json");
+    points.push_back(p);
+  }
+  EnvelopeReport r = join_points(points, c.options);
+  json_save_file(c.out + "/envelope.json", envelope_json(r));
+  std::ofstream(c.out + "/envelope.md") << envelope_markdown(r);
+  return r;
+}
+
+}  // namespace fralab

@@ -1,0 +1,182 @@
+// Joining operating points (lab/envelope.h) on known answers: the report's states across its three
+// speeds (spool inertia, T5 thermocouple) come back as tracks with their labels; a state found at
+// some points only and one that is not monotone are flagged; findings across points get the law
+// their values follow (constant, linear, power), with the simulated value and the points where a
+// finding is not.
+#include "fralab/lab/envelope.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fralab/core/error.h"
+
+namespace fralab {
+namespace {
+
+using ::testing::HasSubstr;
+
+Json real_pole(double tau) { return Json{{"real", -1 / tau}}; }
+
+// A transfer_matrix.json with its common pole set: clusters (pole, pairs, scope, where).
+Json matrix(const std::vector<Json>& clusters) {
+  return Json{{"common_pole_set", {{"common_poles", clusters}}}, {"paths", Json::array()}};
+}
+
+Json cluster(const Json& pole, std::vector<std::string> pairs, const std::string& scope,
+             const std::string& where = "") {
+  return Json{{"pole", pole}, {"pairs", pairs}, {"scope", scope}, {"where", where}};
+}
+
+Json finding(const std::string& cause, const std::string& scope, const std::string& input,
+             const std::string& output, const std::string& param, double value, double sigma,
+             double from = NAN) {
+  Json f{{"cause", cause}, {"scope", scope}};
+  f["input"] = input.empty() ? Json(nullptr) : Json(input);
+  f["output"] = output.empty() ? Json(nullptr) : Json(output);
+  f["parameters"] = {{param, value}};
+  if (!std::isnan(from)) f["parameters"]["from_" + param.substr(param.find('_') + 1)] = from;
+  f["intervals"] = {{param, {value - sigma, value + sigma}}};
+  return f;
+}
+
+// The report's Section III at 70, 85 and 95 %: spool inertia 1.2, 0.55, 0.36 s in every path;
+// the T5 thermocouple 2.71, 1.21, 0.60 s on T5's paths; the A8 actuator 27.2, 32.4, 38.2 rad/s
+// (simulated 3.14 everywhere); the combustion delay at 70 and 95 % only; A8's hysteresis 9.24
+// everywhere.
+std::vector<EnvelopePoint> report_points() {
+  const double x[3] = {70, 85, 95};
+  const double spool[3] = {1.2, 0.55, 0.36}, t5[3] = {2.71, 1.21, 0.60};
+  const double a8[3] = {27.2, 32.4, 38.2}, width[3] = {9.3, 9.2, 9.25};
+  const double odd[3] = {10, 20, 12};  // a pair that goes up then down
+  std::vector<EnvelopePoint> pts;
+  for (int i = 2; i >= 0; --i) {  // out of order: join_points sorts
+    EnvelopePoint p;
+    p.name = "speed_pct_" + std::to_string(int(x[i]));
+    p.x = x[i];
+    std::vector<Json> cl = {
+        cluster(real_pole(spool[i]), {"Wf:N", "A8:N", "Wf:T5", "A8:T5"}, "plant"),
+        cluster(real_pole(t5[i]), {"Wf:T5", "A8:T5"}, "output", "T5"),
+        cluster(Json{{"wn", odd[i]}, {"zeta", 0.1}}, {"A8:N"}, "path")};
+    if (i != 1) cl.push_back(cluster(Json{{"wn", 150.0}, {"zeta", 0.05}}, {"Wf:T5"}, "path"));
+    p.transfer_matrix = matrix(cl);
+    p.diagnosis = Json{{"findings", Json::array()}};
+    p.diagnosis["findings"].push_back(
+        finding("pole_shift", "input", "A8", "", "to_rad_s", a8[i], 0.2, 3.14));
+    p.diagnosis["findings"].push_back(
+        finding("hysteresis", "input", "A8", "", "width", width[i], 0.2));
+    if (i != 1)
+      p.diagnosis["findings"].push_back(
+          finding("time_delay", "path", "Wf", "P3", "delay_s", 0.011, 0.0005));
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+const StateTrack* track(const EnvelopeReport& r, const std::string& label, bool pair) {
+  for (const auto& t : r.tracks)
+    if (t.label == label && t.pair == pair) return &t;
+  return nullptr;
+}
+
+const FindingLaw* law(const EnvelopeReport& r, const std::string& cause) {
+  for (const auto& f : r.findings)
+    if (f.cause == cause) return &f;
+  return nullptr;
+}
+
+TEST(Envelope, StatesAreFollowedAcrossPointsWithTheirLabels) {
+  const EnvelopeReport r = join_points(report_points());
+  ASSERT_EQ(r.points.size(), 3u);
+  EXPECT_EQ(r.points.front().x, 70);
+  const StateTrack* spool = track(r, "plant", false);
+  ASSERT_NE(spool, nullptr);
+  ASSERT_EQ(spool->values.size(), 3u);
+  EXPECT_NEAR(spool->values[0].value, 1.2, 1e-12);
+  EXPECT_NEAR(spool->values[2].value, 0.36, 1e-12);
+  EXPECT_TRUE(spool->at_every_point);
+  EXPECT_TRUE(spool->monotone);
+  const StateTrack* t5 = track(r, "sensor T5", false);
+  ASSERT_NE(t5, nullptr);
+  EXPECT_NEAR(t5->values[1].value, 1.21, 1e-12);
+  EXPECT_EQ(t5->flags, "");
+}
+
+TEST(Envelope, AStateAtSomePointsOnlyAndOneNotMonotoneAreFlagged) {
+  const EnvelopeReport r = join_points(report_points());
+  const StateTrack* odd = track(r, "path A8:N", true);
+  ASSERT_NE(odd, nullptr);
+  EXPECT_FALSE(odd->monotone);
+  EXPECT_THAT(odd->flags, HasSubstr("not monotone: 20 at 85 then 12 at 95"));
+  const StateTrack* part = track(r, "path Wf:T5", true);
+  ASSERT_NE(part, nullptr);
+  EXPECT_FALSE(part->at_every_point);
+  EXPECT_THAT(part->flags, HasSubstr("found at 2 of 3 points (speed_pct_70, speed_pct_95)"));
+}
+
+TEST(Envelope, FindingsAcrossPointsGetTheLawTheirValuesFollow) {
+  const EnvelopeReport r = join_points(report_points());
+  const FindingLaw* a8 = law(r, "pole_shift");
+  ASSERT_NE(a8, nullptr);
+  EXPECT_NE(a8->law, "constant");
+  EXPECT_GT(a8->b, 0);
+  EXPECT_GT(a8->b_sigma, 0);
+  EXPECT_THAT(a8->text, HasSubstr("simulated 3.14 at every point"));
+  EXPECT_THAT(a8->text, HasSubstr("27.2 (70), 32.4 (85), 38.2 (95)"));
+  EXPECT_THAT(a8->text, HasSubstr("rising"));
+  const FindingLaw* w = law(r, "hysteresis");
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(w->law, "constant");
+  EXPECT_NEAR(w->a, 9.25, 0.05);
+  const FindingLaw* d = law(r, "time_delay");
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->missing_at, std::vector<std::string>{"speed_pct_85"});
+  EXPECT_THAT(d->text, HasSubstr("not found at speed_pct_85"));
+}
+
+// Laws on drawn data: a linear law with noise of its sigma comes back linear with its slope within
+// 2 sigma; a power law comes back power with its exponent.
+TEST(Envelope, LawsComeBackFromTheirValues) {
+  std::vector<EnvelopePoint> lin, pw;
+  const double xs[5] = {60, 70, 80, 90, 100};
+  const double noise[5] = {0.05, -0.08, 0.02, 0.07, -0.04};  // within sigma 0.1
+  for (int i = 0; i < 5; ++i) {
+    EnvelopePoint p;
+    p.name = "p" + std::to_string(i);
+    p.x = xs[i];
+    p.diagnosis = Json{{"findings", Json::array()}};
+    p.diagnosis["findings"].push_back(
+        finding("missing_lag", "path", "Wf", "N", "corner_rad_s", 2 + 0.5 * xs[i] + noise[i], 0.1));
+    lin.push_back(p);
+    p.diagnosis["findings"][0] =
+        finding("missing_lag", "path", "Wf", "N", "corner_rad_s", 3 * std::pow(xs[i], 1.5), 0.01);
+    pw.push_back(p);
+  }
+  const FindingLaw* l = law(join_points(lin), "missing_lag");
+  ASSERT_NE(l, nullptr);
+  EXPECT_EQ(l->law, "linear");
+  EXPECT_NEAR(l->b, 0.5, 2 * l->b_sigma);
+  const FindingLaw* q = law(join_points(pw), "missing_lag");
+  ASSERT_NE(q, nullptr);
+  EXPECT_EQ(q->law, "power");
+  EXPECT_NEAR(q->b, 1.5, 1e-3);
+  EXPECT_NEAR(q->a, 3, 1e-2);
+}
+
+TEST(Envelope, ModelsWithoutTheScheduleKeyAreRefusedByName) {
+  EXPECT_THROW(envelope_models("j85", "altitude_m"), InputError);
+  try {
+    envelope_models("j85", "altitude_m");
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("no number operating_point.altitude_m"));
+  }
+  const auto m = envelope_models("j85_sim", "speed_pct");
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[0].spec, "j85_70_sim");
+  EXPECT_EQ(m[2].x, 95);
+  EXPECT_EQ(envelope_point_name("speed_pct", 85), "speed_pct_85");
+}
+
+}  // namespace
+}  // namespace fralab
