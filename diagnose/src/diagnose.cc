@@ -148,6 +148,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   prepare(r);
   fit_causes(r);
   scope(r);
+  joint(r);
   resolve(r);
   earn_place(r);
   summarise(r);

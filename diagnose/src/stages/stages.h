@@ -80,6 +80,9 @@ void fit_causes(DiagnosisRun& r);
 /// 5. Consistent fits of one cause over every path into an output, from an input, or everywhere
 /// become one finding there; the rest stay with their path.
 void scope(DiagnosisRun& r);
+/// 5b. Findings that share pairs get their primary parameters refined together, every finding in
+/// place (joint.cc).
+void joint(DiagnosisRun& r);
 /// 6. Each finding's primary parameter gets its 1-sigma interval; the unresolved are dropped.
 void resolve(DiagnosisRun& r);
 /// 7. On the validation measurement, the findings that do not lower its error are dropped.
