@@ -192,7 +192,7 @@ TEST(Lab, FitWithCommonPolesFitsSeveralCurvesWithOnePoleSet) {
   EXPECT_EQ(j["fit"]["status"], "adequate") << c.output;
   ASSERT_EQ(j["curves"].size(), 2u);
   for (int k = 0; k < 2; ++k) {
-    const Tf fit = tf_from_json(j["curves"][k]["tf"], JsonWhere{"cp.json"});
+    const Tf fit = tf_from_json(j["curves"][k]["tf"], JsonWhere{"cp.json", ""});
     const Tf& truth = k == 0 ? a : b;
     for (double w : {10.0, 30.0, 55.0, 70.0, 100.0})
       EXPECT_LT(std::abs(fit.at(w) - truth.at(w)), 1e-4 * std::abs(truth.at(w))) << k << " " << w;
