@@ -507,8 +507,12 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
           ": done before, kept");
     } else {
       if (fs::exists(dir)) {
-        say("point " + name + ": an interrupted run's folder, measured again");
-        fs::remove_all(dir);
+        // Nothing recorded is lost: the interrupted point's folder (its tapes) is kept aside.
+        std::string aside = dir + ".interrupted";
+        for (int k = 2; fs::exists(aside); ++k) aside = dir + ".interrupted-" + std::to_string(k);
+        fs::rename(dir, aside);
+        say("point " + name + ": an interrupted run's folder, kept as " + aside +
+            ", measured again");
       }
       say("point " + std::to_string(i + 1) + " of " + std::to_string(pairs.size()) + ", " + name +
           ": measuring " + e.spec + " and diagnosing " + s.spec + " ...");

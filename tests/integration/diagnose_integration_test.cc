@@ -347,4 +347,6 @@ TEST(Envelope, TheJ85AcrossItsSpeedsJoinsTheFindingsWithTheirLaws) {
   EXPECT_THAT(resumed.output, ::testing::HasSubstr("measuring j85_85"));
   EXPECT_THAT(resumed.output, ::testing::Not(::testing::HasSubstr("measuring j85_70")));
   EXPECT_TRUE(fs::exists(d + "/speed_pct_85/diagnosis.json"));
+  EXPECT_TRUE(fs::exists(d + "/speed_pct_85.interrupted/extended_model.json"))
+      << "the interrupted point's folder is kept";
 }

@@ -126,7 +126,8 @@ std::vector<EnvelopeModel> envelope_models(const std::string& set, const std::st
 std::string envelope_point_name(const std::string& schedule_by, double x);
 
 /// Runs the campaign: each point whose DIR/<point>/diagnosis.json is missing is diagnosed (a
-/// folder left by an interrupted point is removed first), in x order; then the report is joined
+/// folder left by an interrupted point is first renamed DIR/<point>.interrupted, or
+/// .interrupted-2, ...: its tapes are kept), in x order; then the report is joined
 /// and written to DIR/envelope.json and DIR/envelope.md. `log` receives one line per step.
 EnvelopeReport run_envelope(const EnvelopeCommand& c,
                             const std::function<void(const std::string&)>& log = {});
