@@ -55,6 +55,17 @@ void assign_scopes(TransferMatrix& m,
   }
 }
 
+// The clusters' scopes (assign_scopes), the state count they make, and their order (by modulus).
+void finish_clusters(TransferMatrix& m,
+                     const std::vector<std::pair<std::string, std::string>>& fitted) {
+  assign_scopes(m, fitted);
+  m.state_count = 0;
+  for (const auto& c : m.clusters) m.state_count += c.mean.order();
+  std::sort(m.clusters.begin(), m.clusters.end(), [](const PoleCluster& a, const PoleCluster& b) {
+    return (a.mean.pair ? a.mean.wn : -a.mean.real) < (b.mean.pair ? b.mean.wn : -b.mean.real);
+  });
+}
+
 }  // namespace
 
 std::string factor_text(const Root& r) {
@@ -113,11 +124,7 @@ TransferMatrix build_transfer_matrix(const std::vector<MatrixEntry>& entries, do
   std::vector<std::pair<std::string, std::string>> fitted;
   for (const auto& e : entries)
     if (e.fit.status == FitResult::Status::kConverged) fitted.push_back({e.input, e.output});
-  assign_scopes(m, fitted);
-  for (const auto& c : m.clusters) m.state_count += c.mean.order();
-  std::sort(m.clusters.begin(), m.clusters.end(), [](const PoleCluster& a, const PoleCluster& b) {
-    return (a.mean.pair ? a.mean.wn : -a.mean.real) < (b.mean.pair ? b.mean.wn : -b.mean.real);
-  });
+  finish_clusters(m, fitted);
   return m;
 }
 
@@ -127,7 +134,6 @@ CommonPoleMatrix common_pole_matrix(const TransferMatrix& m,
   CommonPoleMatrix out;
   out.matrix = m;
   out.matrix.clusters.clear();
-  out.matrix.state_count = 0;
   out.matrix.from_pole_set = true;
   std::vector<std::vector<double>> w, W;
   std::vector<std::vector<std::complex<double>>> g;
@@ -186,13 +192,7 @@ CommonPoleMatrix common_pole_matrix(const TransferMatrix& m,
     if (c.pairs.empty()) continue;  // a pole no path needs
     out.matrix.clusters.push_back(c);
   }
-  assign_scopes(out.matrix, fitted);
-  for (const auto& c : out.matrix.clusters) out.matrix.state_count += c.mean.order();
-  std::sort(out.matrix.clusters.begin(), out.matrix.clusters.end(),
-            [](const PoleCluster& a, const PoleCluster& b) {
-              return (a.mean.pair ? a.mean.wn : -a.mean.real) <
-                     (b.mean.pair ? b.mean.wn : -b.mean.real);
-            });
+  finish_clusters(out.matrix, fitted);
   return out;
 }
 
