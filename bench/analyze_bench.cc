@@ -8,6 +8,9 @@
 #include <numbers>
 
 #include "fralab/analyze/fourier_filter.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/tape_file.h"
 #include "tape_analysis.h"
 
 using namespace fralab;

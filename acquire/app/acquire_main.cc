@@ -20,7 +20,7 @@
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/core/measurement_chain.h"
 #include "fralab/core/text.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/lab_lcm.h"
 #include "fralab/plant/embedded_models.h"
 
 using namespace fralab;
@@ -82,8 +82,7 @@ int main(int argc, char** argv) {
     lo.first_block = lo_first_block;
     lo.first_status = lo_first_status;
     if (!chain.empty()) {
-      lo.start_message =
-          chain_to_message(chain_from_json(json_parse_text(chain, "--chain"), {"--chain", ""}));
+      lo.measurement_chain = chain_from_json(json_parse_text(chain, "--chain"), {"--chain", ""});
     }
     lo.flow.stall_timeout_s = stall_timeout;
     lo.stop_requested = [] { return g_stop != 0; };

@@ -6,7 +6,8 @@
 #include <csignal>
 #include <iostream>
 
-#include "fralab/lcm_io.h"
+#include "fralab/core/error.h"
+#include "fralab/lcm/lab_lcm.h"
 #include "recorder_node.h"
 
 using namespace fralab;

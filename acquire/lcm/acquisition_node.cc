@@ -6,7 +6,9 @@
 #include <map>
 #include <set>
 
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/lab_lcm.h"
 
 namespace fralab {
 namespace {
@@ -194,7 +196,7 @@ Json AcquisitionNode::run() {
   start.seq = -1;
   start.sample = 0;
   start.n_samples = campaign.total_samples();
-  start.message = o_.start_message;
+  start.measurement_chain = o_.measurement_chain;
   publish_status(start);  // outside the flow control: informative
 
   const auto t0 = Clock::now();

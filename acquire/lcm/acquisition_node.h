@@ -21,12 +21,14 @@
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "fralab/acquire/acquisition.h"
 #include "fralab/acquire/flow_control.h"
 #include "fralab/core/json_util.h"
+#include "fralab/core/measurement_chain.h"
 
 namespace fralab {
 
@@ -49,9 +51,9 @@ struct AcquisitionLoopOptions {
   /// beyond a pending decision. The summary adds "adaptive": per step its input, frequency,
   /// cycles, worst sigma / |G| and state, with the counts met / limit.
   AutoIntegrator* auto_integrator = nullptr;
-  /// The start event's message: the measurement chain (core/measurement_chain.h,
-  /// chain_to_message), so that the tape says how it was measured.
-  std::string start_message;
+  /// The measurement chain (core/measurement_chain.h), carried by the start event so that the
+  /// tape says how it was measured.
+  std::optional<MeasurementChain> measurement_chain;
 };
 
 class AcquisitionNode {

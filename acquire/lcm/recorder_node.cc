@@ -2,7 +2,9 @@
 
 #include <cstdio>
 
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/lab_lcm.h"
 
 namespace fralab {
 
@@ -73,7 +75,7 @@ void RecorderNode::on_any(const lcm::ReceiveBuffer* rbuf, const std::string& cha
       ++blocks_;
       advance(tape_, m.seq, "tape");
     } else if (channel == kStatusChannel) {
-      const excitation_status_t m = decode_checked<excitation_status_t>(rbuf, channel);
+      const StatusEvent m = decode_status_event(rbuf, channel);
       if (run_id_.empty()) run_id_ = m.run_id;
       if (m.run_id != run_id_ || m.seq < 0) return;
       advance(status_, m.seq, "status");

@@ -10,6 +10,7 @@
 
 #include "analyzer_node.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/lcm/lab_lcm.h"
 
 using namespace fralab;
 

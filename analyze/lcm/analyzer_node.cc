@@ -29,10 +29,13 @@ void AnalyzerNode::on_msg(const lcm::ReceiveBuffer* rbuf, const std::string& cha
     if (fed.kind == TapeFeeder::Kind::kOther) return;
     started_ = true;
     for (auto& a : feeder_.analyzers()) {
-      if (!a->take_new_points().empty()) {
-        frd_t m = to_frd_msg(a->frd(), feeder_.run_id(), frd_seq_++, a->done());
-        data_.publish(kFrdChannel, &m);
-      }
+      std::vector<FrdPoint> fresh = a->take_new_points();
+      if (fresh.empty()) continue;
+      // While the curve grows, only its new points travel (a message per point, not the curve
+      // again each time); the finished curve travels whole (merged repeats, the BLA).
+      const Frd f = a->done() ? a->frd() : Frd{a->pair(), std::move(fresh), ""};
+      frd_t m = to_frd_msg(f, feeder_.run_id(), frd_seq_++, a->done());
+      data_.publish(kFrdChannel, &m);
     }
     if (feeder_.status_delivered() != status0 ||
         (fed.kind == TapeFeeder::Kind::kStatus && fed.duplicate))

@@ -1,12 +1,13 @@
 // The live analyser on LCM (fralab-analyze's loop as a library, the transport passed in): tape
 // blocks and status events from `data` feed the pair analysers in sequence order (TapeFeeder:
-// duplicates dropped, gaps held until retransmitted), each pair's curve is republished on
-// FRALAB_FRD as it grows, and the last tape block and status event held without a gap are
-// acknowledged under the consumer's name on the control instance (streams "tape" and "status";
-// again on every duplicate, so a lost acknowledgement is mended). From the data instance it also
-// hears the acquisition's "close" (FRALAB_FLOW) and the identifier's acknowledgements of complete
-// curves (FRALAB_FRD_ACK, consumer "identify", streams "ready" and "frd:<pair>"); it never reads
-// the control instance (every consumer's acknowledgements). Tests run it in-process over memq://.
+// duplicates dropped, gaps held until retransmitted), each pair's new points are published on
+// FRALAB_FRD as they complete (the finished curve whole), and the last tape block and status event
+// held without a gap are acknowledged under the consumer's name on the control instance (streams
+// "tape" and "status"; again on every duplicate, so a lost acknowledgement is mended). From the
+// data instance it also hears the acquisition's "close" (FRALAB_FLOW) and the identifier's
+// acknowledgements of complete curves (FRALAB_FRD_ACK, consumer "identify", streams "ready" and
+// "frd:<pair>"); it never reads the control instance (every consumer's acknowledgements). Tests run
+// it in-process over memq://.
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/lcm/lab_lcm.h"
 #include "tape_analysis.h"
 
 namespace fralab {

@@ -37,7 +37,7 @@ TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, i
     }
     fed.duplicate = offered == InOrder<Block>::Offer::kDuplicate;
   } else if (channel == kStatusChannel) {
-    StatusEvent e = from_msg(decode_checked<excitation_status_t>(&rb, channel));
+    StatusEvent e = decode_status_event(&rb, channel);
     if (run_id_.empty()) run_id_ = e.run_id;
     if (e.run_id != run_id_) return fed;
     fed.kind = Kind::kStatus;

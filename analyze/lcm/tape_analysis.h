@@ -9,7 +9,9 @@
 
 #include "fralab/analyze/pair_analyzer.h"
 #include "fralab/core/in_order.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fralab {
 
@@ -42,7 +44,7 @@ class TapeFeeder {
   /// number of tape blocks and status events given up.
   int64_t flush();
   const std::string& run_id() const { return run_id_; }
-  /// Tape blocks refused because their checksum failed (lcm_io CorruptBlock), by seq.
+  /// Tape blocks refused because their checksum failed (fralab/lcm/codec.h CorruptBlock), by seq.
   const std::set<int64_t>& corrupt() const { return corrupt_; }
 
  private:

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "fralab/core/error.h"
+#include "fralab/core/measurement_chain.h"
 
 namespace fralab {
 
@@ -22,6 +23,7 @@ Json event_to_json(const StatusEvent& e) {
          {"inputs", e.inputs},
          {"amplitudes", e.amplitudes}};
   if (!e.message.empty()) j["message"] = e.message;
+  if (e.measurement_chain) j["measurement_chain"] = chain_to_json(*e.measurement_chain);
   if (e.excitation == Excitation::kMultisine) {
     j["period_samples"] = e.period_samples;
     j["lines"] = e.lines;
@@ -79,6 +81,11 @@ StatusEvent event_from_json(const Json& o, const JsonWhere& w, int index, double
     throw InputError(w.str() + ": " + std::to_string(e.amplitudes.size()) + " amplitudes for " +
                      std::to_string(e.inputs.size()) + " inputs");
   if (o.contains("message")) e.message = json_string_member(o, w, "message");
+  // The chain as a key of its own, or as the message of a schedule written before it had one.
+  if (o.contains("measurement_chain"))
+    e.measurement_chain = chain_from_json(o["measurement_chain"], w / "measurement_chain");
+  else
+    e.measurement_chain = chain_from_message(e.message, (w / "message").str());
   if (e.excitation == Excitation::kMultisine) {
     e.period_samples = int(integer_member(o, w, "period_samples", 0.0));
     for (const char* key : {"lines", "line_input"}) {

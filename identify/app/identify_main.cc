@@ -8,37 +8,14 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
-#include <map>
 
 #include "fralab/core/measure_dir.h"
 #include "fralab/identify/fit_io.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/lab_lcm.h"
+#include "fralab/lcm/url.h"
+#include "identifier_node.h"
 
 using namespace fralab;
-
-namespace {
-
-// Complete curves of the run, each acknowledged to its analyser (FRALAB_FRD_ACK on the data URL,
-// consumer "identify", stream "frd:<pair>"; again for every copy, so a lost one is mended).
-struct Collector {
-  std::string run_id;
-  lcm::LCM* control = nullptr;
-  std::map<std::string, Frd> complete;
-  std::string error;
-  void on_frd(const lcm::ReceiveBuffer* rbuf, const std::string& ch) {
-    try {
-      frd_t m = decode_checked<frd_t>(rbuf, ch);
-      if (!run_id.empty() && m.run_id != run_id) return;
-      if (!m.complete) return;
-      if (!complete.count(m.pair)) complete[m.pair] = from_frd_msg(m);
-      publish_ack(*control, m.run_id, "identify", "frd:" + m.pair, 0, kFrdAckChannel);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
-};
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"fralab-identify: transfer functions and the transfer matrix of a run"};
@@ -73,30 +50,23 @@ int main(int argc, char** argv) {
     if (expect <= 0) throw InputError("--expect N (the pairs to wait for) or --from-frd DIR");
     lcm::LCM lcm(resolve_lcm_url(url));
     require_lcm(lcm, "LCM", resolve_lcm_url(url));
-    Collector c{run_id, &lcm, {}, ""};
-    lcm.subscribe(kFrdChannel, &Collector::on_frd, &c)->setQueueCapacity(100000);
+    IdentifierNode node(lcm, run_id);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_ready = t0 - std::chrono::seconds(1);
-    while (int(c.complete.size()) < expect) {
+    while (int(node.curves().size()) < expect) {
       // Says it is there, so the analysers hand their curves over until acknowledged.
       if (std::chrono::steady_clock::now() - last_ready > std::chrono::milliseconds(500)) {
-        publish_ack(lcm, run_id, "identify", "ready", -1, kFrdAckChannel);
+        node.announce_ready();
         last_ready = std::chrono::steady_clock::now();
       }
       lcm.handleTimeout(100);
-      if (!c.error.empty()) throw InputError(c.error);
+      if (!node.error().empty()) throw InputError(node.error());
       if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) {
-        throw InputError("only " + std::to_string(c.complete.size()) + " of " +
+        throw InputError("only " + std::to_string(node.curves().size()) + " of " +
                          std::to_string(expect) + " curves arrived");
       }
     }
-    std::vector<Frd> curves;
-    for (auto& [p, f] : c.complete) curves.push_back(f);
-    auto fits = fit_and_write(curves, o, out, title);
-    for (size_t i = 0; i < fits.size(); ++i) {
-      tf_t m = to_tf_msg(fits[i].tf, curves[i].pair, run_id, fits[i].e_n, fits[i].status_str());
-      lcm.publish(kTfChannel, &m);
-    }
+    node.fit_and_publish(o, out, title);
     // Copies republished while fitting (an acknowledgement was lost) are acknowledged again.
     const auto t_end = std::chrono::steady_clock::now() + std::chrono::seconds(1);
     while (std::chrono::steady_clock::now() < t_end) lcm.handleTimeout(100);

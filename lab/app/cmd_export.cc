@@ -9,7 +9,7 @@
 #include "fralab/core/error.h"
 #include "fralab/exchange/results_export.h"
 #include "fralab/exchange/tape_series.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fs = std::filesystem;
 

@@ -1,12 +1,13 @@
 // `fralab import`: a time series recorded elsewhere (CSV, WAV, .mat) and its excitation schedule
 // written as a fralab tape that `fralab analyze --log`, `fit` and `diagnose --measured` take as
-// they take their own (exchange/time_series.h, schedule.h, tape_series.h; lcm_io writes the tape).
+// they take their own (exchange/time_series.h, schedule.h, tape_series.h; lcm/tape_file.h writes
+// the tape).
 #include <cstdio>
 #include <memory>
 
 #include "commands.h"
 #include "fralab/exchange/tape_series.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fralab {
 

@@ -12,6 +12,11 @@
 #include "commands.h"
 #include "fralab/diagnose/diagnose.h"
 #include "fralab/lab/monitor.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/lab_lcm.h"
+#include "fralab/lcm/tape_file.h"
+#include "fralab/lcm/url.h"
 #include "fralab/plant/embedded_models.h"
 #include "tape_analysis.h"
 
@@ -77,26 +82,29 @@ void run(const MonitorCommand& c) {
   }
   lcm::LCM lcm(resolve_lcm_url(c.url));
   require_lcm(lcm, "LCM", resolve_lcm_url(c.url));
+  // A growing curve's messages carry its new points, the finished curve's all of them
+  // (docs/lcm-protocol.md): each message's points are shown as they come.
   struct Listener {
     const MonitorCommand* c = nullptr;
-    std::optional<Frd> latest;
+    std::vector<Frd> arrived;
     bool complete = false;
     void on_frd(const lcm::ReceiveBuffer* rb, const std::string& ch) {
       const frd_t m = decode_checked<frd_t>(rb, ch);
       if (m.pair != c->pair || (!c->run_id.empty() && m.run_id != c->run_id)) return;
-      latest = from_frd_msg(m);
+      arrived.push_back(from_frd_msg(m));
       complete |= m.complete;
     }
   } listener;
   listener.c = &c;
   lcm.subscribe(kFrdChannel, &Listener::on_frd, &listener)->setQueueCapacity(10000);
   while (!listener.complete && !idle()) {
-    if (lcm.handleTimeout(100) > 0 && listener.latest) {
-      last_new = Clock::now();
-      show(*listener.latest);
-    }
+    lcm.handleTimeout(100);
+    if (listener.arrived.empty()) continue;
+    last_new = Clock::now();
+    for (const Frd& f : listener.arrived) show(f);
+    listener.arrived.clear();
   }
-  if (listener.latest) show(*listener.latest);
+  for (const Frd& f : listener.arrived) show(f);
   plot(false);
 }
 

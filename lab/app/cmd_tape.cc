@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "commands.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fralab {
 

@@ -6,6 +6,8 @@
 #include <iostream>
 
 #include "fralab/lab/deputy.h"
+#include "fralab/lcm/lab_lcm.h"
+#include "fralab/lcm/url.h"
 
 using namespace fralab;
 

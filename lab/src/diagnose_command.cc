@@ -9,7 +9,7 @@
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/lab/run_lock.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -59,15 +59,14 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
       chain_known = true;
     }
   }
-  // Else the tape's own record of it (the start event's message), when the folder has the tape.
+  // Else the tape's own record of it (the start event's), when the folder has the tape.
   const std::string tape = MeasureDir(data_dir).tape();
   if (!chain_known && fs::exists(tape)) {
     for (const StatusEvent& e : read_tape_run(tape).events)
-      if (e.state == RunState::kStart)
-        if (auto c = chain_from_message(e.message, tape)) {
-          opt.chain = *c;
-          break;
-        }
+      if (e.state == RunState::kStart && e.measurement_chain) {
+        opt.chain = *e.measurement_chain;
+        break;
+      }
   }
   Diagnosis d = diagnose(sim, data, opt);
   json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));

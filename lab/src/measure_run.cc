@@ -11,7 +11,10 @@
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
 #include "fralab/lab/progress.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/lab_lcm.h"
+#include "fralab/lcm/url.h"
 #include "fralab/plant/embedded_models.h"
 #include "tape_analysis.h"
 #include "tape_check.h"
@@ -105,8 +108,8 @@ class ProgressWatch {
     ProgressLine* p;
     std::string run_id;
     void on_status(const lcm::ReceiveBuffer* rb, const std::string& ch) {
-      const auto m = decode_checked<excitation_status_t>(rb, ch);
-      if (m.run_id == run_id) p->on_status(from_msg(m));
+      const StatusEvent e = decode_status_event(rb, ch);
+      if (e.run_id == run_id) p->on_status(e);
     }
     void on_flow(const lcm::ReceiveBuffer* rb, const std::string& ch) {
       const auto f = decode_checked<flow_t>(rb, ch);

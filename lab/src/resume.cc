@@ -5,7 +5,9 @@
 #include <set>
 
 #include "fralab/acquire/acquisition.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fralab {
 
@@ -26,8 +28,8 @@ std::vector<StatusEvent> tape_status(const std::string& tape, const std::string&
     if (ev.channel != kStatusChannel) return;
     lcm::ReceiveBuffer rb{const_cast<void*>(ev.data), uint32_t(ev.datalen), 0};
     try {
-      const excitation_status_t m = decode_checked<excitation_status_t>(&rb, ev.channel);
-      if (m.run_id == run_id && m.seq >= 0) by_seq.emplace(m.seq, from_msg(m));
+      const StatusEvent m = decode_status_event(&rb, ev.channel);
+      if (m.run_id == run_id && m.seq >= 0) by_seq.emplace(m.seq, m);
     } catch (const InputError& e) {
       throw InputError(tape + ": event " + std::to_string(ev.eventnum) + ": " + e.what());
     }
@@ -86,8 +88,8 @@ ResumePoint plan_resume(const std::string& tape, const std::string& run_id, cons
         } catch (const CorruptBlock&) {  // not on the tape: measured again
         }
       } else if (ev.channel == kStatusChannel) {
-        const excitation_status_t m = decode_checked<excitation_status_t>(&rb, ev.channel);
-        done |= m.run_id == run_id && from_msg(m).state == RunState::kDone;
+        const StatusEvent m = decode_status_event(&rb, ev.channel);
+        done |= m.run_id == run_id && m.state == RunState::kDone;
         if (m.run_id == run_id && m.seq >= 0) status_seqs.insert(m.seq);
       }
     } catch (const InputError& e) {

@@ -59,10 +59,10 @@ void TapeCheck::decode(const TapeEvent& ev) {
       final_tape_ |= m.final_block;
     }
   } else if (ev.channel == kStatusChannel) {
-    auto m = decode_checked<excitation_status_t>(&rb, ev.channel);
+    const StatusEvent m = decode_status_event(&rb, ev.channel);
     if (m.run_id != run_id_) return;
     if (m.seq >= 0) seqs_["status"].push_back(m.seq);
-    done_ |= from_msg(m).state == RunState::kDone;
+    done_ |= m.state == RunState::kDone;
   }
 }
 

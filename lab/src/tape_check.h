@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 
 namespace fralab {
 

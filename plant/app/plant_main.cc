@@ -9,7 +9,8 @@
 #include <iostream>
 #include <random>
 
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/lab_lcm.h"
+#include "fralab/lcm/tape_file.h"
 #include "fralab/plant/embedded_models.h"
 #include "plant_node.h"
 

@@ -19,7 +19,9 @@
 #include <string>
 
 #include "fralab/core/in_order.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/lab_lcm.h"
 #include "fralab/plant/command_buffer.h"
 #include "fralab/plant/lockstep.h"
 

@@ -5,7 +5,8 @@
 #include <numbers>
 
 #include "fralab/core/frd.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
 #include "fralab/plant/embedded_models.h"
 #include "fralab/plant/model.h"
 

@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <string>
 
+#include "fralab/lcm/tape_file.h"
+
 namespace fralab::fuzz {
 
 /// The readers fuzzed: "tape" (read_tape_file + the tape analysis), "model" (load_model), "frd"

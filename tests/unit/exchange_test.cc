@@ -170,6 +170,42 @@ TEST(MatFile, ValuesReadBackThroughMatio) {
       ThrowsMessage<InputError>(HasSubstr("'1x' is not a MATLAB name")));
 }
 
+// The start event's measurement chain is a key of its own in a schedule and reads back typed; a
+// schedule written when the chain was the start event's message still gives it.
+TEST(Schedule, TheStartEventsMeasurementChainIsKeptAndOldSchedulesStillGiveIt) {
+  Schedule s;
+  s.sample_rate_hz = 1000;
+  s.run_id = "r";
+  StatusEvent e;
+  e.seq = -1;
+  e.state = RunState::kStart;
+  e.inputs = {"A"};
+  e.amplitudes = {0.5};
+  MeasurementChain c;
+  c.sample_rate_hz = 500;
+  c.hold = MeasurementChain::Hold::kZeroOrder;
+  c.converter_delay_s = 0.002;
+  c.reheld_inputs = {"A"};
+  e.measurement_chain = c;
+  s.events = {e};
+  Json j = schedule_to_json(s);
+  ASSERT_TRUE(j["events"][0].contains("measurement_chain"));
+  const Schedule r = schedule_from_json(j, "s.json");
+  ASSERT_TRUE(r.events[0].measurement_chain.has_value());
+  EXPECT_EQ(r.events[0].measurement_chain->sample_rate_hz, 500);
+  EXPECT_EQ(r.events[0].measurement_chain->hold, MeasurementChain::Hold::kZeroOrder);
+  EXPECT_EQ(r.events[0].measurement_chain->converter_delay_s, 0.002);
+  EXPECT_EQ(r.events[0].measurement_chain->reheld_inputs, std::vector<std::string>{"A"});
+
+  j["events"][0].erase("measurement_chain");
+  j["events"][0]["message"] = chain_to_message(c);
+  const Schedule old = schedule_from_json(j, "old.json");
+  ASSERT_TRUE(old.events[0].measurement_chain.has_value());
+  EXPECT_EQ(old.events[0].measurement_chain->converter_delay_s, 0.002);
+  j["events"][0].erase("message");
+  EXPECT_FALSE(schedule_from_json(j, "none.json").events[0].measurement_chain.has_value());
+}
+
 TEST(Schedule, JsonRoundTripKeepsEveryFieldAndErrorsNameThePath) {
   Schedule s;
   s.sample_rate_hz = 1000;

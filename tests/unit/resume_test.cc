@@ -10,7 +10,7 @@
 
 #include <filesystem>
 
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/tape_file.h"
 #include "fralab/plant/embedded_models.h"
 #include "test_util.h"
 

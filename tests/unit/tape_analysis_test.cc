@@ -8,6 +8,9 @@
 
 #include <limits>
 
+#include "fralab/lcm/channels.h"
+#include "fralab/lcm/codec.h"
+#include "fralab/lcm/tape_file.h"
 #include "test_util.h"
 
 namespace fralab {

@@ -1,6 +1,6 @@
 // The tape's records as plain structs, free of LCM: a block of sample-clocked multi-channel samples
 // and an excitation status (docs/formats.md §3). The LCM adapters
-// (lcmtypes/include/fralab/lcm_io.h) convert them to and from fralab.tape_block_t /
+// (lcmtypes/include/fralab/lcm/codec.h) convert them to and from fralab.tape_block_t /
 // command_block_t / excitation_status_t; the libraries (acquire, analyze) only ever see these.
 #pragma once
 
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fralab/core/error.h"
+#include "fralab/core/measurement_chain.h"
 #include "fralab/core/text.h"
 
 namespace fralab {
@@ -89,6 +90,9 @@ struct StatusEvent {
   // sample_rate_hz / period_samples excited by inputs[line_input[j]].
   int period_samples = 0;
   std::vector<int> lines, line_input;
+  // The start event: how the run was measured (docs/formats.md §12); absent on other events and
+  // on runs measured without one.
+  std::optional<MeasurementChain> measurement_chain;
 };
 
 }  // namespace fralab

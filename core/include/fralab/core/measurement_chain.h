@@ -48,10 +48,10 @@ Json chain_to_json(const MeasurementChain& c);
 /// Errors name `where`.
 MeasurementChain chain_from_json(const Json& j, const JsonWhere& where);
 
-/// The chain on the tape itself: the run's start status event carries it as its message,
-/// "measurement_chain: " followed by chain_to_json's text (so a tape alone says how it was
-/// measured). chain_from_message: nullopt for any other message; InputError naming `where` for a
-/// chain that does not read.
+/// The chain as tapes recorded before it had a field of its own carry it: the start status
+/// event's message, "measurement_chain: " followed by chain_to_json's text (a tape's start event
+/// now carries it typed, core/block.h StatusEvent::measurement_chain). chain_from_message: nullopt
+/// for any other message; InputError naming `where` for a chain that does not read.
 inline constexpr const char* kChainMessagePrefix = "measurement_chain: ";
 std::string chain_to_message(const MeasurementChain& c);
 std::optional<MeasurementChain> chain_from_message(const std::string& message,

@@ -1,6 +1,6 @@
 // A run's tape as a time series and its schedule, and back (`fralab export --tape`, `fralab
 // import`). Plain structs on both sides (core/block.h); the tape file itself is read and written
-// by the LCM bridge (lcm_io.h: read_tape_run, write_tape_file).
+// by the LCM bridge (fralab/lcm/tape_file.h: read_tape_run, write_tape_file).
 //
 // Exact both ways: the series holds every sample of every tape channel on the tape's sample clock,
 // the schedule every status event; a tape rebuilt from them analyses to the same frd, bit for bit

@@ -1,6 +1,6 @@
 // Deputies: one `fralab-deputy` per host starts and stops the lab's module processes for a
 // launcher on another host, over LCM, as procman's deputies do. Multi-host is an explicit opt-in
-// (FRALAB_NETWORK=1, URLs with ttl >= 1, lcm_io.h).
+// (FRALAB_NETWORK=1, URLs with ttl >= 1, lcm/url.h).
 //
 // Protocol (lcmtypes deputy_order_t / deputy_report_t, on the deputies' URL):
 //   launcher -> FRALAB_DEPUTY_ORDER: "start" (argv, log file) or "stop" one named process of a
@@ -19,7 +19,7 @@
 #include <string>
 
 #include "fralab/lab/supervisor.h"
-#include "fralab/lcm_io.h"
+#include "fralab/lcm/codec.h"
 
 namespace fralab {
 
