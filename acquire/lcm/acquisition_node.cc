@@ -97,232 +97,281 @@ AcquisitionNode::~AcquisitionNode() {
   if (tape_sub_) data_.unsubscribe(tape_sub_);
 }
 
-Json AcquisitionNode::run() {
-  lcm::LCM& data = data_;
-  const Campaign& campaign = campaign_;
-  const AcquireOptions& o = o_.acquire;
-  Acks& acq = *acks_;
-  FlowControl& flow = acq.flow;
-  const auto& events = campaign.events();
-  for (size_t i = 0; i < events.size(); ++i)
-    if (events[i].seq != int64_t(i))
-      throw InputError("campaign status event " + std::to_string(i) + " has seq " +
-                       std::to_string(events[i].seq) + " (the status stream needs 0, 1, ...)");
+// One run of the campaign: the steps of run(), sharing the node's transport, flow control and
+// tape watch.
+class AcquisitionNode::Run {
+ public:
+  explicit Run(AcquisitionNode& n)
+      : n_(n),
+        o_(n.o_),
+        a_(n.o_.acquire),
+        campaign_(n.campaign_),
+        events_(n.campaign_.events()),
+        acks_(*n.acks_),
+        flow_(n.acks_->flow),
+        tape_(n.tape_.get()),
+        nblocks_(command_block_count(n.campaign_, n.o_.acquire.block)),
+        lead_samples_(int64_t(n.o_.acquire.lead) * n.o_.acquire.block) {}
 
-  auto publish_status = [&](const StatusEvent& e) {
+  Json operator()() {
+    check_campaign_and_resume_point();
+    wait_for_consumers();
+    publish_start();
+    t0_ = Clock::now();
+    send_campaign();
+    if (a_.free_running) play_out_and_repeat();
+    wait_until_everyone_holds_everything();
+    for (int i = 0; i < 3; ++i) publish_flow(n_.data_, o_.run_id, "close", "", 0, last_command_);
+    return summary();
+  }
+
+ private:
+  void check_campaign_and_resume_point() const {
+    for (size_t i = 0; i < events_.size(); ++i)
+      if (events_[i].seq != int64_t(i))
+        throw InputError("campaign status event " + std::to_string(i) + " has seq " +
+                         std::to_string(events_[i].seq) + " (the status stream needs 0, 1, ...)");
+    if (o_.first_block < 0 || o_.first_block > nblocks_ || o_.first_status < 0 ||
+        o_.first_status > int64_t(events_.size()))
+      throw InputError("resume point block " + std::to_string(o_.first_block) + ", status " +
+                       std::to_string(o_.first_status) + " is outside the campaign");
+  }
+
+  void publish_status(const StatusEvent& e) {
     excitation_status_t m = to_status_msg(e);
-    data.publish(kStatusChannel, &m);
-  };
+    n_.data_.publish(kStatusChannel, &m);
+  }
+
   // Free-running, the command blocks from the campaign's last on (its final flag cleared, the
-  // play-out's idle blocks, the repeated steps) are not the campaign's blocks of their seq: kept as
-  // published, so that a retransmission sends them again as they were.
-  std::map<int64_t, command_block_t> sent_free;
-  auto publish_command = [&](int64_t b) {
-    if (const auto it = sent_free.find(b); it != sent_free.end()) {
-      data.publish(kCmdChannel, &it->second);
+  // play-out's idle blocks, the repeated steps) are not the campaign's blocks of their seq: kept
+  // as published, so that a retransmission sends them again as they were.
+  void publish_command(int64_t b) {
+    if (const auto it = sent_free_.find(b); it != sent_free_.end()) {
+      n_.data_.publish(kCmdChannel, &it->second);
       return;
     }
     command_block_t m =
-        to_command_msg(command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id));
-    data.publish(kCmdChannel, &m);
-  };
+        to_command_msg(command_block(campaign_, b, a_.block, a_.sample_rate_hz, o_.run_id));
+    n_.data_.publish(kCmdChannel, &m);
+  }
+
   // Stops the excitation: an "abort" status and a block commanding every actuator to its
-  // operating point, both with seq -1 (outside the run's sequences, so a resumed run continues the
-  // same numbering; readers take neither for part of the campaign).
-  int64_t next_block = 0;
-  auto abort_run = [&]() {
-    const int64_t at = next_block * o.block;
-    StatusEvent e = events.front();
+  // operating point, both with seq -1 (outside the run's sequences, so a resumed run continues
+  // the same numbering; readers take neither for part of the campaign).
+  [[noreturn]] void abort_run() {
+    const int64_t at = next_block_ * a_.block;
+    StatusEvent e = events_.front();
     e.state = RunState::kAbort;
     e.seq = -1;
     e.sample = at;
     e.n_samples = 0;
     e.message = "stopped by a signal";
     const command_block_t m =
-        to_command_msg(abort_block(campaign, -1, at, o.block, o.sample_rate_hz, o_.run_id));
+        to_command_msg(abort_block(campaign_, -1, at, a_.block, a_.sample_rate_hz, o_.run_id));
     for (int i = 0; i < 3; ++i) {
       publish_status(e);
-      data.publish(kCmdChannel, &m);
+      n_.data_.publish(kCmdChannel, &m);
     }
     throw InputError("stopped by a signal at sample " + std::to_string(at) +
                      ": the excitation is stopped and every actuator commanded back to its "
                      "operating point");
-  };
+  }
+
   // Handles what arrived, retransmits what a consumer lacks, and fails on a stalled stream.
-  auto pump = [&](int poll_ms) {
+  void pump(int poll_ms) {
     if (o_.stop_requested && o_.stop_requested()) abort_run();
-    handle_either(data_, control_, poll_ms);
-    if (!acq.error.empty()) throw InputError(acq.error);
+    handle_either(n_.data_, n_.control_, poll_ms);
+    if (!acks_.error.empty()) throw InputError(acks_.error);
     if (tape_ && !tape_->error.empty()) throw InputError(tape_->error);
-    const double now = acq.now();
-    if (o.free_running && tape_->last_seq >= 0) flow.published(Stream::kTape, tape_->last_seq);
+    const double now = acks_.now();
+    if (a_.free_running && tape_->last_seq >= 0) flow_.published(Stream::kTape, tape_->last_seq);
     for (Stream s : {Stream::kCommand, Stream::kTape, Stream::kStatus}) {
-      if (auto r = flow.due(s, now)) {
+      if (auto r = flow_.due(s, now)) {
         if (s == Stream::kCommand)
           for (int64_t b = r->from; b <= r->to; ++b) publish_command(b);
         else if (s == Stream::kStatus)
-          for (int64_t k = r->from; k <= r->to; ++k) publish_status(events[size_t(k)]);
+          for (int64_t k = r->from; k <= r->to; ++k) publish_status(events_[size_t(k)]);
         else
-          publish_flow(data_, o_.run_id, "resend", "tape", r->from, r->to);
+          publish_flow(n_.data_, o_.run_id, "resend", "tape", r->from, r->to);
       }
-      const std::string why = flow.stalled(s, now);
+      const std::string why = flow_.stalled(s, now);
       if (!why.empty()) throw InputError(why);
     }
-  };
-  // Waits until `ok()`; the streams are pumped meanwhile.
-  auto wait_until = [&](const std::function<bool()>& ok) {
-    while (!ok()) pump(10);
-  };
-
-  if (o_.first_block < 0 || o_.first_block > command_block_count(campaign, o.block) ||
-      o_.first_status < 0 || o_.first_status > int64_t(events.size()))
-    throw InputError("resume point block " + std::to_string(o_.first_block) + ", status " +
-                     std::to_string(o_.first_status) + " is outside the campaign");
-  flow.begin_at(o_.first_block, o_.first_status);
-  const double t_ready = acq.now();
-  std::string missing;
-  while (!flow.all_ready(&missing)) {
-    if (o_.stop_requested && o_.stop_requested())
-      throw InputError("stopped by a signal before the run started");
-    handle_either(data_, control_, 50);
-    if (!acq.error.empty()) throw InputError(acq.error);
-    if (acq.now() - t_ready > o_.ready_timeout_s)
-      throw InputError("consumer \"" + missing + "\" never said ready within " +
-                       std::to_string(o_.ready_timeout_s) +
-                       " s (is it running on the same LCM URL?)");
   }
-  StatusEvent start = events.front();
-  start.state = RunState::kStart;
-  start.seq = -1;
-  start.sample = 0;
-  start.n_samples = campaign.total_samples();
-  start.measurement_chain = o_.measurement_chain;
-  publish_status(start);  // outside the flow control: informative
 
-  const auto t0 = Clock::now();
-  size_t ev = size_t(o_.first_status);
-  next_block = o_.first_block;
-  const bool free = o.free_running;
-  // Free-running: the last event ("done") and the final block wait until every step is known to
-  // have been played without a held sample (the play-out after this loop).
-  const size_t n_done_held = free ? 1 : 0;
-  const int64_t lead_samples = int64_t(o.lead) * o.block;
-  AutoIntegrator* const ai = o_.auto_integrator;
+  // Waits until `ok()`; the streams are pumped meanwhile.
+  template <class Ok>
+  void wait_until(const Ok& ok) {
+    while (!ok()) pump(10);
+  }
+
+  void wait_for_consumers() {
+    flow_.begin_at(o_.first_block, o_.first_status);
+    const double t_ready = acks_.now();
+    std::string missing;
+    while (!flow_.all_ready(&missing)) {
+      if (o_.stop_requested && o_.stop_requested())
+        throw InputError("stopped by a signal before the run started");
+      handle_either(n_.data_, n_.control_, 50);
+      if (!acks_.error.empty()) throw InputError(acks_.error);
+      if (acks_.now() - t_ready > o_.ready_timeout_s)
+        throw InputError("consumer \"" + missing + "\" never said ready within " +
+                         std::to_string(o_.ready_timeout_s) +
+                         " s (is it running on the same LCM URL?)");
+    }
+  }
+
+  // The start event: the run's length and measurement chain, outside the flow control
+  // (informative).
+  void publish_start() {
+    StatusEvent start = events_.front();
+    start.state = RunState::kStart;
+    start.seq = -1;
+    start.sample = 0;
+    start.n_samples = campaign_.total_samples();
+    start.measurement_chain = o_.measurement_chain;
+    publish_status(start);
+  }
+
   // Adaptive: the decision pending at sample E is taken before a block starting at or after E goes
   // out (the campaign, its events and its length may change then); the tape it needs is asked for
   // again when it is slow to come.
-  auto decide_before = [&](int64_t b) {
-    double t_asked = acq.now();
-    while (ai->decision_sample() >= 0 && b * o.block >= ai->decision_sample()) {
+  void decide_before(int64_t b) {
+    AutoIntegrator* const ai = o_.auto_integrator;
+    double t_asked = acks_.now();
+    while (ai->decision_sample() >= 0 && b * a_.block >= ai->decision_sample()) {
       if (ai->decide()) continue;
       pump(5);
       const auto [from, to] = ai->needed_samples();
       int64_t lost = -1;
-      for (int64_t k = from / o.block; k <= (to - 1) / o.block && lost < 0; ++k)
+      for (int64_t k = from / a_.block; k <= (to - 1) / a_.block && lost < 0; ++k)
         if (!tape_->seen.count(k)) lost = k;
-      if (lost >= 0 && acq.now() - t_asked > 0.2) {
-        publish_flow(data_, o_.run_id, "resend", "tape", lost, (to - 1) / o.block);
-        t_asked = acq.now();
+      if (lost >= 0 && acks_.now() - t_asked > 0.2) {
+        publish_flow(n_.data_, o_.run_id, "resend", "tape", lost, (to - 1) / a_.block);
+        t_asked = acks_.now();
       }
     }
-  };
-  for (int64_t b = o_.first_block; b < command_block_count(campaign, o.block); ++b) {
-    if (ai) decide_before(b);
-    if (b >= command_block_count(campaign, o.block)) break;
-    const size_t n_events = events.size() - n_done_held;
-    Block blk = command_block(campaign, b, o.block, o.sample_rate_hz, o_.run_id);
-    if (free) {  // ahead of the plant's clock by at most `lead` blocks; the plant does not wait
-      blk.final_block = false;
-      wait_until([&] { return blk.start_sample - tape_->played < lead_samples; });
-    } else {
-      wait_until([&] {
-        return flow.acked(Stream::kCommand) >= b - o.window &&
-               flow.acked(Stream::kTape) >= b - o.window;
-      });
-    }
-    if (o.speed > 0 && !free) {
-      auto due =
-          t0 + std::chrono::duration<double>(double(blk.start_sample) / o.sample_rate_hz / o.speed);
-      while (Clock::now() < due)
-        pump(1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
-    }
-    // The block's status events, held by every consumer before the block goes out: a window's
-    // definition always precedes its samples, however datagrams are lost.
-    bool new_status = false;
-    while (ev < n_events &&
-           (events[ev].sample < blk.start_sample + blk.n_samples || blk.final_block)) {
-      publish_status(events[ev]);
-      flow.published(Stream::kStatus, events[ev].seq);
-      ++ev;
-      new_status = true;
-    }
-    if (new_status)
-      wait_until([&] { return flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus); });
-    command_block_t m = to_command_msg(blk);
-    if (free && b == command_block_count(campaign, o.block) - 1) sent_free[b] = m;
-    data.publish(kCmdChannel, &m);
-    flow.published(Stream::kCommand, b);
-    next_block = b + 1;
   }
-  const int64_t total = campaign.total_samples();
-  const int64_t nblocks = command_block_count(campaign, o.block);
-  int64_t last_command = nblocks - 1, last_tape = nblocks - 1;
-  Json repeats = Json::array();
-  if (free) {
-    // Play out, look at the tape for held samples in any step, repeat those steps at the end,
-    // until none is touched; then "done" and the final block.
-    int64_t pos = total, cmd_seq = nblocks, status_seq = events.back().seq;
-    auto publish_block = [&](Block c) {
-      c.seq = cmd_seq++;
-      wait_until([&] { return c.start_sample - tape_->played < lead_samples; });
-      command_block_t m = to_command_msg(c);
-      sent_free[c.seq] = m;
-      data.publish(kCmdChannel, &m);
-      flow.published(Stream::kCommand, c.seq);
-    };
-    auto idle_block = [&](bool final) {
-      Block c = abort_block(campaign, 0, pos, o.block, o.sample_rate_hz, o_.run_id);
-      c.final_block = final;
-      publish_block(c);
-      pos += o.block;
-    };
-    auto publish_event = [&](const StatusEvent& e) {
-      publish_status(e);
-      flow.published(Stream::kStatus, e.seq);
-      wait_until([&] { return flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus); });
-    };
+
+  // The campaign's command blocks in order, each when the flow control lets it go (lockstep: at
+  // most `window` blocks ahead of the slowest consumer; free-running: at most `lead` blocks ahead
+  // of the plant's clock), each preceded by the status events that take effect in it.
+  void send_campaign() {
+    size_t ev = size_t(o_.first_status);
+    next_block_ = o_.first_block;
+    const bool free = a_.free_running;
+    // Free-running: the last event ("done") and the final block wait until every step is known
+    // to have been played without a held sample (the play-out).
+    const size_t n_done_held = free ? 1 : 0;
+    for (int64_t b = o_.first_block; b < command_block_count(campaign_, a_.block); ++b) {
+      if (o_.auto_integrator) decide_before(b);
+      if (b >= command_block_count(campaign_, a_.block)) break;
+      const size_t n_events = events_.size() - n_done_held;
+      Block blk = command_block(campaign_, b, a_.block, a_.sample_rate_hz, o_.run_id);
+      if (free) {  // ahead of the plant's clock by at most `lead` blocks; the plant does not wait
+        blk.final_block = false;
+        wait_until([&] { return blk.start_sample - tape_->played < lead_samples_; });
+      } else {
+        wait_until([&] {
+          return flow_.acked(Stream::kCommand) >= b - a_.window &&
+                 flow_.acked(Stream::kTape) >= b - a_.window;
+        });
+      }
+      if (a_.speed > 0 && !free) {
+        auto due = t0_ + std::chrono::duration<double>(double(blk.start_sample) /
+                                                       a_.sample_rate_hz / a_.speed);
+        while (Clock::now() < due)
+          pump(1 + int(std::chrono::duration<double, std::milli>(due - Clock::now()).count()));
+      }
+      // The block's status events, held by every consumer before the block goes out: a window's
+      // definition always precedes its samples, however datagrams are lost.
+      bool new_status = false;
+      while (ev < n_events &&
+             (events_[ev].sample < blk.start_sample + blk.n_samples || blk.final_block)) {
+        publish_status(events_[ev]);
+        flow_.published(Stream::kStatus, events_[ev].seq);
+        ++ev;
+        new_status = true;
+      }
+      if (new_status)
+        wait_until(
+            [&] { return flow_.acked(Stream::kStatus) >= flow_.available(Stream::kStatus); });
+      command_block_t m = to_command_msg(blk);
+      if (free && b == command_block_count(campaign_, a_.block) - 1) sent_free_[b] = m;
+      n_.data_.publish(kCmdChannel, &m);
+      flow_.published(Stream::kCommand, b);
+      next_block_ = b + 1;
+    }
+    nblocks_ = command_block_count(campaign_, a_.block);
+    last_command_ = last_tape_ = nblocks_ - 1;
+  }
+
+  // Free-running: a command block `lead` blocks ahead of the plant's clock at most, kept as sent.
+  void publish_free_block(Block c) {
+    c.seq = cmd_seq_++;
+    wait_until([&] { return c.start_sample - tape_->played < lead_samples_; });
+    command_block_t m = to_command_msg(c);
+    sent_free_[c.seq] = m;
+    n_.data_.publish(kCmdChannel, &m);
+    flow_.published(Stream::kCommand, c.seq);
+  }
+
+  // Free-running: every actuator at its operating point for a block.
+  void idle_block(bool final) {
+    Block c = abort_block(campaign_, 0, pos_, a_.block, a_.sample_rate_hz, o_.run_id);
+    c.final_block = final;
+    publish_free_block(c);
+    pos_ += a_.block;
+  }
+
+  // Free-running: a status event beyond the campaign's, held by every consumer before going on.
+  void publish_free_event(const StatusEvent& e) {
+    publish_status(e);
+    flow_.published(Stream::kStatus, e.seq);
+    wait_until([&] { return flow_.acked(Stream::kStatus) >= flow_.available(Stream::kStatus); });
+  }
+
+  // Free-running: idle blocks keep the plant fed until it has played (and the acquisition seen,
+  // without a gap) everything commanded so far.
+  void play_out() {
+    const int64_t target = pos_;
+    while (!(tape_->played >= target && tape_->contiguous() == tape_->last_seq)) {
+      if (pos_ - tape_->played < lead_samples_) {
+        idle_block(false);
+        continue;
+      }
+      pump(5);
+      const int64_t c = tape_->contiguous();
+      if (c < tape_->last_seq && acks_.now() - t_asked_ > 0.2) {  // lost on the way here
+        publish_flow(n_.data_, o_.run_id, "resend", "tape", c + 1, tape_->last_seq);
+        t_asked_ = acks_.now();
+      }
+    }
+  }
+
+  // Free-running: play out, look at the tape for held samples in any step, repeat those steps at
+  // the end, until none is touched; then "done" and the final block.
+  void play_out_and_repeat() {
+    pos_ = campaign_.total_samples();
+    cmd_seq_ = nblocks_;
+    int64_t status_seq = events_.back().seq;
     // Each step's span (settle and integrate) and its integrate event, latest run of it.
     std::map<int, std::pair<int64_t, int64_t>> span;
     std::map<int, StatusEvent> integ;
     int64_t settle_at = 0;
-    for (const auto& e : events) {
+    for (const auto& e : events_) {
       if (e.state == RunState::kSettle) settle_at = e.sample;
       if (e.state != RunState::kIntegrate) continue;
       span[e.step] = {std::min(settle_at, e.sample), e.sample + e.n_samples};
       integ[e.step] = e;
     }
-    double t_asked = -1;
     for (int round = 0;; ++round) {
-      // Idle blocks keep the plant fed until it has played (and the acquisition seen, without a
-      // gap) everything commanded so far.
-      const int64_t target = pos;
-      while (!(tape_->played >= target && tape_->contiguous() == tape_->last_seq)) {
-        if (pos - tape_->played < lead_samples) {
-          idle_block(false);
-          continue;
-        }
-        pump(5);
-        const int64_t c = tape_->contiguous();
-        if (c < tape_->last_seq && acq.now() - t_asked > 0.2) {  // lost on the way here
-          publish_flow(data_, o_.run_id, "resend", "tape", c + 1, tape_->last_seq);
-          t_asked = acq.now();
-        }
-      }
+      play_out();
       std::vector<int> hit;
       for (const auto& [step, sp] : span)
         if (tape_->held.within(sp.first, sp.second)) hit.push_back(step);
       if (hit.empty()) break;
-      if (round >= o.max_repeats)
+      if (round >= a_.max_repeats)
         throw InputError(
             "the free-running plant's command buffer ran dry in " + std::to_string(hit.size()) +
             " steps again after " + std::to_string(round) +
@@ -338,8 +387,9 @@ Json AcquisitionNode::run() {
         s.n_cycles = e.n_cycles;
         s.integrate_samples = e.n_samples;
         s.settle_samples = span[step].second - span[step].first - e.n_samples;
-        const SteppedSineCampaign rep(campaign.inputs(), {input}, {s}, o.sample_rate_hz, o_.run_id);
-        const int64_t start = pos;
+        const SteppedSineCampaign rep(campaign_.inputs(), {input}, {s}, a_.sample_rate_hz,
+                                      o_.run_id);
+        const int64_t start = pos_;
         for (StatusEvent x : rep.events()) {
           if (x.state != RunState::kSettle && x.state != RunState::kIntegrate) continue;
           x.sample += start;
@@ -347,57 +397,86 @@ Json AcquisitionNode::run() {
           x.step = e.step;
           x.n_steps = e.n_steps;
           if (x.state == RunState::kIntegrate) integ[step] = x;
-          publish_event(x);
+          publish_free_event(x);
         }
-        for (int64_t k = 0; k < command_block_count(rep, o.block); ++k) {
-          Block c = command_block(rep, k, o.block, o.sample_rate_hz, o_.run_id);
+        for (int64_t k = 0; k < command_block_count(rep, a_.block); ++k) {
+          Block c = command_block(rep, k, a_.block, a_.sample_rate_hz, o_.run_id);
           c.start_sample += start;
           c.final_block = false;
-          publish_block(c);
+          publish_free_block(c);
         }
-        pos = start + rep.total_samples();
-        span[step] = {start, pos};
-        repeats.push_back({{"step", step}, {"frequency_hz", e.frequency_hz}, {"round", round + 1}});
+        pos_ = start + rep.total_samples();
+        span[step] = {start, pos_};
+        repeats_.push_back(
+            {{"step", step}, {"frequency_hz", e.frequency_hz}, {"round", round + 1}});
       }
     }
-    StatusEvent done = events.back();
+    StatusEvent done = events_.back();
     done.seq = status_seq;
-    done.sample = pos;
-    publish_event(done);
+    done.sample = pos_;
+    publish_free_event(done);
     idle_block(true);
-    last_command = cmd_seq - 1;
+    last_command_ = cmd_seq_ - 1;
     wait_until([&] { return tape_->final_seq >= 0; });
-    last_tape = tape_->final_seq;
+    last_tape_ = tape_->final_seq;
   }
+
   // Everyone holds everything: the run is judged by what was measured.
-  wait_until([&] {
-    return flow.acked(Stream::kCommand) >= last_command && flow.acked(Stream::kTape) >= last_tape &&
-           flow.acked(Stream::kStatus) >= flow.available(Stream::kStatus);
-  });
-  for (int i = 0; i < 3; ++i) publish_flow(data_, o_.run_id, "close", "", 0, last_command);
-  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  // Engine time of this run (a resumed run: from its first block on).
-  const double engine_s =
-      double(total - std::min(total, o_.first_block * int64_t(o.block))) / o.sample_rate_hz;
-  Json sj{{"run_id", o_.run_id},
-          {"engine_time_s", engine_s},
-          {"wall_time_s", wall},
-          {"speedup", engine_s / std::max(wall, 1e-9)},
-          {"blocks", nblocks},
-          {"first_block", o_.first_block},
-          {"samples", total},
-          {"excitation", to_string(campaign.events().front().excitation)},
-          {"retransmissions", flow.retransmissions()},
-          {"items_retransmitted", flow.items_retransmitted()},
-          {"plant_clock", free ? "free" : "lockstep"}};
-  if (ai) sj["adaptive"] = adaptive_steps_json(ai->results());
-  if (free) {
-    sj["held_samples"] = tape_->held.count();
-    sj["repeated_steps"] = repeats;
-    sj["engine_time_s"] = double(tape_->played) / o.sample_rate_hz;  // held and repeated included
-    sj["speedup"] = sj["engine_time_s"].get<double>() / std::max(wall, 1e-9);
+  void wait_until_everyone_holds_everything() {
+    wait_until([&] {
+      return flow_.acked(Stream::kCommand) >= last_command_ &&
+             flow_.acked(Stream::kTape) >= last_tape_ &&
+             flow_.acked(Stream::kStatus) >= flow_.available(Stream::kStatus);
+    });
   }
-  return sj;
-}
+
+  Json summary() const {
+    const double wall = std::chrono::duration<double>(Clock::now() - t0_).count();
+    const int64_t total = campaign_.total_samples();
+    // Engine time of this run (a resumed run: from its first block on).
+    const double engine_s =
+        double(total - std::min(total, o_.first_block * int64_t(a_.block))) / a_.sample_rate_hz;
+    const bool free = a_.free_running;
+    Json sj{{"run_id", o_.run_id},
+            {"engine_time_s", engine_s},
+            {"wall_time_s", wall},
+            {"speedup", engine_s / std::max(wall, 1e-9)},
+            {"blocks", nblocks_},
+            {"first_block", o_.first_block},
+            {"samples", total},
+            {"excitation", to_string(campaign_.events().front().excitation)},
+            {"retransmissions", flow_.retransmissions()},
+            {"items_retransmitted", flow_.items_retransmitted()},
+            {"plant_clock", free ? "free" : "lockstep"}};
+    if (o_.auto_integrator) sj["adaptive"] = adaptive_steps_json(o_.auto_integrator->results());
+    if (free) {
+      sj["held_samples"] = tape_->held.count();
+      sj["repeated_steps"] = repeats_;
+      sj["engine_time_s"] = double(tape_->played) / a_.sample_rate_hz;  // held and repeated too
+      sj["speedup"] = sj["engine_time_s"].get<double>() / std::max(wall, 1e-9);
+    }
+    return sj;
+  }
+
+  AcquisitionNode& n_;
+  const AcquisitionLoopOptions& o_;
+  const AcquireOptions& a_;
+  const Campaign& campaign_;
+  const std::vector<StatusEvent>& events_;
+  Acks& acks_;
+  FlowControl& flow_;
+  TapeWatch* tape_;
+  int64_t nblocks_;
+  const int64_t lead_samples_;
+  Clock::time_point t0_ = Clock::now();
+  int64_t next_block_ = 0;                        // the next command block (an abort's sample)
+  std::map<int64_t, command_block_t> sent_free_;  // free-running: blocks kept as sent
+  int64_t last_command_ = -1, last_tape_ = -1;    // what every consumer must hold at the end
+  int64_t pos_ = 0, cmd_seq_ = 0;                 // free-running play-out: next sample, next seq
+  double t_asked_ = -1;                           // free-running: the last resend asked for
+  Json repeats_ = Json::array();
+};
+
+Json AcquisitionNode::run() { return Run(*this)(); }
 
 }  // namespace fralab

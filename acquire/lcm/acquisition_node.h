@@ -74,6 +74,7 @@ class AcquisitionNode {
  private:
   struct Acks;
   struct TapeWatch;
+  class Run;
   lcm::LCM& data_;
   lcm::LCM& control_;
   const Campaign& campaign_;
