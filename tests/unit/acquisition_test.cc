@@ -1,13 +1,12 @@
-// The acquisition's protocol logic (acquire/acquisition.h, acquire_flags.h) and the plant's
-// lockstep (plant/lockstep.h), without LCM: command blocks cover the campaign sample-exactly, flags
-// reproduce the options exactly, acknowledgements are tracked per consumer, and the plant refuses a
-// gap naming the sequence numbers.
+// The acquisition's protocol logic (acquire/acquisition.h) and the plant's lockstep
+// (plant/lockstep.h), without LCM: command blocks cover the campaign sample-exactly, bad options
+// are named, and the plant refuses a gap naming the sequence numbers (the flags that reproduce the
+// options: acquire_flags_test).
 #include "fralab/acquire/acquisition.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "fralab/acquire/acquire_flags.h"
 #include "fralab/plant/embedded_models.h"
 #include "fralab/plant/lockstep.h"
 
@@ -49,29 +48,6 @@ TEST(Acquisition, CommandBlocksCoverTheCampaignExactly) {
     samples += b.n_samples;
   }
   EXPECT_EQ(samples, camp->total_samples());
-}
-
-TEST(Acquisition, FlagsReproduceTheOptionsExactly) {
-  AcquireOptions o = short_run();
-  o.excitation = Excitation::kMultisine;
-  o.amplitude_scale = 1.0 / 3.0;  // not representable in 6 decimals
-  o.min_integrate_s = 0.1 + 0.2;
-  o.odd_lines = true;
-  o.slowest_time_constant_s = 0.7;
-  CLI::App app;
-  AcquireOptions back;
-  add_acquire_flags(&app, back);
-  std::vector<std::string> args = acquire_flags(o);
-  std::reverse(args.begin(), args.end());  // CLI11 takes argv in reverse in this form
-  app.parse(args);
-  EXPECT_EQ(back.inputs, o.inputs);
-  EXPECT_EQ(back.band, o.band);
-  EXPECT_EQ(back.excitation, Excitation::kMultisine);
-  EXPECT_EQ(back.amplitude_scale, o.amplitude_scale);  // bit for bit
-  EXPECT_EQ(back.min_integrate_s, o.min_integrate_s);
-  EXPECT_EQ(back.slowest_time_constant_s, 0.7);
-  EXPECT_TRUE(back.odd_lines);
-  EXPECT_EQ(back.window, o.window);
 }
 
 TEST(Acquisition, BadOptionsAreNamed) {

@@ -23,7 +23,9 @@ const char* to_string(Excitation e);
 Excitation excitation_from_string(const std::string& s);
 
 /// One acquisition: the excitation and its schedule, the amplitudes, the block size and the flow
-/// control. Frequencies Hz, amplitudes % of full scale, times s.
+/// control. Frequencies Hz, amplitudes % of full scale, times s. A field added here is a row of
+/// acquire_fields() (acquire/acquire_flags.h), its flag and JSON key; acquire_flags_test fails
+/// until it is.
 struct AcquireOptions {
   std::string inputs;             // "NAME[,NAME...]" to excite; "" = every input
   std::string band = "0.04:100";  // LO_HZ:HI_HZ
@@ -60,6 +62,8 @@ struct AcquireOptions {
   std::string adaptive_decided;
   /// InputError naming the option (block, window, speed, band, excitation settings).
   void validate() const;
+  /// Every field equal (the flags' and JSON form's round trips are held to it).
+  bool operator==(const AcquireOptions&) const = default;
 };
 
 /// The stepped-sine plan's options (band, density, cycles, settle) on model `m`.

@@ -49,6 +49,7 @@ struct AdaptiveSineOptions {
   bool enabled() const { return sigma_target > 0; }
   /// InputError naming the option (a flag's name).
   void validate() const;
+  bool operator==(const AdaptiveSineOptions&) const = default;
 };
 
 /// sigma / |G| beyond which a response is not told from zero (|G| < 3 sigma).
