@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "fralab/core/measure_dir.h"
 #include "fralab/lab/diagnose_command.h"
+#include "fralab/lab/run_record.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -45,27 +46,33 @@ void run(const RunCommand& c) {
   const DiagnoseResult res = run_diagnose(d);
   const std::string m = c.measure.out + "/measure";
   const MeasureDir md(m);
-  const Json rj = json_load_file(md.run_json());
+  const AnyRunRecord record = load_any_run_record(md.run_json());
   std::string tapes = md.tape();
-  if (rj.value("excitation", "") == "auto") {
+  double engine_s = 0, wall_s = 0, speedup = 0;
+  if (const auto* run = std::get_if<RunRecord>(&record)) {
+    engine_s = run->engine_time_s.value_or(0.0);
+    wall_s = run->wall_time_s.value_or(0.0);
+    speedup = run->speedup.value_or(0.0);
+  } else {
+    const auto& campaign = std::get<AutoRunRecord>(record);
+    engine_s = campaign.engine_time_s;
+    wall_s = campaign.wall_time_s;
+    speedup = campaign.speedup;
     tapes = md.multisine().tape();
-    if (!rj["sine"]["inputs"].empty()) {
+    if (!campaign.sine.inputs.empty()) {
       std::string ins;
-      for (const auto& x : rj["sine"]["inputs"])
-        ins += (ins.empty() ? "" : ",") + x.get<std::string>();
+      for (const std::string& x : campaign.sine.inputs) ins += (ins.empty() ? "" : ",") + x;
       tapes += " and " + md.sine().tape();
       std::printf(
           "fralab: auto campaign: orthogonal multisine %.0f s, sine for %s (it distorts at the "
           "multisine's level) %.0f s\n",
-          rj["multisine"]["engine_time_s"].get<double>(), ins.c_str(),
-          rj["sine"]["engine_time_s"].get<double>());
+          campaign.multisine.engine_time_s, ins.c_str(), campaign.sine.engine_time_s);
     }
   }
   std::printf(
       "fralab: engine time %.0f s (%.2f h) measured in %.1f s (%.0fx), tape %s, transfer matrix "
       "%s/transfer_matrix.md\n",
-      rj["engine_time_s"].get<double>(), rj["engine_time_s"].get<double>() / 3600,
-      rj["wall_time_s"].get<double>(), rj["speedup"].get<double>(), tapes.c_str(), m.c_str());
+      engine_s, engine_s / 3600, wall_s, speedup, tapes.c_str(), m.c_str());
   std::printf("fralab: %s\n", res.summary.c_str());
   throw_if_partial(res.partial);
 }

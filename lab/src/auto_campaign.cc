@@ -9,6 +9,7 @@
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/lab/run_lock.h"
+#include "fralab/lab/run_record.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -60,7 +61,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   m.out = opt.out + "/multisine";
   const MeasureResult mr = run_measure(m);
   res.multisine_engine_s = mr.engine_time_s;
-  const Json mrun = json_load_file(MeasureDir(m.out).run_json());
+  const RunRecord mrun = load_run_record(MeasureDir(m.out).run_json());
   // 2. Which actuators distort at the multisine's level.
   std::string sine_inputs;
   double act_tc = 0;
@@ -82,7 +83,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   auto input_of_command_pair = [](const std::string& pair) {  // "u_X:..." -> X
     return pair.rfind("u_", 0) == 0 ? pair.substr(2, pair.find(':') - 2) : std::string();
   };
-  Json sine_run;
+  std::optional<RunRecord> sine_run;
   if (!res.sine_inputs.empty()) {
     MeasureOptions s = plain;
     s.acquire.excitation = Excitation::kStepped;
@@ -96,7 +97,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
     s.out = opt.out + "/sine";
     const MeasureResult sr = run_measure(s);
     res.sine_engine_s = sr.engine_time_s;
-    sine_run = json_load_file(MeasureDir(s.out).run_json());
+    sine_run = load_run_record(MeasureDir(s.out).run_json());
     // 4. Merge: the sine's actuator curve replaces the multisine's; the multisine's u_X:O go.
     std::vector<Frd> merged;
     for (const Frd& f : curves) {
@@ -121,46 +122,38 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   res.measure.pairs.clear();
   for (const Frd& f : curves) res.measure.pairs.push_back(f.pair);
   res.measure.engine_time_s = res.multisine_engine_s + res.sine_engine_s;
-  res.measure.wall_time_s =
-      mr.wall_time_s + (sine_run.is_null() ? 0.0 : sine_run.value("wall_time_s", 0.0));
+  res.measure.wall_time_s = mr.wall_time_s + (sine_run ? sine_run->wall_time_s.value_or(0.0) : 0.0);
   res.measure.tape_blocks =
-      mr.tape_blocks + (sine_run.is_null() ? 0 : sine_run.value("tape_blocks", int64_t(0)));
-  Json run = Json::object();
-  record_fit_outcome(run, res.measure, fit_failure, opt.out);
-  run["excitation"] = "auto";
-  run["fit_delay"] = opt.fit_delay;
-  run["engine"] = model.name;
-  run["seed"] = opt.seed;
-  run["engine_time_s"] = res.measure.engine_time_s;
-  run["wall_time_s"] = res.measure.wall_time_s;
-  run["speedup"] = res.measure.engine_time_s / std::max(res.measure.wall_time_s, 1e-9);
-  run["multisine"] = {{"dir", m.out}, {"engine_time_s", res.multisine_engine_s}};
-  run["sine"] = {{"dir", opt.out + "/sine"},
-                 {"engine_time_s", res.sine_engine_s},
-                 {"inputs", res.sine_inputs}};
-  Json nl = Json::object();
+      mr.tape_blocks + (sine_run ? sine_run->tape_blocks.value_or(int64_t(0)) : 0);
+  AutoRunRecord run;
+  record_fit_outcome(run, res.measure, fit_failure);
+  run.fit_delay = opt.fit_delay;
+  run.engine = model.name;
+  run.seed = opt.seed;
+  run.engine_time_s = res.measure.engine_time_s;
+  run.wall_time_s = res.measure.wall_time_s;
+  run.speedup = res.measure.engine_time_s / std::max(res.measure.wall_time_s, 1e-9);
+  run.multisine = {m.out, res.multisine_engine_s};
+  run.sine = {opt.out + "/sine", res.sine_engine_s, res.sine_inputs};
   for (const auto& [x, v] : res.nl)
-    nl[x] = {{"nl_rel_median", v},
-             {"measured_by",
-              std::find(res.sine_inputs.begin(), res.sine_inputs.end(), x) != res.sine_inputs.end()
-                  ? "sine"
-                  : "multisine"}};
-  run["inputs"] = nl;
-  run["nl_threshold"] = a.nl_threshold;
-  if (mrun.contains("measurement_chain")) run["measurement_chain"] = mrun["measurement_chain"];
-  run["pairs"] = res.measure.pairs;
-  json_save_file(dir.run_json(), run);
+    run.inputs[x] = {
+        v, std::find(res.sine_inputs.begin(), res.sine_inputs.end(), x) != res.sine_inputs.end()
+               ? "sine"
+               : "multisine"};
+  run.nl_threshold = a.nl_threshold;
+  run.measurement_chain = mrun.measurement_chain;
+  run.pairs = res.measure.pairs;
+  save_run_record(dir.run_json(), run);
   return res;
 }
 
 MeasureResult resume_auto_campaign(const std::string& dir) {
   const RunLock lock(dir, "fralab measure --resume");
-  Json run = json_load_file(MeasureDir(dir).run_json());
-  const std::string state = run.value("state", "");
-  if (state == "complete")
+  AutoRunRecord run = load_auto_run_record(MeasureDir(dir).run_json());
+  if (run.state == RunRecordState::kComplete)
     throw InputError(dir + ": the run is complete; there is nothing to resume");
-  if (state != "partial")
-    throw InputError(dir + "/run.json: an auto campaign in state \"" + state +
+  if (run.state != RunRecordState::kPartial)
+    throw InputError(dir + "/run.json: an auto campaign in state \"" + to_string(run.state) +
                      "\": it resumes its runs one by one: `fralab measure --resume " + dir +
                      "/multisine` (or /sine)");
   std::vector<Frd> curves;
@@ -168,16 +161,16 @@ MeasureResult resume_auto_campaign(const std::string& dir) {
   const Model model = load_model(MeasureDir(dir).engine());
   MeasureResult r;
   for (const Frd& f : curves) r.pairs.push_back(f.pair);
-  r.engine_time_s = run.value("engine_time_s", 0.0);
-  r.wall_time_s = run.value("wall_time_s", 0.0);
+  r.engine_time_s = run.engine_time_s;
+  r.wall_time_s = run.wall_time_s;
   std::cerr << "fralab: resuming the auto campaign in " << dir << ": fitting its " << curves.size()
             << " curves again\n";
   const std::string fit_failure =
-      save_curves_and_fit(curves, dir, run.value("fit_delay", std::string("auto")),
+      save_curves_and_fit(curves, dir, run.fit_delay.value_or("auto"),
                           model.name + ": measured transfer matrix (auto campaign)");
-  record_fit_outcome(run, r, fit_failure, dir);
-  run["resumed"] = run.value("resumed", 0) + 1;
-  json_save_file(MeasureDir(dir).run_json(), run);
+  record_fit_outcome(run, r, fit_failure);
+  run.resumed = run.resumed.value_or(0) + 1;
+  save_run_record(MeasureDir(dir).run_json(), run);
   return r;
 }
 

@@ -53,6 +53,8 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   const std::string run_file = MeasureDir(data_dir).run_json();
   bool chain_known = false;
   if (fs::exists(run_file)) {
+    // Its measurement chain only (RunRecord's key, read alone): a folder measured by an older
+    // fralab, whose run.json lacks most of today's keys, is diagnosed all the same.
     const Json run = json_load_file(run_file);
     if (run.contains("measurement_chain")) {
       opt.chain = chain_from_json(run["measurement_chain"], {run_file, "/measurement_chain"});

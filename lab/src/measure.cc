@@ -8,6 +8,7 @@
 #include "fralab/identify/fit_io.h"
 #include "fralab/lab/auto_campaign.h"
 #include "fralab/lab/run_lock.h"
+#include "fralab/lab/run_record.h"
 #include "fralab/lab/supervisor.h"
 #include "measure_run.h"
 
@@ -72,17 +73,16 @@ std::string partial_run_message(const MeasureResult& r, const std::string& dir) 
          dir + "`";
 }
 
-void record_fit_outcome(Json& run, MeasureResult& r, const std::string& fit_failure,
-                        const std::string& dir) {
-  run.erase("reason");
+void record_fit_outcome(RunOutcome& run, MeasureResult& r, const std::string& fit_failure) {
+  run.reason.reset();
   if (fit_failure.empty()) {
-    run["state"] = "complete";
-    run.erase("failed_step");
+    run.state = RunRecordState::kComplete;
+    run.failed_step.reset();
     r.failed_step.clear(), r.failure.clear();
     return;
   }
-  run["state"] = "partial";
-  run["failed_step"] = {{"step", "identify"}, {"error", fit_failure}};
+  run.state = RunRecordState::kPartial;
+  run.failed_step = FailedStep{"identify", fit_failure};
   r.failed_step = "identify";
   r.failure = fit_failure;
 }
@@ -107,8 +107,9 @@ MeasureResult run_measure(const MeasureOptions& given) {
 MeasureResult measure(const MeasureOptions& o) {
   if (o.out.empty()) throw InputError("--out DIR is required");
   if (o.auto_campaign) return run_auto_campaign(o).measure;
-  if (const MeasureDir dir(o.out); o.resume && fs::exists(dir.run_json()) &&
-                                   json_load_file(dir.run_json()).value("excitation", "") == "auto")
+  if (const MeasureDir dir(o.out);
+      o.resume && fs::exists(dir.run_json()) &&
+      std::holds_alternative<AutoRunRecord>(load_any_run_record(dir.run_json())))
     return resume_auto_campaign(o.out);
   return run_measure(o);
 }

@@ -28,26 +28,26 @@ namespace {
 // The run's record, DIR/run.json: written when the run starts (state "running", with what is
 // needed to resume it), and again when it ends ("complete", "failed" with the reason,
 // "interrupted").
-void save_run(const std::string& out, const Json& run) {
-  json_save_file(MeasureDir(out).run_json(), run);
+void save_run(const std::string& out, const RunRecord& run) {
+  save_run_record(MeasureDir(out).run_json(), run);
 }
 
 // The options of the run recorded in DIR/run.json (--resume DIR).
-MeasureOptions options_from_run(const std::string& dir, const Json& run) {
+MeasureOptions options_from_run(const std::string& dir, const RunRecord& run) {
   MeasureOptions o;
   o.out = dir;
   o.resume = true;
+  const RunOptions& opt = run.options;
+  o.engine = MeasureDir(dir).engine();
+  o.seed = opt.seed;
+  o.no_noise = opt.no_noise;
+  o.fit_delay = opt.fit_delay;
+  o.timeout_s = opt.timeout_s.value_or(o.timeout_s);
+  o.stall_timeout_s = opt.stall_timeout_s.value_or(o.stall_timeout_s);
+  o.hosts = opt.hosts.value_or(o.hosts);
+  o.deputy_url = opt.deputy_url.value_or(o.deputy_url);
   try {
-    const Json& opt = run.at("options");
-    o.engine = MeasureDir(dir).engine();
-    o.seed = opt.at("seed").get<uint64_t>();
-    o.no_noise = opt.at("no_noise").get<bool>();
-    o.fit_delay = opt.at("fit_delay").get<std::string>();
-    o.timeout_s = opt.value("timeout_s", o.timeout_s);
-    o.stall_timeout_s = opt.value("stall_timeout_s", o.stall_timeout_s);
-    o.hosts = opt.value("hosts", o.hosts);
-    o.deputy_url = opt.value("deputy_url", o.deputy_url);
-    std::vector<std::string> flags = opt.at("acquire_flags").get<std::vector<std::string>>();
+    std::vector<std::string> flags = opt.acquire_flags;
     CLI::App app;
     add_acquire_flags(&app, o.acquire);
     std::reverse(flags.begin(), flags.end());  // CLI11 parses a vector from its back
@@ -140,7 +140,7 @@ void MeasureRun::check_can_start(const MeasureOptions& given) {
                      "/run.json: no such file: --resume needs the folder of a run started by "
                      "`fralab measure`");
   }
-  if (given.resume && json_load_file(dir.run_json()).value("excitation", "") == "auto")
+  if (given.resume && std::holds_alternative<AutoRunRecord>(load_any_run_record(dir.run_json())))
     throw InputError(given.out + ": an auto campaign: measure() resumes it (resume_auto_campaign)");
 }
 
@@ -151,15 +151,15 @@ MeasureRun::MeasureRun(const MeasureOptions& given) : o_(given), dir_(given.out)
     find_resume_point();
   else
     start_record();
-  run_["lcm_url"] = url_;
-  run_["state"] = "running";
+  run_.lcm_url = url_;
+  run_.state = RunRecordState::kRunning;
   save_run(o_.out, run_);
 }
 
 void MeasureRun::read_options(const MeasureOptions& given) {
   if (given.resume) {
-    run_ = json_load_file(dir_.run_json());
-    if (run_.value("state", "") == "complete")
+    run_ = load_run_record(dir_.run_json());
+    if (run_.state == RunRecordState::kComplete)
       throw InputError(given.out + ": the run is complete; there is nothing to resume");
     o_ = options_from_run(given.out, run_);
   }
@@ -187,8 +187,7 @@ void MeasureRun::choose_run_id_and_url() {
   url_ = o_.lcm_url.empty() ? private_lcm_url(salt) : o_.lcm_url;
   if (!o_.hosts.empty() && o_.lcm_url.empty()) url_.replace(url_.find("ttl=0"), 5, "ttl=1");
   url_ = resolve_lcm_url(url_);  // ttl=1 needs FRALAB_NETWORK=1
-  r_.run_id = o_.resume ? run_.at("run_id").get<std::string>()
-                        : "run-" + std::to_string(salt % 1000000007u);
+  r_.run_id = o_.resume ? run_.run_id : "run-" + std::to_string(salt % 1000000007u);
 }
 
 void MeasureRun::find_resume_point() {
@@ -208,29 +207,26 @@ void MeasureRun::find_resume_point() {
                                : "starting again at step " + std::to_string(from_.first_step) +
                                      " (command block " + std::to_string(from_.first_block) + ")")
             << "\n";
-  run_["resumed"] = run_.value("resumed", 0) + 1;
+  run_.resumed = run_.resumed.value_or(0) + 1;
 }
 
 void MeasureRun::start_record() {
   fs::remove(dir_.tape());
-  run_ =
-      Json{{"format", "fralab-run/1"},
-           {"run_id", r_.run_id},
-           {"engine", model_.name},
-           {"inputs", o_.acquire.inputs},
-           {"pairs", r_.pairs},
-           {"options",
-            {{"seed", o_.seed},
-             {"no_noise", o_.no_noise},
-             {"fit_delay", o_.fit_delay},
-             {"timeout_s", o_.timeout_s},
-             {"stall_timeout_s", o_.stall_timeout_s},
-             {"hosts", o_.hosts},
-             {"deputy_url", o_.deputy_url},
-             {"acquire_flags", acquire_flags(o_.acquire)}}},
-           // The lab's measurement chain: recorded here and, through the acquisition, on the
-           // tape.
-           {"measurement_chain", chain_to_json(emulator_chain(model_, o_.acquire.sample_rate_hz))}};
+  run_ = RunRecord{};
+  run_.run_id = r_.run_id;
+  run_.engine = model_.name;
+  run_.inputs = o_.acquire.inputs;
+  run_.pairs = r_.pairs;
+  run_.options.seed = o_.seed;
+  run_.options.no_noise = o_.no_noise;
+  run_.options.fit_delay = o_.fit_delay;
+  run_.options.timeout_s = o_.timeout_s;
+  run_.options.stall_timeout_s = o_.stall_timeout_s;
+  run_.options.hosts = o_.hosts;
+  run_.options.deputy_url = o_.deputy_url;
+  run_.options.acquire_flags = acquire_flags(o_.acquire);
+  // The lab's measurement chain: recorded here and, through the acquisition, on the tape.
+  run_.measurement_chain = emulator_chain(model_, o_.acquire.sample_rate_hz);
 }
 
 void MeasureRun::prepare_supervision() {
@@ -301,8 +297,8 @@ void MeasureRun::analyse_resumed() {
 InputError MeasureRun::abandon(const std::exception& e) {
   sup_.stop_all();
   const bool interrupted = dynamic_cast<const Interrupted*>(&e) != nullptr;
-  run_["state"] = interrupted ? "interrupted" : "failed";
-  run_["reason"] = e.what();
+  run_.state = interrupted ? RunRecordState::kInterrupted : RunRecordState::kFailed;
+  run_.reason = e.what();
   save_run(o_.out, run_);
   if (interrupted)
     return InputError(std::string(e.what()) +
@@ -322,8 +318,8 @@ MeasureResult MeasureRun::finish() {
     // The adaptive campaign grew while running: its length is the summary's.
     if (ao.adaptive.enabled())
       engine_total = acq_summary.at("samples").get<double>() / ao.sample_rate_hz;
-    run_["retransmissions"] = acq_summary.value("retransmissions", 0);
-    run_["items_retransmitted"] = acq_summary.value("items_retransmitted", 0);
+    run_.retransmissions = acq_summary.value("retransmissions", int64_t(0));
+    run_.items_retransmitted = acq_summary.value("items_retransmitted", int64_t(0));
   }
   r_.engine_time_s = engine_total;
   if (ao.adaptive.enabled()) {  // each step as decided, from the curves (a resumed run's too)
@@ -333,15 +329,14 @@ MeasureResult MeasureRun::finish() {
     const auto& adaptive = dynamic_cast<const AdaptiveSineCampaign&>(*camp);
     std::vector<int> limits;
     for (int g = 0; g < adaptive.n_steps(); ++g) limits.push_back(adaptive.limit(g));
-    run_["adaptive"] =
-        adaptive_steps_json(adaptive_steps(curves, ao.adaptive.sigma_target, limits));
+    run_.adaptive = adaptive_steps_json(adaptive_steps(curves, ao.adaptive.sigma_target, limits));
   }
-  record_fit_outcome(run_, r_, fit_failure_, o_.out);
-  run_["engine_time_s"] = r_.engine_time_s;
-  run_["wall_time_s"] = r_.wall_time_s;
-  run_["speedup"] = r_.engine_time_s / std::max(r_.wall_time_s, 1e-9);
-  run_["tape_blocks"] = r_.tape_blocks;
-  run_["fit_time_s"] = r_.fit_time_s;
+  record_fit_outcome(run_, r_, fit_failure_);
+  run_.engine_time_s = r_.engine_time_s;
+  run_.wall_time_s = r_.wall_time_s;
+  run_.speedup = r_.engine_time_s / std::max(r_.wall_time_s, 1e-9);
+  run_.tape_blocks = r_.tape_blocks;
+  run_.fit_time_s = r_.fit_time_s;
   save_run(o_.out, run_);
   return r_;
 }

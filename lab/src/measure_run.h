@@ -14,6 +14,7 @@
 #include "fralab/lab/measure.h"
 #include "fralab/lab/process_plan.h"
 #include "fralab/lab/resume.h"
+#include "fralab/lab/run_record.h"
 #include "fralab/lab/supervisor.h"
 #include "fralab/plant/model.h"
 
@@ -71,7 +72,7 @@ class MeasureRun {
   MeasureOptions o_;  // as run; o_.acquire as the acquisition runs it (inputs by name, decisions)
   Model model_;
   MeasureDir dir_;
-  Json run_;  // DIR/run.json
+  RunRecord run_;  // DIR/run.json
   std::string url_;
   ResumePoint from_;  // a fresh run starts at the default
   MeasureResult r_;

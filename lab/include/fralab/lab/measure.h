@@ -16,6 +16,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
+#include "fralab/lab/run_record.h"
 #include "fralab/plant/model.h"
 
 namespace fralab {
@@ -104,9 +105,9 @@ std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir
                                 const std::string& fit_delay, const std::string& title,
                                 double timeout_s = 3600);
 
-/// DIR/run.json's state after a run's fit: "complete", or "partial" with "failed_step":
-/// {"step": "identify", "error": ...} (the same in `r`) when `fit_failure` is not "".
-void record_fit_outcome(Json& run, MeasureResult& r, const std::string& fit_failure,
-                        const std::string& dir);
+/// DIR/run.json's state after a run's fit (either record, lab/run_record.h): "complete", or
+/// "partial" with failed_step {"identify", error} (the same in `r`) when `fit_failure` is not "";
+/// no reason either way.
+void record_fit_outcome(RunOutcome& run, MeasureResult& r, const std::string& fit_failure);
 
 }  // namespace fralab
