@@ -53,6 +53,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   const RunLock lock(opt.out, "fralab measure --excitation auto");
   MeasureOptions plain = opt;  // the campaign's runs are plain ones
   plain.auto_campaign = false;
+  plain.fit = false;  // their curves, merged, are fitted once below
   // 1. The orthogonal multisine over every selected input.
   MeasureOptions m = plain;
   m.acquire.excitation = Excitation::kMultisine;

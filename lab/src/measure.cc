@@ -34,15 +34,20 @@ MeasurementChain emulator_chain(const Model& m, double sample_rate_hz) {
   return c;
 }
 
-std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
-                                const std::string& fit_delay, const std::string& title,
-                                double timeout_s) {
+void save_curves(std::vector<Frd>& curves, const std::string& dir) {
   std::sort(curves.begin(), curves.end(),
             [](const Frd& a, const Frd& b) { return a.pair < b.pair; });
   const MeasureDir md(dir);
   fs::create_directories(md.frd_dir());
   fs::create_directories(md.logs_dir());
   for (const Frd& f : curves) save_frd(md.frd(f.pair), f);
+}
+
+std::string save_curves_and_fit(std::vector<Frd>& curves, const std::string& dir,
+                                const std::string& fit_delay, const std::string& title,
+                                double timeout_s) {
+  save_curves(curves, dir);
+  const MeasureDir md(dir);
   FitOptions fo;
   parse_delay_option(fit_delay, &fo);  // a bad --delay is the caller's error, not a failed fit
   std::vector<std::string> args = {module_path("fralab-identify"),

@@ -42,6 +42,7 @@ MeasureOptions options_from_run(const std::string& dir, const RunRecord& run) {
   o.seed = opt.seed;
   o.no_noise = opt.no_noise;
   o.fit_delay = opt.fit_delay;
+  o.fit = opt.fit.value_or(true);
   o.timeout_s = opt.timeout_s.value_or(o.timeout_s);
   o.stall_timeout_s = opt.stall_timeout_s.value_or(o.stall_timeout_s);
   o.hosts = opt.hosts.value_or(o.hosts);
@@ -220,6 +221,7 @@ void MeasureRun::start_record() {
   run_.options.seed = o_.seed;
   run_.options.no_noise = o_.no_noise;
   run_.options.fit_delay = o_.fit_delay;
+  if (!o_.fit) run_.options.fit = false;
   run_.options.timeout_s = o_.timeout_s;
   run_.options.stall_timeout_s = o_.stall_timeout_s;
   run_.options.hosts = o_.hosts;
@@ -264,7 +266,7 @@ void MeasureRun::start_and_supervise() {
 
 void MeasureRun::wait_for_identifier() {
   t_fit_ = std::chrono::steady_clock::now();
-  if (o_.resume) return;
+  if (o_.resume || !o_.fit) return;
   try {  // a failed fit leaves the measurement whole: the run ends partial
     sup_.wait_for({"identify"}, o_.timeout_s);
   } catch (const Interrupted&) {
@@ -288,8 +290,11 @@ void MeasureRun::analyse_resumed() {
   if (o_.resume) {
     // The curves in pair order, as the live identifier takes them.
     std::vector<Frd> curves = analyze_tape_file(dir_.tape(), r_.pairs, {});
-    fit_failure_ = save_curves_and_fit(curves, o_.out, o_.fit_delay,
-                                       model_.name + ": measured transfer matrix", o_.timeout_s);
+    if (o_.fit)
+      fit_failure_ = save_curves_and_fit(curves, o_.out, o_.fit_delay,
+                                         model_.name + ": measured transfer matrix", o_.timeout_s);
+    else
+      save_curves(curves, o_.out);
   }
   r_.fit_time_s = seconds_since(t_fit_);
 }

@@ -1,5 +1,8 @@
 #include "fralab/lab/process_plan.h"
 
+#include <algorithm>
+#include <cstdlib>
+
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/measure_dir.h"
@@ -21,18 +24,56 @@ std::string host_of(const MeasureOptions& o, const std::string& kind) {
   return it == o.hosts.end() ? std::string() : it->second;
 }
 
-// The pair groups of input `x`, one analyser each: every position-relative pair (X:O and u_X:X)
-// alone, and the command-relative pairs u_X:O together (they share the command as reference).
-std::vector<std::vector<std::string>> analyser_groups(const std::string& x,
-                                                      const std::vector<std::string>& outs) {
-  const std::vector<std::string> pairs = pairs_for_input(x, outs);
-  std::vector<std::vector<std::string>> groups;
-  for (size_t k = 0; k <= outs.size(); ++k) groups.push_back({pairs[k]});
-  groups.push_back(std::vector<std::string>(pairs.begin() + outs.size() + 1, pairs.end()));
-  return groups;
+}  // namespace
+
+AnalyserGrouping AnalyserGrouping::parse(const std::string& word) {
+  AnalyserGrouping g;
+  if (word == "pair") return g;
+  if (word == "input") {
+    g.by = By::kInput;
+    return g;
+  }
+  char* end = nullptr;
+  const long n = std::strtol(word.c_str(), &end, 10);
+  if (word.empty() || *end != '\0' || n < 1 || n > 100000)
+    throw InputError("--analysers \"" + word + "\": pair, input or a number of pairs >= 1");
+  g.by = By::kCount;
+  g.pairs = int(n);
+  return g;
 }
 
-}  // namespace
+std::string AnalyserGrouping::str() const {
+  return by == By::kPair ? "pair" : by == By::kInput ? "input" : std::to_string(pairs);
+}
+
+std::vector<AnalyserGroup> analyser_groups(const std::vector<std::string>& inputs,
+                                           const std::vector<std::string>& outs,
+                                           const AnalyserGrouping& g) {
+  std::vector<AnalyserGroup> groups;
+  std::vector<std::string> all;
+  for (const std::string& x : inputs) {
+    const std::vector<std::string> pairs = pairs_for_input(x, outs);
+    all.insert(all.end(), pairs.begin(), pairs.end());
+    if (g.by == AnalyserGrouping::By::kInput) {
+      groups.push_back({"analyze-" + x, pairs});
+    } else if (g.by == AnalyserGrouping::By::kPair) {
+      // Per pairs_for_input: X:O for every output and u_X:X first, then the u_X:O.
+      for (size_t k = 0; k <= outs.size(); ++k)
+        groups.push_back({"analyze-" + pair_file_stem(pairs[k]), {pairs[k]}});
+      const std::vector<std::string> cmd(pairs.begin() + outs.size() + 1, pairs.end());
+      if (!cmd.empty())
+        groups.push_back(
+            {"analyze-" + pair_file_stem(cmd.front()) + (cmd.size() > 1 ? "-cmd" : ""), cmd});
+    }
+  }
+  if (g.by == AnalyserGrouping::By::kCount)
+    for (size_t k = 0; k < all.size(); k += size_t(g.pairs))
+      groups.push_back(
+          {"analyze-" + std::to_string(k / size_t(g.pairs) + 1),
+           std::vector<std::string>(all.begin() + k,
+                                    all.begin() + std::min(all.size(), k + size_t(g.pairs)))});
+  return groups;
+}
 
 std::vector<std::string> measured_pairs(const Model& m, const std::vector<int>& inputs) {
   std::vector<std::string> outs, all;
@@ -90,28 +131,25 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
   plan.consumers = {"plant", "recorder"};
   plan.awaited = {"plant"};
   if (!o.resume) {
-    for (const std::string& x : input_names) {
-      for (const auto& g : analyser_groups(x, outs)) {
-        const std::string name =
-            "analyze-" + pair_file_stem(g.front()) + (g.size() > 1 ? "-cmd" : "");
-        // At lower priority: they are flow-controlled like the plant and recorder.
-        std::vector<std::string> args = {"nice",      "-n", "5",        program("fralab-analyze"),
-                                         "--lcm-url", url,  "--run-id", run_id,
-                                         "--name",    name, "--out",    o.out,
-                                         "--linger",  "30"};
-        for (const auto& p : g) args.insert(args.end(), {"--pair", p});
-        start({name, args, dir.log(name), host_of(o, "analyze")});
-        plan.consumers.push_back(name);
-        plan.awaited.push_back(name);
-      }
+    for (const AnalyserGroup& g : analyser_groups(input_names, outs, o.analysers)) {
+      // At lower priority: they are flow-controlled like the plant and recorder.
+      std::vector<std::string> args = {"nice",      "-n",   "5",        program("fralab-analyze"),
+                                       "--lcm-url", url,    "--run-id", run_id,
+                                       "--name",    g.name, "--out",    o.out,
+                                       "--linger",  "30"};
+      for (const auto& p : g.pairs) args.insert(args.end(), {"--pair", p});
+      start({g.name, args, dir.log(g.name), host_of(o, "analyze")});
+      plan.consumers.push_back(g.name);
+      plan.awaited.push_back(g.name);
     }
-    start({"identify",
-           {program("fralab-identify"), "--lcm-url", url, "--run-id", run_id, "--expect",
-            std::to_string(measured_pairs(model, excite).size()), "--out", o.out, "--delay",
-            o.fit_delay, "--title", model.name + ": measured transfer matrix"},
-           dir.log("identify"),
-           host_of(o, "identify"),
-           /*essential=*/false});
+    if (o.fit)
+      start({"identify",
+             {program("fralab-identify"), "--lcm-url", url, "--run-id", run_id, "--expect",
+              std::to_string(measured_pairs(model, excite).size()), "--out", o.out, "--delay",
+              o.fit_delay, "--title", model.name + ": measured transfer matrix"},
+             dir.log("identify"),
+             host_of(o, "identify"),
+             /*essential=*/false});
   }
 
   std::vector<std::string> acq = {program("fralab-acquire"),

@@ -147,6 +147,7 @@ Json run_record_to_json(const RunRecord& r) {
               {"no_noise", o.no_noise},
               {"fit_delay", o.fit_delay},
               {"acquire_flags", o.acquire_flags}};
+  if (o.fit) opt["fit"] = *o.fit;
   if (o.timeout_s) opt["timeout_s"] = *o.timeout_s;
   if (o.stall_timeout_s) opt["stall_timeout_s"] = *o.stall_timeout_s;
   if (o.hosts) opt["hosts"] = *o.hosts;
@@ -180,6 +181,7 @@ RunRecord run_record_from_json(const Json& j, const std::string& file) {
   r.options.seed = opt.unsigned_integer("seed");
   r.options.no_noise = opt.boolean("no_noise");
   r.options.fit_delay = opt.string("fit_delay");
+  r.options.fit = opt.optional("fit", &RecordReader::boolean);
   r.options.timeout_s = opt.optional("timeout_s", &RecordReader::number);
   r.options.stall_timeout_s = opt.optional("stall_timeout_s", &RecordReader::number);
   r.options.hosts = opt.optional("hosts", &RecordReader::string_map);

@@ -91,6 +91,63 @@ TEST(ProcessPlan, AFreshRunStartsRecorderPlantAnalysersIdentifierThenTheAcquisit
   }
 }
 
+// A run whose curves its caller fits (the auto campaign's runs) starts no identifier.
+TEST(ProcessPlan, ARunThatDoesNotFitStartsNoIdentifier) {
+  MeasureOptions o = options("Wf,A8");
+  o.fit = false;
+  const ProcessPlan p = plan(o);
+  EXPECT_THAT(names(p),
+              ElementsAreArray(
+                  concat({{"recorder", "plant"}, analysers("Wf"), analysers("A8"), {"acquire"}})));
+}
+
+// The analysers' pairs as the plan passes them (--pair after each name), every pair of the run.
+std::vector<std::string> analysed_pairs(const ProcessPlan& p) {
+  std::vector<std::string> pairs;
+  for (const ProcessSpec& s : p.processes)
+    for (size_t k = 0; k + 1 < s.argv.size(); ++k)
+      if (s.argv[k] == "--pair") pairs.push_back(s.argv[k + 1]);
+  return pairs;
+}
+
+// Grouped by input: one analyser per input holding all its pairs; in groups of N: N pairs each,
+// input by input. Either way every measured pair is analysed exactly once, and the acquisition
+// waits for every analyser.
+TEST(ProcessPlan, AnalysersGroupedByInputOrByCountAnalyseEveryPairOnce) {
+  const Model m = load_model_or_embedded("j85_95");
+  const std::vector<std::string> all = measured_pairs(m, {0, 1});  // Wf, A8: 2 x 11 pairs
+  ASSERT_EQ(all.size(), 22u);
+  MeasureOptions o = options("Wf,A8");
+  o.analysers = AnalyserGrouping::parse("input");
+  ProcessPlan p = plan(o);
+  EXPECT_THAT(names(p),
+              ElementsAre("recorder", "plant", "analyze-Wf", "analyze-A8", "identify", "acquire"));
+  EXPECT_THAT(analysed_pairs(p), ElementsAreArray(all));
+  EXPECT_THAT(p.consumers, ElementsAre("plant", "recorder", "analyze-Wf", "analyze-A8"));
+
+  o.analysers = AnalyserGrouping::parse("5");
+  p = plan(o);
+  EXPECT_THAT(names(p), ElementsAre("recorder", "plant", "analyze-1", "analyze-2", "analyze-3",
+                                    "analyze-4", "analyze-5", "identify", "acquire"));
+  EXPECT_THAT(analysed_pairs(p), ElementsAreArray(all));
+  EXPECT_THAT(process(p, "analyze-5").argv, Contains("--pair").Times(2));  // 22 = 4 x 5 + 2
+  EXPECT_THAT(p.awaited, Contains("analyze-5"));
+
+  o.analysers = AnalyserGrouping::parse("pair");
+  EXPECT_THAT(analysed_pairs(plan(o)), ElementsAreArray(all));
+}
+
+TEST(ProcessPlan, AnalyserGroupingWordsAreParsedAndOthersNamed) {
+  EXPECT_EQ(AnalyserGrouping::parse("pair").by, AnalyserGrouping::By::kPair);
+  EXPECT_EQ(AnalyserGrouping::parse("input").by, AnalyserGrouping::By::kInput);
+  EXPECT_EQ(AnalyserGrouping::parse("7").pairs, 7);
+  EXPECT_EQ(AnalyserGrouping::parse("7").str(), "7");
+  for (const char* bad : {"0", "-2", "3x", "", "inputs"})
+    EXPECT_THAT([&] { AnalyserGrouping::parse(bad); },
+                testing::ThrowsMessage<InputError>(testing::HasSubstr(std::string("\"") + bad)))
+        << bad;
+}
+
 TEST(ProcessPlan, EachProcessGetsTheRunsArguments) {
   const MeasureOptions o = options("Wf,A8");
   const ProcessPlan p = plan(o);

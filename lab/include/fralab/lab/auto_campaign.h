@@ -2,7 +2,8 @@
 // sine for what is not.
 //   1. An orthogonal multisine (acquire/campaign.h: every selected input on every line, n_u
 //      experiments of multisine_periods measured periods, at the sine test's power) over the
-//      band: a whole measurement in DIR/multisine/.
+//      band: a measurement in DIR/multisine/ (its tape and curves; the campaign's runs fit
+//      nothing, the merged curves are fitted once in 4).
 //   2. Per input X, its actuator pair u_X:X from that run: the median nl_rel (the level of X's
 //      position on the non-excited lines relative to the line, pair_analyzer.h) over the lines
 //      measured to better than max_rel_sigma (sigma / |G|). X is nonlinear (a backlash, a deadband

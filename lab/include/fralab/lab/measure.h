@@ -21,6 +21,22 @@
 
 namespace fralab {
 
+/// How the live analysers share a run's pairs. Each instance decodes a tape block once for all its
+/// pairs; the instances run in parallel. The curves do not depend on the grouping.
+struct AnalyserGrouping {
+  enum class By {
+    kPair,   // "pair": each position-relative pair (X:O, u_X:X) alone, an input's
+             // command-relative pairs (u_X:O, one reference) together
+    kInput,  // "input": one instance per input, all its pairs
+    kCount,  // N: N pairs an instance, input by input
+  };
+  By by = By::kPair;
+  int pairs = 0;  // kCount: pairs an instance, >= 1
+  /// "pair", "input" or a whole number >= 1; InputError naming the word otherwise.
+  static AnalyserGrouping parse(const std::string& word);
+  std::string str() const;
+};
+
 struct MeasureOptions {
   std::string engine = "j85_95";
   AcquireOptions acquire;  // the excitation (passed to fralab-acquire losslessly)
@@ -31,7 +47,11 @@ struct MeasureOptions {
   std::string lcm_url;         // "" = a fresh private URL
   double timeout_s = 3600;
   std::string fit_delay = "auto";  // the identifier's --delay
-  double stall_timeout_s = 60;     // a stream standing still this long fails the run (acquire)
+  /// Fit the curves (the live identifier; DIR/tf, DIR/transfer_matrix.*). false: the curves
+  /// only, for a caller that fits them itself (the auto campaign fits its merged curves once).
+  bool fit = true;
+  AnalyserGrouping analysers;   // --analysers
+  double stall_timeout_s = 60;  // a stream standing still this long fails the run (acquire)
   /// Continue the run in `out` (its run.json holds every other option) from its first incomplete
   /// step (lab/resume.h).
   bool resume = false;
@@ -93,6 +113,9 @@ MeasureResult run_measure(const MeasureOptions& opt);
 /// opt.auto_campaign (run_auto_campaign, whose runs are plain ones), the refit of a partial auto
 /// campaign on --resume of its folder (resume_auto_campaign), else run_measure.
 MeasureResult measure(const MeasureOptions& opt);
+
+/// The curves in pair order (sorted in place), each to DIR/frd/<stem>.json (DIR/logs made too).
+void save_curves(std::vector<Frd>& curves, const std::string& dir);
 
 /// A measurement's results from its curves, as the live analysers and identifier leave them:
 /// the curves in pair order (sorted in place), each to DIR/frd/<stem>.json, then fitted

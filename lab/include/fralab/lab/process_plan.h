@@ -4,8 +4,9 @@
 // (docs/lcm-protocol.md, "Processes").
 //
 // In start order: the recorder (inside the flow control, so a busy machine slows the run instead
-// of losing tape blocks), the plant, on a fresh run the live analysers (one process per
-// position-relative pair, one for the command-relative pairs of each input, at lower priority)
+// of losing tape blocks), the plant, on a fresh run the live analysers (at lower priority,
+// grouped as MeasureOptions::analysers says: by default one process per position-relative pair
+// and one for the command-relative pairs of each input)
 // and the identifier (not essential: its failure leaves the measurement whole), and the
 // acquisition last, once every consumer it waits for listens. A resumed run replays the tape into
 // the plant, appends to the tape, and analyses the whole tape at its end instead of live.
@@ -42,6 +43,19 @@ using ModuleResolver = std::function<std::string(const std::string&)>;
 /// The pairs a run on `inputs` (indices into m.inputs) measures, input by input
 /// (pairs_for_input).
 std::vector<std::string> measured_pairs(const Model& m, const std::vector<int>& inputs);
+
+/// One live analyser: its process name and pairs.
+struct AnalyserGroup {
+  std::string name;  // "analyze-<stem>": the first pair's file stem (-cmd: a command group), the
+                     // input (by input), or the group's number (N pairs an instance)
+  std::vector<std::string> pairs;
+};
+
+/// The analysers of a run measuring `inputs` (names) on outputs `outs`, grouped as `g` says:
+/// every measured pair (measured_pairs' order) in exactly one group.
+std::vector<AnalyserGroup> analyser_groups(const std::vector<std::string>& inputs,
+                                           const std::vector<std::string>& outs,
+                                           const AnalyserGrouping& g);
 
 /// The plan of a run of `model` with options `o` (o.out the run's folder, its files named by
 /// MeasureDir; o.acquire the acquisition's options, with the adaptive decisions already taken on a

@@ -50,9 +50,10 @@ struct RunOutcome {
 /// The keys a record may lack are those of runs recorded before they were (a resume then takes
 /// MeasureOptions' defaults).
 struct RunOptions {
-  uint64_t seed = 1;                                        // "seed": the plant's noise seed
-  bool no_noise = false;                                    // "no_noise"
-  std::string fit_delay = "auto";                           // "fit_delay": identify's --delay
+  uint64_t seed = 1;               // "seed": the plant's noise seed
+  bool no_noise = false;           // "no_noise"
+  std::string fit_delay = "auto";  // "fit_delay": identify's --delay
+  std::optional<bool> fit;  // "fit": false when the run fits nothing (an auto campaign's runs)
   std::optional<double> timeout_s;                          // "timeout_s", s
   std::optional<double> stall_timeout_s;                    // "stall_timeout_s", s
   std::optional<std::map<std::string, std::string>> hosts;  // "hosts": process kind -> deputy
