@@ -77,14 +77,16 @@ TEST(RunRecord, EveryOptionalKeyRoundTrips) {
   j["failed_step"] = {{"step", "identify"}, {"error", "identify was killed by signal 9"}};
   j["resumed"] = 2;
   j["options"]["hosts"] = {{"plant", "cell-3"}};
+  j["options"]["fit"] = false;  // an auto campaign's run: it measures, the campaign fits
   j["adaptive"] = {{"steps", Json::array({{{"input", "Wf"}, {"step", 0}, {"state", "met"}}})},
                    {"met", 1}};
   const RunRecord r = run_record_from_json(j, "run.json");
   EXPECT_EQ(run_record_to_json(r), j);
   EXPECT_EQ(r.failed_step, (FailedStep{"identify", "identify was killed by signal 9"}));
   EXPECT_EQ(r.resumed, 2);
+  EXPECT_EQ(r.options.fit, false);
   // Keys a record of an earlier run lacks stay absent.
-  for (const char* k : {"timeout_s", "stall_timeout_s", "hosts", "deputy_url"})
+  for (const char* k : {"timeout_s", "stall_timeout_s", "hosts", "deputy_url", "fit"})
     j["options"].erase(k);
   for (const char* k : {"measurement_chain", "engine_time_s", "wall_time_s", "speedup",
                         "tape_blocks", "fit_time_s", "retransmissions", "items_retransmitted"})
