@@ -64,11 +64,15 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   // Else the tape's own record of it (the start event's), when the folder has the tape.
   const std::string tape = MeasureDir(data_dir).tape();
   if (!chain_known && fs::exists(tape)) {
-    for (const StatusEvent& e : read_tape_run(tape).events)
-      if (e.state == RunState::kStart && e.measurement_chain) {
+    for (const StatusEvent& e : read_tape_run(tape).events) {
+      if (e.state != RunState::kStart) continue;
+      if (!e.measurement_chain_error.empty())  // compared against no chain would be wrong
+        throw InputError(tape + ": " + e.measurement_chain_error);
+      if (e.measurement_chain) {
         opt.chain = *e.measurement_chain;
         break;
       }
+    }
   }
   Diagnosis d = diagnose(sim, data, opt);
   json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));

@@ -280,14 +280,22 @@ excitation_status_t to_status_msg(const StatusEvent& e) {
 
 StatusEvent from_msg(const excitation_status_t& m) {
   StatusEvent e = from_status(m);
-  if (m.has_measurement_chain)
-    e.measurement_chain = from_chain_msg(m.measurement_chain, status_where(m.run_id, m.seq));
+  try {
+    if (m.has_measurement_chain)
+      e.measurement_chain = from_chain_msg(m.measurement_chain, status_where(m.run_id, m.seq));
+  } catch (const InputError& x) {
+    e.measurement_chain_error = x.what();
+  }
   return e;
 }
 
 StatusEvent from_msg(const excitation_status_v1_t& m) {
   StatusEvent e = from_status(m);
-  e.measurement_chain = chain_from_message(m.message, status_where(m.run_id, m.seq));
+  try {
+    e.measurement_chain = chain_from_message(m.message, status_where(m.run_id, m.seq));
+  } catch (const InputError& x) {
+    e.measurement_chain_error = x.what();
+  }
   return e;
 }
 

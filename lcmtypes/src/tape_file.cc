@@ -225,6 +225,9 @@ Json tape_summary(const std::string& path) {
             if (e.state == RunState::kStart && !j.contains("measurement_chain") &&
                 e.measurement_chain)
               j["measurement_chain"] = chain_to_json(*e.measurement_chain);
+            if (!e.measurement_chain_error.empty())
+              j["measurement_chain_error"] = path + ": event " + std::to_string(ev.eventnum) +
+                                             ": " + e.measurement_chain_error;
           }
         } catch (const InputError& e) {
           throw InputError(path + ": event " + std::to_string(ev.eventnum) + ": " + e.what());

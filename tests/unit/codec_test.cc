@@ -238,11 +238,21 @@ TEST(StatusEvents, TapesRecordedWithTheChainInTheMessageAreStillRead) {
   EXPECT_EQ(back.message, old.message);
   EXPECT_EQ(back.n_samples, 123456);
 
+  // A chain that does not read (status events carry no checksum) leaves the event whole, the
+  // chain unknown and the reason named: what is recorded stays readable.
   old.message = "measurement_chain: {\"sample_rate_hz\": -5, \"hold\": \"zero_order\"}";
   const std::vector<uint8_t> bad = bytes_of(old);
   const lcm::ReceiveBuffer brb = buffer_of(bad);
-  EXPECT_THAT([&] { decode_status_event(&brb, kStatusChannel); },
-              testing::ThrowsMessage<InputError>(testing::HasSubstr("status event seq -1")));
+  const StatusEvent kept = decode_status_event(&brb, kStatusChannel);
+  EXPECT_FALSE(kept.measurement_chain.has_value());
+  EXPECT_THAT(kept.measurement_chain_error, testing::HasSubstr("status event seq -1"));
+  EXPECT_EQ(kept.n_samples, 123456);
+  excitation_status_t typed = to_status_msg(start_event());
+  typed.measurement_chain.hold = "no_hold";
+  const std::vector<uint8_t> tb = bytes_of(typed);
+  const lcm::ReceiveBuffer trb = buffer_of(tb);
+  EXPECT_THAT(decode_status_event(&trb, kStatusChannel).measurement_chain_error,
+              testing::HasSubstr("no_hold"));
 }
 
 // Bytes of neither form, and counts beyond the bytes (LCM's decoders would allocate what a count

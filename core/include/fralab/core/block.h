@@ -93,6 +93,9 @@ struct StatusEvent {
   // The start event: how the run was measured (docs/formats.md §12); absent on other events and
   // on runs measured without one.
   std::optional<MeasurementChain> measurement_chain;
+  // A start event whose chain did not read (status events carry no checksum): why, naming the
+  // event; the event itself is kept (what is recorded stays readable), the chain is unknown.
+  std::string measurement_chain_error;
 };
 
 }  // namespace fralab

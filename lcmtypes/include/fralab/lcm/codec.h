@@ -40,11 +40,12 @@ Block from_msg(const tape_block_t& m);
 Block decode_tape_block(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
 Block from_msg(const command_block_t& m);
 /// A status event; its measurement chain travels as the typed field (has_measurement_chain).
+/// A chain that does not read leaves the event whole, with measurement_chain_error saying why.
 excitation_status_t to_status_msg(const StatusEvent& e);
 StatusEvent from_msg(const excitation_status_t& m);
 /// A status event of a tape recorded before the chain had a field: a start event whose message is
 /// "measurement_chain: {...}" (chain_from_message) gets it as measurement_chain, its message
-/// kept. InputError for a chain that does not read.
+/// kept; one that does not read, measurement_chain_error.
 StatusEvent from_msg(const excitation_status_v1_t& m);
 /// A status record (FRALAB_STATUS) as a StatusEvent: excitation_status_t, or the form tapes were
 /// recorded in before the chain had a field (excitation_status_v1_t). InputError naming the channel
