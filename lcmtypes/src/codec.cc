@@ -66,10 +66,6 @@ int64_t crc_of(tape_block_t m) {
   return int64_t(::crc32(::crc32(0L, Z_NULL, 0), buf.data(), uInt(buf.size())));
 }
 
-}  // namespace
-
-namespace {
-
 // A walk over the wire format of the messages read from files, with bounds: LCM's generated
 // decoders size their arrays from the counts in the bytes before checking that the bytes hold them
 // (a count of 10^9 allocates 32 GB: found by fuzzing), so the counts are checked here first.
@@ -116,10 +112,6 @@ bool tape_block_wire_ok(const void* data, size_t size) {
   const int64_t nv = w.i32();
   return w.fits(nv, 8);
 }
-
-}  // namespace
-
-namespace {
 
 // The fields of a status event up to its lines (both forms); false when a count exceeds the bytes.
 bool status_common_wire_ok(Wire& w) {
