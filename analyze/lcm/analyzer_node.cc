@@ -31,7 +31,7 @@ void AnalyzerNode::on_msg(const lcm::ReceiveBuffer* rbuf, const std::string& cha
     for (auto& a : feeder_.analyzers()) {
       std::vector<FrdPoint> fresh = a->take_new_points();
       if (fresh.empty()) continue;
-      // While the curve grows, only its new points travel (a message per point, not the curve
+      // While the curve grows, only the points this block completed travel (not the whole curve
       // again each time); the finished curve travels whole (merged repeats, the BLA).
       const Frd f = a->done() ? a->frd() : Frd{a->pair(), std::move(fresh), ""};
       frd_t m = to_frd_msg(f, feeder_.run_id(), frd_seq_++, a->done());
