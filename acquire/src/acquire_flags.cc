@@ -22,22 +22,17 @@ std::string flag_word(double v) { return lossless(v); }
 template <class T>
 T json_field_value(const Json& v, const JsonWhere& where) {
   if constexpr (std::is_same_v<T, bool>) {
-    if (!v.is_boolean()) json_fail(where, "expected true or false, found " + v.dump());
-    return v.get<bool>();
+    return json_bool(v, where);
   } else if constexpr (std::is_same_v<T, int>) {
-    const bool fits = v.is_number_unsigned()
-                          ? v.get<uint64_t>() <= uint64_t(std::numeric_limits<int>::max())
-                          : v.is_number_integer() &&
-                                v.get<int64_t>() >= std::numeric_limits<int>::min() &&
-                                v.get<int64_t>() <= std::numeric_limits<int>::max();
-    if (!fits) json_fail(where, "expected an integer, found " + v.dump());
-    return v.get<int>();
+    const int64_t n = json_integer(v, where);
+    if (n < std::numeric_limits<int>::min() || n > std::numeric_limits<int>::max())
+      json_fail(where, "expected an integer, found " + v.dump());
+    return int(n);
   } else if constexpr (std::is_same_v<T, double>) {
     return json_number(v, where);
   } else {
     static_assert(std::is_same_v<T, std::string>);
-    if (!v.is_string()) json_fail(where, "expected a string, found " + v.dump());
-    return v.get<std::string>();
+    return json_string(v, where);
   }
 }
 

@@ -96,10 +96,7 @@ Frd frd_from_json(const Json& j, const std::string& source) {
       json_fail(w / "sigma_nl", "sigma_nl must be >= 0 (omit it when unknown)");
     p.amplitude = json_number_member(jp, w, "amplitude", 0.0);
     if (jp.contains("input") && jp["input"].is_string()) p.input = jp["input"];
-    if (jp.contains("valid")) {
-      if (!jp["valid"].is_boolean()) json_fail(w / "valid", "expected true or false");
-      p.valid = jp["valid"];
-    }
+    if (jp.contains("valid")) p.valid = json_bool(jp["valid"], w / "valid");
     if (jp.contains("note") && jp["note"].is_string()) p.note = jp["note"];
     if (jp.contains("sigma") && !(p.sigma > 0))
       json_fail(w / "sigma", "sigma " + std::to_string(p.sigma) +

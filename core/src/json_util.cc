@@ -76,6 +76,22 @@ double json_number(const Json& v, const JsonWhere& where) {
   return x;
 }
 
+bool json_bool(const Json& v, const JsonWhere& where) {
+  if (!v.is_boolean()) json_fail(where, "expected true or false, found " + v.dump());
+  return v.get<bool>();
+}
+
+int64_t json_integer(const Json& v, const JsonWhere& where) {
+  if (!v.is_number_integer() || (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(INT64_MAX)))
+    json_fail(where, "expected an integer, found " + v.dump());
+  return v.get<int64_t>();
+}
+
+std::string json_string(const Json& v, const JsonWhere& where) {
+  if (!v.is_string()) json_fail(where, "expected a string, found " + v.dump());
+  return v.get<std::string>();
+}
+
 double json_number_member(const Json& obj, const JsonWhere& where, const std::string& key) {
   return json_number(json_member(obj, where, key), where / key);
 }
@@ -89,9 +105,7 @@ double json_number_member(const Json& obj, const JsonWhere& where, const std::st
 }
 
 std::string json_string_member(const Json& obj, const JsonWhere& where, const std::string& key) {
-  const Json& v = json_member(obj, where, key);
-  if (!v.is_string()) json_fail(where / key, "expected a string, found " + v.dump());
-  return v.get<std::string>();
+  return json_string(json_member(obj, where, key), where / key);
 }
 
 const Json& json_array_member(const Json& obj, const JsonWhere& where, const std::string& key,

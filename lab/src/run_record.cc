@@ -28,19 +28,9 @@ class RecordReader {
   RecordReader object(const std::string& key) const { return {member(key), at(key)}; }
 
   std::string string(const std::string& key) const { return json_string_member(obj_, where_, key); }
-  bool boolean(const std::string& key) const {
-    const Json& v = member(key);
-    if (!v.is_boolean()) json_fail(at(key), "expected true or false, found " + v.dump());
-    return v.get<bool>();
-  }
+  bool boolean(const std::string& key) const { return json_bool(member(key), at(key)); }
   double number(const std::string& key) const { return json_number_member(obj_, where_, key); }
-  int64_t integer(const std::string& key) const {
-    const Json& v = member(key);
-    if (!v.is_number_integer() ||
-        (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(INT64_MAX)))
-      json_fail(at(key), "expected an integer, found " + v.dump());
-    return v.get<int64_t>();
-  }
+  int64_t integer(const std::string& key) const { return json_integer(member(key), at(key)); }
   int count(const std::string& key) const {  // an int >= 0
     const int64_t n = integer(key);
     if (n < 0 || n > std::numeric_limits<int>::max())
@@ -55,10 +45,7 @@ class RecordReader {
   std::vector<std::string> strings(const std::string& key) const {
     const Json& a = json_array_member(obj_, where_, key);
     std::vector<std::string> v;
-    for (size_t i = 0; i < a.size(); ++i) {
-      if (!a[i].is_string()) json_fail(at(key) / i, "expected a string, found " + a[i].dump());
-      v.push_back(a[i].get<std::string>());
-    }
+    for (size_t i = 0; i < a.size(); ++i) v.push_back(json_string(a[i], at(key) / i));
     return v;
   }
   std::map<std::string, std::string> string_map(const std::string& key) const {

@@ -20,6 +20,25 @@ std::string write(const std::string& name, const std::string& text) {
   return p;
 }
 
+// Typed values: the value when it is of the type, else an error naming the place and the value.
+TEST(JsonUtil, TypedValuesAreReadOrRefusedNamingThePlace) {
+  const JsonWhere w{"f.json", "/k"};
+  EXPECT_EQ(json_bool(Json(true), w), true);
+  EXPECT_EQ(json_integer(Json(-7), w), -7);
+  EXPECT_EQ(json_integer(Json(uint64_t(INT64_MAX)), w), INT64_MAX);
+  EXPECT_EQ(json_string(Json("x"), w), "x");
+  using ::testing::HasSubstr;
+  using ::testing::ThrowsMessage;
+  EXPECT_THAT([&] { json_bool(Json(1), w); },
+              ThrowsMessage<InputError>(HasSubstr("f.json: /k: expected true or false, found 1")));
+  for (const Json& bad : {Json(1.5), Json("3"), Json(uint64_t(INT64_MAX) + 1), Json(nullptr)})
+    EXPECT_THAT(
+        [&] { json_integer(bad, w); },
+        ThrowsMessage<InputError>(HasSubstr("/k: expected an integer, found " + bad.dump())));
+  EXPECT_THAT([&] { json_string(Json(2), w); },
+              ThrowsMessage<InputError>(HasSubstr("/k: expected a string, found 2")));
+}
+
 TEST(JsonUtil, NestingBeyondTheLimitIsRefusedNamingTheFile) {
   const std::string deep = write("deep.json", std::string(200000, '[') + std::string(200000, ']'));
   try {

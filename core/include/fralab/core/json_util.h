@@ -48,6 +48,15 @@ const Json& json_member(const Json& obj, const JsonWhere& where, const std::stri
 /// A finite number; InputError otherwise (strings, null, NaN are refused).
 double json_number(const Json& v, const JsonWhere& where);
 
+/// true or false; InputError naming `where` otherwise.
+bool json_bool(const Json& v, const JsonWhere& where);
+
+/// An integer that fits int64_t; InputError naming `where` otherwise (1.5, "3", 2^63 refused).
+int64_t json_integer(const Json& v, const JsonWhere& where);
+
+/// A string; InputError naming `where` otherwise.
+std::string json_string(const Json& v, const JsonWhere& where);
+
 /// A finite number member; `fallback` when absent and not required.
 double json_number_member(const Json& obj, const JsonWhere& where, const std::string& key);
 double json_number_member(const Json& obj, const JsonWhere& where, const std::string& key,
