@@ -1,6 +1,7 @@
 #include "fralab/core/text.h"
 
 #include <charconv>
+#include <cstdio>
 
 namespace fralab {
 
@@ -20,6 +21,12 @@ std::string lossless(double v) {
   char buf[64];
   const auto r = std::to_chars(buf, buf + sizeof buf, v);
   return std::string(buf, r.ptr);
+}
+
+std::string significant(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
 }
 
 }  // namespace fralab

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "fralab/core/numerics.h"
+#include "fralab/core/text.h"
 
 namespace fralab::diag {
 
@@ -49,11 +49,6 @@ double minimise_1d(const std::function<double(double)>& f, double lo, double hi,
   return detail::brent_minimum(f, std::max(lo, best - step), std::min(hi, best + step));
 }
 
-std::string fmt(double v, int prec) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << v;
-  return s.str();
-}
+std::string fmt(double v, int prec) { return significant(v, prec); }
 
 }  // namespace fralab::diag

@@ -2,18 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <set>
 #include <sstream>
+
+#include "fralab/core/text.h"
 
 namespace fralab {
 namespace {
 
-std::string num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
-}
+std::string num(double v) { return significant(v, 3); }
 
 double dist(const Root& a, const Root& b) {
   auto loc = [](const Root& r) {

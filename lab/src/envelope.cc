@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,6 +11,7 @@
 #include <sstream>
 
 #include "fralab/core/error.h"
+#include "fralab/core/text.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/plant/embedded_models.h"
 
@@ -21,11 +21,7 @@ namespace fralab {
 
 namespace {
 
-std::string num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", v);
-  return b;
-}
+std::string num(double v) { return significant(v, 4); }
 
 // A root of transfer_matrix.json: {"real": p} or {"wn": w, "zeta": z}.
 struct R {

@@ -38,4 +38,7 @@ std::optional<E> enum_from_word(const std::pair<E, const char*> (&table)[N],
 /// The shortest decimal text that reads back as exactly `v` (std::to_chars round trip).
 std::string lossless(double v);
 
+/// `v` to `digits` significant digits, as printf's %g writes it (reports and messages).
+std::string significant(double v, int digits);
+
 }  // namespace fralab
