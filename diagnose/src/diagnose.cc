@@ -166,6 +166,43 @@ Json intervals_json(const Finding& f) {
 }
 }  // namespace
 
+Finding finding_from_json(const Json& j, const JsonWhere& where) {
+  json_require_object(j, where);
+  Finding f;
+  f.cause = cause_from_string(json_string_member(j, where, "cause"));
+  f.scope = scope_from_string(json_string_member(j, where, "scope"));
+  for (const char* k : {"input", "output"}) {
+    const Json& v = json_member(j, where, k);
+    (std::string(k) == "input" ? f.input : f.output) = v.is_null() ? "" : json_string(v, where / k);
+  }
+  const Json& p = json_member(j, where, "parameters");
+  json_require_object(p, where / "parameters");
+  for (auto it = p.begin(); it != p.end(); ++it) {
+    if (it->is_string())
+      f.text_parameters[it.key()] = it->get<std::string>();
+    else
+      f.parameters[it.key()] = json_number(*it, where / "parameters" / it.key());
+  }
+  const Json& pairs = json_array_member(j, where, "pairs");
+  for (size_t i = 0; i < pairs.size(); ++i)
+    f.pairs.push_back(json_string(pairs[i], where / "pairs" / i));
+  if (j.contains("tf")) f.tf = tf_from_json(j["tf"], where / "tf", nullptr, true);
+  return f;
+}
+
+Model extend_model(const Model& sim, const std::vector<Finding>& findings) {
+  Model m = sim;
+  for (const Finding& f : findings) {
+    if ((!f.input.empty() && m.input_index(f.input) < 0) ||
+        (!f.output.empty() && m.output_index(f.output) < 0))
+      throw InputError(std::string(to_string(f.cause)) + " at " + f.input +
+                       (f.output.empty() ? "" : " -> " + f.output) + ": " + m.name +
+                       " has no such channel");
+    diag::cause_unit(f.cause)->apply(m, f);
+  }
+  return m;
+}
+
 Json diagnosis_to_json(const Diagnosis& d) {
   Json j{{"format", "fralab-diagnosis/1"}, {"findings", Json::array()}};
   for (const auto& f : d.findings) {

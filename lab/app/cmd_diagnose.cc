@@ -24,7 +24,11 @@ void add_diagnose_command(CLI::App& app) {
   c->add_option("--out", dc->out)->required();
   c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
   add_measure_flags(c, dc->measure);
-  c->callback([dc] {
+  auto op = std::make_shared<std::string>();
+  add_operating_point_flag(c, *op);
+  c->callback([dc, op] {
+    dc->simulation = at_operating_point(dc->simulation, *op);
+    dc->engine = at_operating_point(dc->engine, *op);
     const DiagnoseResult r = run_diagnose(*dc);
     std::printf("fralab: %s\n", r.summary.c_str());
     throw_if_partial(r.partial);

@@ -55,19 +55,33 @@ void throw_if_partial(const std::vector<std::string>& partial) {
   if (!all.empty()) throw PartialRun(all);
 }
 
+void add_operating_point_flag(CLI::App* c, std::string& op) {
+  c->add_option("--operating-point", op,
+                "X or KEY=X: the engine and simulation SETs (an embedded family such as j85, a "
+                "folder or comma list of models) at that operating point, interpolated between "
+                "their models; the same as --engine SET@X");
+}
+
+std::string at_operating_point(const std::string& spec, const std::string& op) {
+  return op.empty() || spec.empty() ? spec : spec + "@" + op;
+}
+
 void add_measure_command(CLI::App& app) {
   auto mo = std::make_shared<MeasureOptions>();
   auto* c = app.add_subcommand("measure", "plant, acquisition, analysers: tape and frd files");
   auto* engine = c->add_option("--engine", mo->engine, "engine model file or embedded name");
   auto* out = c->add_option("--out", mo->out);
   add_measure_flags(c, *mo);
+  auto op = std::make_shared<std::string>();
+  add_operating_point_flag(c, *op);
   auto resume = std::make_shared<std::string>();
   c->add_option("--resume", *resume,
                 "continue the interrupted or failed run in DIR from its first incomplete step "
                 "(every other option comes from DIR/run.json)")
       ->excludes(engine)
       ->excludes(out);
-  c->callback([mo, engine, out, resume] {
+  c->callback([mo, engine, out, resume, op] {
+    mo->engine = at_operating_point(mo->engine, *op);
     if (!resume->empty()) {
       mo->resume = true;
       mo->out = *resume;

@@ -21,15 +21,29 @@ namespace {
 struct RunCommand {
   MeasureOptions measure;
   std::string simulation;
+  std::string operating_point;
 };
 
-void run(const RunCommand& c) {
+void run(RunCommand c) {
   std::string sim = c.simulation;
   if (sim.empty()) {
+    // The engine's embedded _sim model, or family (j85 -> j85_sim) at an operating point.
     const std::string base = std::filesystem::path(c.measure.engine).stem().string();
+    auto in_family = [&](const std::string& n) {  // base_<digits>_sim.json
+      const std::string head = base + "_", tail = "_sim.json";
+      if (n.size() <= head.size() + tail.size() || n.rfind(head, 0) != 0 ||
+          n.compare(n.size() - tail.size(), tail.size(), tail) != 0)
+        return false;
+      const std::string digits = n.substr(head.size(), n.size() - head.size() - tail.size());
+      return digits.find_first_not_of("0123456789") == std::string::npos;
+    };
     for (const auto& e : embedded_models())
-      if (std::string(e.name) == base + "_sim.json") sim = base + "_sim";
+      if (std::string(e.name) == base + "_sim.json" ||
+          (!c.operating_point.empty() && in_family(e.name)))
+        sim = base + "_sim";
   }
+  c.measure.engine = at_operating_point(c.measure.engine, c.operating_point);
+  sim = at_operating_point(sim, c.operating_point);
   if (sim.empty()) {
     const MeasureResult r = measure(c.measure);
     print_measure(r, c.measure.out);
@@ -95,6 +109,7 @@ void add_run_command(CLI::App& app) {
       "--simulation", rc->simulation,
       "diagnose against this simulation (default: the engine's _sim model when embedded)");
   add_measure_flags(c, rc->measure);
+  add_operating_point_flag(c, rc->operating_point);
   c->callback([rc] { run(*rc); });
 }
 

@@ -12,6 +12,11 @@ namespace fralab {
 
 /// The flags every measuring subcommand shares (measure, run, diagnose --engine).
 void add_measure_flags(CLI::App* c, MeasureOptions& m);
+/// `--operating-point X` (or KEY=X): the model SETs named by --engine and --simulation, read at
+/// that operating point (plant/schedule.h: a member, or interpolated between two).
+void add_operating_point_flag(CLI::App* c, std::string& op);
+/// `spec` at the operating point: "SPEC@OP" ("" or no op: spec unchanged).
+std::string at_operating_point(const std::string& spec, const std::string& op);
 /// "fralab: N pairs measured; engine time ..." on stdout.
 void print_measure(const MeasureResult& r, const std::string& out);
 /// After everything is written: PartialRun (exit status 3) naming each partial measurement.

@@ -8,6 +8,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
+#include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lab/run_record.h"
 #include "fralab/plant/embedded_models.h"
@@ -46,7 +47,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
         "--resume: an auto campaign resumes its runs one by one: `fralab measure "
         "--resume " +
         opt.out + "/multisine` (or /sine)");
-  const Model model = load_model_or_embedded(opt.engine);
+  const Model model = load_model_or_scheduled(opt.engine);
   const std::vector<int> excite = select_inputs(model, opt.acquire.inputs);
   AutoCampaignResult res;
   // The campaign's folder is its own until it ends (each run below takes its own sub-folder too).

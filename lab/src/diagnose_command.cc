@@ -8,6 +8,7 @@
 
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
+#include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lcm/tape_file.h"
 #include "fralab/plant/embedded_models.h"
@@ -16,12 +17,42 @@ namespace fralab {
 
 namespace fs = std::filesystem;
 
+MeasuredFolder read_measured_folder(const std::string& dir) {
+  MeasuredFolder f;
+  f.data = read_measured_dir(dir);
+  // The lab's measurement chain, as the measurement recorded it (else an ideal one).
+  const std::string run_file = MeasureDir(dir).run_json();
+  if (fs::exists(run_file)) {
+    // Its measurement chain only (RunRecord's key, read alone): a folder measured by an older
+    // fralab, whose run.json lacks most of today's keys, is diagnosed all the same.
+    const Json run = json_load_file(run_file);
+    if (run.contains("measurement_chain")) {
+      f.chain = chain_from_json(run["measurement_chain"], {run_file, "/measurement_chain"});
+      return f;
+    }
+  }
+  // Else the tape's own record of it (the start event's), when the folder has the tape.
+  const std::string tape = MeasureDir(dir).tape();
+  if (fs::exists(tape)) {
+    for (const StatusEvent& e : read_tape_run(tape).events) {
+      if (e.state != RunState::kStart) continue;
+      if (!e.measurement_chain_error.empty())  // compared against no chain would be wrong
+        throw InputError(tape + ": " + e.measurement_chain_error);
+      if (e.measurement_chain) {
+        f.chain = *e.measurement_chain;
+        break;
+      }
+    }
+  }
+  return f;
+}
+
 DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   DiagnoseResult res;
   if (c.out.empty()) throw InputError("--out DIR is required");
   if (c.engine.empty() == c.measured.empty())
     throw InputError("give exactly one of --engine TRUTH.json or --measured DIR");
-  Model sim = load_model_or_embedded(c.simulation);
+  Model sim = load_model_or_scheduled(c.simulation);
   // The diagnosis's folder is its own until it ends (its measurements take their sub-folders).
   const RunLock lock(c.out, "fralab diagnose");
   std::string data_dir = c.measured, data_name = c.measured;
@@ -47,33 +78,10 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) +
                 "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
   }
-  auto data = read_measured_dir(data_dir);
-  // The lab's measurement chain, as the measurement recorded it (else an ideal one).
+  const MeasuredFolder folder = read_measured_folder(data_dir);
+  const auto& data = folder.data;
   DiagnoseOptions opt;
-  const std::string run_file = MeasureDir(data_dir).run_json();
-  bool chain_known = false;
-  if (fs::exists(run_file)) {
-    // Its measurement chain only (RunRecord's key, read alone): a folder measured by an older
-    // fralab, whose run.json lacks most of today's keys, is diagnosed all the same.
-    const Json run = json_load_file(run_file);
-    if (run.contains("measurement_chain")) {
-      opt.chain = chain_from_json(run["measurement_chain"], {run_file, "/measurement_chain"});
-      chain_known = true;
-    }
-  }
-  // Else the tape's own record of it (the start event's), when the folder has the tape.
-  const std::string tape = MeasureDir(data_dir).tape();
-  if (!chain_known && fs::exists(tape)) {
-    for (const StatusEvent& e : read_tape_run(tape).events) {
-      if (e.state != RunState::kStart) continue;
-      if (!e.measurement_chain_error.empty())  // compared against no chain would be wrong
-        throw InputError(tape + ": " + e.measurement_chain_error);
-      if (e.measurement_chain) {
-        opt.chain = *e.measurement_chain;
-        break;
-      }
-    }
-  }
+  opt.chain = folder.chain;
   Diagnosis d = diagnose(sim, data, opt);
   json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));
   Model ext = d.extended;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -14,6 +15,7 @@
 #include "fralab/core/text.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/plant/embedded_models.h"
+#include "fralab/plant/schedule.h"
 
 namespace fs = std::filesystem;
 
@@ -384,6 +386,20 @@ Json envelope_json(const EnvelopeReport& r) {
     }
     j["findings"].push_back(fj);
   }
+  if (!r.scheduled_model.empty()) j["scheduled_model"] = r.scheduled_model;
+  j["leave_one_out"] = Json::array();
+  for (const auto& l : r.leave_one_out) {
+    Json lj{{"point", l.point}, {"x", l.x}, {"from", {l.from_lo, l.from_hi}}};
+    if (l.refused.empty()) {
+      lj["error_simulation"] = l.error_simulation;
+      lj["error_scheduled"] = l.error_scheduled;
+      lj["error_extended"] = l.error_extended;
+      lj["left_out"] = l.left_out;
+    } else {
+      lj["refused"] = l.refused;
+    }
+    j["leave_one_out"].push_back(lj);
+  }
   return j;
 }
 
@@ -420,58 +436,171 @@ std::string envelope_markdown(const EnvelopeReport& r) {
   md << "\n## Findings across points\n\n";
   if (r.findings.empty()) md << "None.\n";
   for (const auto& f : r.findings) md << "- " << f.text << "\n";
+  if (!r.scheduled_model.empty())
+    md << "\n## The scheduled extended model\n\n`" << r.scheduled_model
+       << "`: the simulation at any " << r.schedule_by
+       << " within the points (between its own points, interpolated along its roots' tracks) "
+          "extended by the findings above, their parameters by their laws. A model at X: "
+          "`--engine "
+       << r.scheduled_model << "@X` (docs/formats.md §28).\n";
+  if (!r.leave_one_out.empty()) {
+    md << "\n## Leave-one-out\n\nAt each inner point, the scheduled extended model built "
+          "without it (its simulation extended by the other points' findings, their laws fitted "
+          "without it) against its measurement; the diagnosis' error metric.\n\n| point | from | "
+          "simulation | "
+          "scheduled | own extended model | notes |\n|---|---|---|---|---|---|\n";
+    for (const auto& l : r.leave_one_out) {
+      md << "| " << num(l.x) << " | " << l.from_lo << ", " << l.from_hi << " |";
+      if (!l.refused.empty()) {
+        md << " - | - | - | refused: " << l.refused << " |\n";
+        continue;
+      }
+      md << " " << num(l.error_simulation) << " | " << num(l.error_scheduled) << " | "
+         << num(l.error_extended) << " |";
+      for (size_t k = 0; k < l.left_out.size(); ++k) md << (k ? "; " : " ") << l.left_out[k];
+      md << " |\n";
+    }
+  }
   return md.str();
 }
 
-std::vector<EnvelopeModel> envelope_models(const std::string& set, const std::string& schedule_by) {
-  std::vector<std::string> specs;
-  if (set.find(',') != std::string::npos) {
-    std::stringstream ss(set);
-    for (std::string s; std::getline(ss, s, ',');)
-      if (!s.empty()) specs.push_back(s);
-  } else if (fs::is_directory(set)) {
-    for (const auto& e : fs::directory_iterator(set))
-      if (e.path().extension() == ".json") specs.push_back(e.path().string());
-    std::sort(specs.begin(), specs.end());
-  } else {
-    // An embedded family: "j85" -> j85_<digits>, "j85_sim" -> j85_<digits>_sim.
-    const bool sim = set.size() > 4 && set.compare(set.size() - 4, 4, "_sim") == 0;
-    const std::string base = sim ? set.substr(0, set.size() - 4) : set;
-    const std::regex family(
-        "^" + std::regex_replace(base, std::regex(R"([.^$|()\[\]{}*+?\\])"), R"(\$&)") + "_[0-9]+" +
-        (sim ? "_sim" : "") + "\\.json$");
-    for (const auto& e : embedded_models())
-      if (std::regex_match(e.name, family))
-        specs.push_back(std::string(e.name).substr(0, std::string(e.name).size() - 5));
-    if (specs.empty()) specs.push_back(set);  // one model: a file or an embedded name
-  }
-  std::vector<EnvelopeModel> out;
-  for (const std::string& s : specs) {
-    const Model m = load_model_or_embedded(s);
-    double x = 0;
-    if (schedule_by == "speed_pct") {
-      if (!(m.speed_pct > 0)) throw InputError(s + ": no operating_point.speed_pct to schedule by");
-      x = m.speed_pct;
-    } else {
-      const Json& op = m.operating_point_extra;
-      if (!op.is_object() || !op.contains(schedule_by) || !op[schedule_by].is_number())
-        throw InputError(s + ": no number operating_point." + schedule_by + " to schedule by");
-      x = op[schedule_by].get<double>();
+double law_value(const FindingLaw& l, double x) {
+  if (l.law == "linear") return l.a + l.b * x;
+  if (l.law == "power") return l.a * std::pow(x, l.b);
+  return l.a;
+}
+
+std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points, double x,
+                                        const EnvelopeOptions& o,
+                                        std::vector<std::string>* left_out) {
+  if (points.size() < 2 || !(x >= points.front().x && x <= points.back().x))
+    throw InputError(o.schedule_by + " " + num(x) +
+                     ": outside the measured points' range; findings are never extrapolated");
+  size_t k = 1;
+  while (k + 1 < points.size() && points[k].x < x) ++k;
+  const EnvelopePoint &lo = points[k - 1], &hi = points[k];
+  // The finding of a law at one point, as its diagnosis.json gives it.
+  auto at = [](const EnvelopePoint& p, const FindingLaw& l) -> std::optional<Finding> {
+    if (!p.diagnosis.is_object() || !p.diagnosis.contains("findings")) return std::nullopt;
+    const Json& fs = p.diagnosis["findings"];
+    for (size_t i = 0; i < fs.size(); ++i) {
+      auto word = [&](const char* k) {
+        return fs[i].contains(k) && fs[i][k].is_string() ? fs[i][k].get<std::string>() : "";
+      };
+      if (word("cause") == l.cause && word("scope") == l.scope && word("input") == l.input &&
+          word("output") == l.output)
+        return finding_from_json(fs[i],
+                                 {p.name + "/diagnosis.json", "/findings/" + std::to_string(i)});
     }
-    out.push_back({s, x});
+    return std::nullopt;
+  };
+  std::vector<Finding> out;
+  const EnvelopeReport r = join_points(points, o);
+  for (const FindingLaw& l : r.findings) {
+    const auto a = at(lo, l), b = at(hi, l);
+    if (!a || !b) {
+      if (left_out)
+        left_out->push_back(l.cause + " (" + l.scope + " " + l.input +
+                            (l.output.empty() ? "" : " -> ") + l.output + "): not at both " +
+                            lo.name + " and " + hi.name);
+      continue;
+    }
+    const double t = (x - lo.x) / (hi.x - lo.x);
+    Finding f = *a;
+    for (auto& [key, v] : f.parameters) {
+      const auto it = b->parameters.find(key);
+      if (key == l.parameter)
+        v = law_value(l, x);
+      else if (it != b->parameters.end())
+        v = v + (it->second - v) * t;  // the finding's other figures between its two points
+    }
+    out.push_back(f);
   }
-  std::sort(out.begin(), out.end(),
-            [](const EnvelopeModel& a, const EnvelopeModel& b) { return a.x < b.x; });
-  for (size_t i = 1; i < out.size(); ++i) {
-    if (out[i].x == out[i - 1].x)
-      throw InputError(out[i - 1].spec + " and " + out[i].spec + ": the same " + schedule_by +
-                       " (" + num(out[i].x) + ")");
+  return out;
+}
+
+Model scheduled_model_at(const std::string& file, double x) {
+  const Json j = json_load_file(file);
+  const JsonWhere w{file, ""};
+  if (json_string_member(j, w, "format") != kScheduledModelFormat)
+    json_fail(w / "format", std::string("not ") + kScheduledModelFormat);
+  EnvelopeOptions o;
+  o.schedule_by = json_string_member(j, w, "schedule_by");
+  const Json& sims = json_array_member(j, w, "simulation");
+  std::string set;
+  for (size_t i = 0; i < sims.size(); ++i)
+    set += (set.empty() ? "" : ",") + json_string(sims[i], w / "simulation" / i);
+  if (sims.size() == 1) set += ",";  // one model: a list of one, not a family or folder
+  InterpolationOptions io;
+  io.schedule_by = o.schedule_by;
+  Model m = model_at(load_model_set(set, o.schedule_by), x, io);
+  const fs::path dir = fs::path(file).parent_path();
+  std::vector<EnvelopePoint> points;
+  const Json& ps = json_array_member(j, w, "points");
+  for (size_t i = 0; i < ps.size(); ++i) {
+    EnvelopePoint p;
+    p.name = json_string_member(ps[i], w / "points" / i, "name");
+    p.x = json_number_member(ps[i], w / "points" / i, "x");
+    p.diagnosis =
+        json_load_file((dir / json_string_member(ps[i], w / "points" / i, "diagnosis")).string());
+    points.push_back(p);
+  }
+  std::sort(points.begin(), points.end(),
+            [](const EnvelopePoint& a, const EnvelopePoint& b) { return a.x < b.x; });
+  std::vector<std::string> left_out;
+  Model ext = extend_model(m, scheduled_findings(points, x, o, &left_out));
+  ext.name = "scheduled extended model at " + o.schedule_by + " " + num(x) + " (" + m.name + ")";
+  ext.source = file + "@" + lossless(x);
+  for (const std::string& l : left_out) ext.warnings.push_back(file + ": " + l + ": left out");
+  return ext;
+}
+
+Model load_model_or_scheduled(const std::string& spec) {
+  if (!fs::exists(spec))
+    if (const auto at = parse_model_at(spec); at && fs::is_regular_file(at->set)) {
+      const Json j = json_load_file(at->set);
+      if (j.is_object() && j.value("format", "") == kScheduledModelFormat) {
+        const std::string key = j.value("schedule_by", "");
+        if (at->schedule_by != key && at->schedule_by != "speed_pct")  // speed_pct: the default
+          throw InputError(spec + ": the scheduled model is scheduled by " + key);
+        return scheduled_model_at(at->set, at->x);
+      }
+    }
+  return load_model_or_embedded(spec);
+}
+
+std::vector<LeaveOneOut> leave_one_out(const std::string& dir,
+                                       const std::vector<EnvelopePoint>& points,
+                                       const EnvelopeOptions& o) {
+  std::vector<LeaveOneOut> out;
+  auto ext = [&](const EnvelopePoint& p) { return dir + "/" + p.name + "/extended_model.json"; };
+  for (size_t i = 1; i + 1 < points.size(); ++i) {
+    const EnvelopePoint &lo = points[i - 1], &p = points[i], &hi = points[i + 1];
+    LeaveOneOut l;
+    l.point = p.name, l.x = p.x, l.from_lo = lo.name, l.from_hi = hi.name;
+    try {
+      const Model sim = load_model_or_embedded(p.simulation);
+      const MeasuredFolder data = read_measured_folder(dir + "/" + p.name + "/measure");
+      DiagnoseOptions opt;
+      opt.chain = data.chain;
+      // The point's own simulation extended by the findings of the others, their parameters
+      // from laws fitted without this point.
+      std::vector<EnvelopePoint> others = points;
+      others.erase(others.begin() + long(i));
+      const Model sched = extend_model(sim, scheduled_findings(others, p.x, o, &l.left_out));
+      l.error_simulation = model_error(sim, sim, data.data, opt);
+      l.error_scheduled = model_error(sched, sim, data.data, opt);
+      l.error_extended = model_error(load_model(ext(p)), sim, data.data, opt);
+    } catch (const std::exception& e) {
+      l.refused = e.what();
+    }
+    out.push_back(l);
   }
   return out;
 }
 
 std::string envelope_point_name(const std::string& schedule_by, double x) {
-  return schedule_by + "_" + num(x);
+  return schedule_by + "_" + lossless(x);
 }
 
 EnvelopeReport run_envelope(const EnvelopeCommand& c,
@@ -480,11 +609,11 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
   auto say = [&](const std::string& s) {
     if (log) log(s);
   };
-  const auto engines = envelope_models(c.engine, c.options.schedule_by);
-  const auto sims = envelope_models(c.simulation, c.options.schedule_by);
-  std::vector<std::pair<EnvelopeModel, EnvelopeModel>> pairs;
+  const auto engines = load_model_set(c.engine, c.options.schedule_by);
+  const auto sims = load_model_set(c.simulation, c.options.schedule_by);
+  std::vector<std::pair<SetModel, SetModel>> pairs;
   for (const auto& e : engines) {
-    const EnvelopeModel* s = nullptr;
+    const SetModel* s = nullptr;
     for (const auto& q : sims)
       if (q.x == e.x) s = &q;
     if (!s)
@@ -525,12 +654,35 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
     EnvelopePoint p;
     p.name = name;
     p.x = e.x;
+    p.simulation = s.spec;
     if (fs::exists(dir + "/measure/transfer_matrix.json"))
       p.transfer_matrix = json_load_file(dir + "/measure/transfer_matrix.json");
     if (fs::exists(dir + "/diagnosis.json")) p.diagnosis = json_load_file(dir + "/diagnosis.json");
     points.push_back(p);
   }
   EnvelopeReport r = join_points(points, c.options);
+  // The scheduled extended model: the simulation set and the points' diagnoses.
+  Json sm{{"format", kScheduledModelFormat},
+          {"schedule_by", c.options.schedule_by},
+          {"simulation", Json::array()},
+          {"points", Json::array()}};
+  for (const SetModel& q : sims)  // a file by its absolute path: the model is read from anywhere
+    sm["simulation"].push_back(fs::exists(q.spec) ? fs::absolute(q.spec).string() : q.spec);
+  for (const EnvelopePoint& p : points)
+    sm["points"].push_back(
+        {{"name", p.name}, {"x", p.x}, {"diagnosis", p.name + "/diagnosis.json"}});
+  json_save_file(c.out + "/scheduled_model.json", sm);
+  r.scheduled_model = "scheduled_model.json";
+  say("the scheduled extended model: " + c.out + "/scheduled_model.json (a model at X: --engine " +
+      c.out + "/scheduled_model.json@X)");
+  r.leave_one_out = leave_one_out(c.out, points, c.options);
+  for (const LeaveOneOut& l : r.leave_one_out)
+    say("leave-one-out at " + l.point + ": " +
+        (l.refused.empty()
+             ? "error " + num(l.error_simulation) + " (simulation), " + num(l.error_scheduled) +
+                   " (scheduled from " + l.from_lo + " and " + l.from_hi + "), " +
+                   num(l.error_extended) + " (its own extended model)"
+             : "refused: " + l.refused));
   json_save_file(c.out + "/envelope.json", envelope_json(r));
   std::ofstream(c.out + "/envelope.md") << envelope_markdown(r);
   return r;

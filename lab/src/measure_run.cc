@@ -10,6 +10,7 @@
 
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
+#include "fralab/lab/envelope.h"
 #include "fralab/lab/progress.h"
 #include "fralab/lcm/channels.h"
 #include "fralab/lcm/codec.h"
@@ -164,7 +165,7 @@ void MeasureRun::read_options(const MeasureOptions& given) {
       throw InputError(given.out + ": the run is complete; there is nothing to resume");
     o_ = options_from_run(given.out, run_);
   }
-  model_ = load_model_or_embedded(o_.engine);
+  model_ = load_model_or_scheduled(o_.engine);
   o_.acquire.validate();
   const std::vector<int> excite = select_inputs(model_, o_.acquire.inputs);
   fs::create_directories(dir_.frd_dir());

@@ -363,11 +363,17 @@ Complex Model::command_to_output(int o, int i, double w) const {
 #include <filesystem>
 
 #include "fralab/plant/embedded_models.h"
+#include "fralab/plant/schedule.h"
 
 namespace fralab {
 
 Model load_model_or_embedded(const std::string& spec) {
   if (std::filesystem::exists(spec)) return load_model(spec);
+  if (const auto at = parse_model_at(spec)) {
+    InterpolationOptions o;
+    o.schedule_by = at->schedule_by;
+    return model_at(load_model_set(at->set, at->schedule_by), at->x, o);
+  }
   std::string names;
   for (const EmbeddedModel& e : embedded_models()) {
     std::string n = e.name;

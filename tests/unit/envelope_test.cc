@@ -8,13 +8,18 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <map>
 
 #include "fralab/core/error.h"
+#include "shell.h"
 
 namespace fralab {
 namespace {
 
+namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 Json real_pole(double tau) { return Json{{"real", -1 / tau}}; }
@@ -38,6 +43,8 @@ Json finding(const std::string& cause, const std::string& scope, const std::stri
   f["parameters"] = {{param, value}};
   if (!std::isnan(from)) f["parameters"]["from_" + param.substr(param.find('_') + 1)] = from;
   f["intervals"] = {{param, {value - sigma, value + sigma}}};
+  // The pairs a finding explains: an input's actuator pair, else the path's.
+  f["pairs"] = {scope == "input" ? "u_" + input + ":" + input : input + ":" + output};
   return f;
 }
 
@@ -164,18 +171,72 @@ TEST(Envelope, LawsComeBackFromTheirValues) {
   EXPECT_NEAR(q->a, 3, 1e-2);
 }
 
-TEST(Envelope, ModelsWithoutTheScheduleKeyAreRefusedByName) {
-  EXPECT_THROW(envelope_models("j85", "altitude_m"), InputError);
-  try {
-    envelope_models("j85", "altitude_m");
-  } catch (const InputError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("no number operating_point.altitude_m"));
+// Without the 85 % point, its findings come from the laws over 70 and 95 %: the A8 actuator
+// linear (27.2 + 15/25 of 11 rad/s: 33.8), the hysteresis constant (the two widths' weighted
+// mean), the delay at both; between 85 and 95 % the delay (not at 85) is left out and said; a
+// point outside the range is refused.
+TEST(Envelope, ScheduledFindingsFollowTheirLawsBetweenThePoints) {
+  constexpr double kArithmetic = 1e-9;
+  std::vector<EnvelopePoint> pts = report_points(), without;
+  for (const auto& p : pts)
+    if (p.x != 85) without.push_back(p);
+  std::sort(without.begin(), without.end(),
+            [](const EnvelopePoint& a, const EnvelopePoint& b) { return a.x < b.x; });
+  std::vector<std::string> left_out;
+  const std::vector<Finding> fs = scheduled_findings(without, 85, {}, &left_out);
+  EXPECT_TRUE(left_out.empty());
+  std::map<std::string, const Finding*> by;
+  for (const Finding& f : fs) by[to_string(f.cause)] = &f;
+  ASSERT_EQ(by.size(), 3u);
+  EXPECT_NEAR(by["pole_shift"]->parameters.at("to_rad_s"), 33.8, kArithmetic);
+  EXPECT_NEAR(by["pole_shift"]->parameters.at("from_rad_s"), 3.14, kArithmetic);
+  EXPECT_NEAR(by["hysteresis"]->parameters.at("width"), 9.275, kArithmetic);
+  EXPECT_NEAR(by["time_delay"]->parameters.at("delay_s"), 0.011, kArithmetic);
+
+  std::sort(pts.begin(), pts.end(),
+            [](const EnvelopePoint& a, const EnvelopePoint& b) { return a.x < b.x; });
+  left_out.clear();
+  EXPECT_EQ(scheduled_findings(pts, 90, {}, &left_out).size(), 2u);
+  ASSERT_EQ(left_out.size(), 1u);
+  EXPECT_THAT(left_out[0], HasSubstr("time_delay (path Wf -> P3): not at both speed_pct_85 and "
+                                     "speed_pct_95"));
+  EXPECT_THROW(scheduled_findings(pts, 60), InputError);
+}
+
+// DIR/scheduled_model.json at 85 % from diagnoses at 70 and 95 %: the simulation set (j85_70_sim
+// and j85_95_sim, whose A8 actuator is 3.142 rad/s at both) interpolated there, its A8 actuator
+// moved to the law's 33.8 rad/s; the same through `--engine FILE@85`'s reader.
+TEST(Envelope, TheScheduledExtendedModelIsAModelAtAnyPointInItsRange) {
+  const std::string d = fralab::testing::tmpdir("scheduled", "fralab_env_");
+  std::vector<EnvelopePoint> pts = report_points();
+  Json sm{{"format", "fralab-scheduled-model/1"},
+          {"schedule_by", "speed_pct"},
+          {"simulation", {"j85_70_sim", "j85_95_sim"}},
+          {"points", Json::array()}};
+  for (const auto& p : pts) {
+    if (p.x == 85) continue;
+    fs::create_directories(d + "/" + p.name);
+    json_save_file(d + "/" + p.name + "/diagnosis.json", p.diagnosis);
+    sm["points"].push_back(
+        {{"name", p.name}, {"x", p.x}, {"diagnosis", p.name + "/diagnosis.json"}});
   }
-  const auto m = envelope_models("j85_sim", "speed_pct");
-  ASSERT_EQ(m.size(), 3u);
-  EXPECT_EQ(m[0].spec, "j85_70_sim");
-  EXPECT_EQ(m[2].x, 95);
+  json_save_file(d + "/scheduled_model.json", sm);
+  const Model m = scheduled_model_at(d + "/scheduled_model.json", 85);
+  EXPECT_EQ(m.speed_pct, 85);
+  const int a8 = m.input_index("A8");
+  ASSERT_GE(a8, 0);
+  ASSERT_TRUE(m.inputs[size_t(a8)].actuator.has_value());
+  const Root& pole = m.inputs[size_t(a8)].actuator->poles.at(0);
+  EXPECT_NEAR(pole.pair ? pole.wn : -pole.real, 33.8, 1e-9);
+  EXPECT_EQ(model_to_json(load_model_or_scheduled(d + "/scheduled_model.json@85")),
+            model_to_json(m));
+  EXPECT_THROW(scheduled_model_at(d + "/scheduled_model.json", 99), InputError);
+  fs::remove_all(d);
+}
+
+TEST(Envelope, APointsFolderIsNamedByItsSchedulingVariable) {
   EXPECT_EQ(envelope_point_name("speed_pct", 85), "speed_pct_85");
+  EXPECT_EQ(envelope_point_name("altitude_m", 3000.5), "altitude_m_3000.5");
 }
 
 }  // namespace

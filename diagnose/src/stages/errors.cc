@@ -61,3 +61,14 @@ double error_over(const DiagnosisRun& r, const Model& m, const std::vector<std::
 }
 
 }  // namespace fralab::diag
+
+namespace fralab {
+
+double model_error(const Model& m, const Model& sim, const std::vector<MeasuredPair>& data,
+                   const DiagnoseOptions& opt, const std::vector<std::string>& which) {
+  diag::DiagnosisRun r(sim, data, opt);
+  diag::prepare(r);
+  return diag::error_over(r, m, which, false);
+}
+
+}  // namespace fralab

@@ -218,6 +218,23 @@ struct Diagnosis {
 Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data,
                    const DiagnoseOptions& opt = {});
 
+/// The diagnosis' error metric (Diagnosis::metric) of model `m` on the fitting measurement of
+/// `data`, over the pairs the simulation `sim` has a path for (those diagnosis.json's
+/// error_before counts), restricted to `which` when not empty; through opt.chain, each point at its
+/// own amplitude or multisine. diagnose(sim, data, opt).error_before equals model_error(sim, sim,
+/// data, opt) and its error_after model_error(d.extended, sim, data, opt). A pair `m` has no
+/// response for errs by 1 there; -1 when no point counts.
+double model_error(const Model& m, const Model& sim, const std::vector<MeasuredPair>& data,
+                   const DiagnoseOptions& opt = {}, const std::vector<std::string>& which = {});
+
+/// A finding as diagnosis.json writes it (docs/formats.md §6: cause, scope, input, output,
+/// parameters, pairs, and a missing path's tf); InputError naming `where` and the key.
+Finding finding_from_json(const Json& j, const JsonWhere& where);
+
+/// The simulation extended by the findings, each as its cause extends a model (the diagnosis'
+/// own extended model is extend_model(sim, d.findings)).
+Model extend_model(const Model& sim, const std::vector<Finding>& findings);
+
 /// fralab-diagnosis/1 JSON (docs/formats.md §6).
 Json diagnosis_to_json(const Diagnosis& d);
 

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/measurement_chain.h"
+#include "fralab/diagnose/diagnose.h"
 #include "fralab/lab/measure.h"
 
 namespace fralab {
@@ -25,6 +27,15 @@ struct DiagnoseResult {
   /// one line. The diagnosis needs only their curves, so it runs all the same.
   std::vector<std::string> partial;
 };
+
+/// A measure folder's curves (its validation/ subfolder's as each pair's validation) and the
+/// measurement chain they were recorded through: run.json's, else the tape's start event's, else
+/// an ideal chain. InputError naming the tape when its start event's chain does not read.
+struct MeasuredFolder {
+  std::vector<MeasuredPair> data;
+  MeasurementChain chain;
+};
+MeasuredFolder read_measured_folder(const std::string& dir);
 
 /// Runs the diagnosis.
 DiagnoseResult run_diagnose(const DiagnoseCommand& c);

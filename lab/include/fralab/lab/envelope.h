@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "fralab/core/json_util.h"
+#include "fralab/diagnose/diagnose.h"
 #include "fralab/lab/measure.h"
 
 namespace fralab {
@@ -45,10 +46,11 @@ struct EnvelopeOptions {
 
 // One operating point's results, as read back from its folder.
 struct EnvelopePoint {
-  std::string name;      // its folder under DIR
-  double x = 0;          // the scheduling variable
-  Json transfer_matrix;  // DIR/<point>/measure/transfer_matrix.json (null: none)
-  Json diagnosis;        // DIR/<point>/diagnosis.json (null: none)
+  std::string name;        // its folder under DIR
+  double x = 0;            // the scheduling variable
+  std::string simulation;  // the simulation's spec ("" when not known)
+  Json transfer_matrix;    // DIR/<point>/measure/transfer_matrix.json (null: none)
+  Json diagnosis;          // DIR/<point>/diagnosis.json (null: none)
 };
 
 struct TrackValue {
@@ -87,11 +89,28 @@ struct FindingLaw {
   std::string text;                     // the sentence for the report
 };
 
+// Leave-one-out at an inner point: the scheduled extended model built without it (the point's
+// simulation extended by scheduled_findings of the other points) against its own measurement,
+// beside the simulation at that point and the point's own extended model; each the diagnosis'
+// error metric (model_error) over the pairs the point's simulation has.
+struct LeaveOneOut {
+  std::string point;
+  double x = 0;
+  std::string from_lo, from_hi;  // the neighbours' points
+  double error_simulation = -1, error_scheduled = -1, error_extended = -1;
+  std::vector<std::string> left_out;  // findings not at both neighbours, not applied
+  std::string refused;                // why no scheduled model was built ("" when one was)
+};
+
 struct EnvelopeReport {
   std::string schedule_by;
   std::vector<EnvelopePoint> points;  // in x order
   std::vector<StateTrack> tracks;
   std::vector<FindingLaw> findings;
+  /// The scheduled extended model's file, relative to DIR (scheduled_model_at); "" when not
+  /// written.
+  std::string scheduled_model;
+  std::vector<LeaveOneOut> leave_one_out;  // inner points, in x order
 };
 
 /// Joins the points' results (see above). Points in any order; sorted by x.
@@ -111,24 +130,41 @@ struct EnvelopeCommand {
   bool plots = true;
 };
 
-struct EnvelopeModel {
-  std::string spec;  // file path or embedded name
-  double x = 0;
-};
-
-/// The models a SET names, with their scheduling variable: an embedded family ("j85": j85_70,
-/// j85_85, j85_95; "j85_sim": the _sim models), a comma-separated list of files or embedded names,
-/// or a folder of model files. InputError naming the model without that operating-point key, or a
-/// SET that names nothing.
-std::vector<EnvelopeModel> envelope_models(const std::string& set, const std::string& schedule_by);
-
 /// The folder name of a point: "<schedule_by>_<x>" (x without trailing zeros).
 std::string envelope_point_name(const std::string& schedule_by, double x);
 
+/// The findings of the scheduled extended model at x (points as join_points takes them, x within
+/// their range): each finding present at both points around x, as the lower one's diagnosis
+/// gives it, its primary parameter from its law over the points (FindingLaw), its other
+/// parameters linearly between the two. A finding at one of the two only is left out and said in
+/// `left_out`. InputError for x outside the points' range (never extrapolated).
+std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points, double x,
+                                        const EnvelopeOptions& o = {},
+                                        std::vector<std::string>* left_out = nullptr);
+
+inline constexpr const char* kScheduledModelFormat = "fralab-scheduled-model/1";
+
+/// The scheduled extended model `DIR/scheduled_model.json` (docs/formats.md §28) at x: its
+/// simulation set at x (a member, or interpolated along its roots' tracks: plant/schedule.h)
+/// extended by scheduled_findings(x) of its points' diagnoses (paths relative to the file).
+/// InputError naming the file and key, or x outside the points' range.
+Model scheduled_model_at(const std::string& file, double x);
+
+/// A model spec as load_model_or_embedded reads it, and also "FILE@X" for a scheduled extended
+/// model FILE: what `--engine` and `--simulation` accept.
+Model load_model_or_scheduled(const std::string& spec);
+
+/// Leave-one-out over the points' folders under `dir` (each with its extended_model.json and
+/// measure/ folder; EnvelopePoint::simulation set): one entry per inner point, in x order.
+std::vector<LeaveOneOut> leave_one_out(const std::string& dir,
+                                       const std::vector<EnvelopePoint>& points,
+                                       const EnvelopeOptions& o = {});
+
 /// Runs the campaign: each point whose DIR/<point>/diagnosis.json is missing is diagnosed (a
 /// folder left by an interrupted point is first renamed DIR/<point>.interrupted, or
-/// .interrupted-2, ...: its tapes are kept), in x order; then the report is joined
-/// and written to DIR/envelope.json and DIR/envelope.md. `log` receives one line per step.
+/// .interrupted-2, ...: its tapes are kept), in x order; then the report is joined, the scheduled
+/// extended model is written to DIR/scheduled_model.json, leave-one-out is run, and the report is
+/// written to DIR/envelope.json and DIR/envelope.md. `log` receives one line per step.
 EnvelopeReport run_envelope(const EnvelopeCommand& c,
                             const std::function<void(const std::string&)>& log = {});
 

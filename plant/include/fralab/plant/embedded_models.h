@@ -16,7 +16,8 @@ struct EmbeddedModel {
 const std::vector<EmbeddedModel>& embedded_models();
 
 /// A model by file path, or, when `spec` names no file but an embedded model ("j85_95" or
-/// "j85_95.json"), the embedded copy. InputError listing the embedded names otherwise.
+/// "j85_95.json"), the embedded copy; "SET@X" / "SET@KEY=X" is the model of a set at an operating
+/// point (plant/schedule.h). InputError listing the embedded names otherwise.
 Model load_model_or_embedded(const std::string& spec);
 
 }  // namespace fralab
