@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "fralab/core/error.h"
+#include "fralab/exchange/envelope_export.h"
 #include "fralab/exchange/results_export.h"
 #include "fralab/exchange/tape_series.h"
 #include "fralab/lcm/tape_file.h"
@@ -34,6 +35,17 @@ void run(const ExportCommand& c) {
   if (c.to != "mat" && c.to != "csv") throw InputError("--to " + c.to + ": mat or csv");
   if (c.from.empty() == c.tape.empty())
     throw InputError("give one of --from DIR (results) and --tape TAPE (a time series)");
+  if (!c.from.empty() && is_envelope_dir(c.from)) {
+    if (c.to != "mat")
+      throw InputError(c.from +
+                       ": an envelope exports to .mat (its tables are envelope.json and "
+                       "envelope.md; each point's measurement exports from its measure/)");
+    const std::string out = !c.out.empty() ? c.out : c.from + "/fralab.mat";
+    export_envelope_mat(c.from, out);
+    std::printf("fralab: exported the envelope (points, states, findings, leave-one-out) to %s\n",
+                out.c_str());
+    return;
+  }
   if (!c.from.empty()) {
     const std::string out =
         !c.out.empty() ? c.out : c.from + (c.to == "mat" ? "/fralab.mat" : "/export");
@@ -73,7 +85,9 @@ void add_export_command(CLI::App& app) {
   auto* c = app.add_subcommand(
       "export",
       "results (frd, tf, transfer matrix, state model) or a tape's time series, to .mat or CSV");
-  c->add_option("--from", ec->from, "a measure directory: its frd/, tf/, transfer_matrix.json");
+  c->add_option("--from", ec->from,
+                "a measure directory (its frd/, tf/, transfer_matrix.json) or an envelope's "
+                "(envelope.json)");
   c->add_option("--tape", ec->tape, "a tape: its run as a time series and a schedule");
   c->add_option("--run", ec->run_id, "with --tape: the run id (default: the tape's first run)");
   c->add_option("--to,--format", ec->to, "mat (default) or csv");

@@ -13,6 +13,7 @@
 
 #include "fralab/core/error.h"
 #include "fralab/core/text.h"
+#include "fralab/diagnose/report.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/plant/embedded_models.h"
 #include "fralab/plant/schedule.h"
@@ -461,6 +462,9 @@ std::string envelope_markdown(const EnvelopeReport& r) {
       md << " |\n";
     }
   }
+  if (r.plots)
+    md << "\n## Pictures\n\n![Root migration: each state's root against " << r.schedule_by
+       << "](plots/roots.png)\n\n![Findings across points with their laws](plots/findings.png)\n";
   return md.str();
 }
 
@@ -683,8 +687,12 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
                    " (scheduled from " + l.from_lo + " and " + l.from_hi + "), " +
                    num(l.error_extended) + " (its own extended model)"
              : "refused: " + l.refused));
+  if (c.plots) r.plots = render_envelope_plots(r, c.out);
   json_save_file(c.out + "/envelope.json", envelope_json(r));
-  std::ofstream(c.out + "/envelope.md") << envelope_markdown(r);
+  const std::string md = envelope_markdown(r);
+  std::ofstream(c.out + "/envelope.md") << md;
+  std::ofstream(c.out + "/report.md") << md;
+  write_report_html(c.out, "Envelope: " + c.engine + " against " + c.simulation);
   return r;
 }
 

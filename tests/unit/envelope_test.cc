@@ -9,9 +9,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include "fralab/core/error.h"
 #include "shell.h"
@@ -232,6 +235,47 @@ TEST(Envelope, TheScheduledExtendedModelIsAModelAtAnyPointInItsRange) {
             model_to_json(m));
   EXPECT_THROW(scheduled_model_at(d + "/scheduled_model.json", 99), InputError);
   fs::remove_all(d);
+}
+
+// The root migration's data: the spool's state as |root| = 1/tau at each speed (1/1.2, 1/0.55,
+// 1/0.36 rad/s) with its sigma; the findings' values per point. The pictures themselves when
+// gnuplot is there.
+TEST(Envelope, TheRootMigrationPlotsEachStatesRootAgainstTheSchedulingVariable) {
+  const std::string d = fralab::testing::tmpdir("plots", "fralab_env_");
+  const EnvelopeReport r = join_points(report_points());
+  const bool drawn = render_envelope_plots(r, d);
+  // The rows (x, value, sigma) of the block "# LABEL" of a gnuplot data file.
+  auto block = [](const std::string& file, const std::string& label) {
+    std::ifstream in(file);
+    std::vector<std::array<double, 3>> rows;
+    bool inside = false;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("# ", 0) == 0) {
+        inside = line == "# " + label;
+        continue;
+      }
+      std::istringstream ss(line);
+      std::array<double, 3> v{};
+      if (inside && ss >> v[0] >> v[1] >> v[2]) rows.push_back(v);
+    }
+    return rows;
+  };
+  const auto plant = block(d + "/plots/roots.dat", "plant");
+  const auto a8 = block(d + "/plots/findings.dat", "pole_shift to_rad_s");
+  ASSERT_EQ(plant.size(), 3u);
+  ASSERT_EQ(a8.size(), 3u);
+  const double tau[3] = {1.2, 0.55, 0.36}, x[3] = {70, 85, 95}, a8_rad_s[3] = {27.2, 32.4, 38.2};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(plant[i][0], x[i]);
+    EXPECT_NEAR(plant[i][1], 1 / tau[i], 1e-12);
+    EXPECT_GE(plant[i][2], 0);
+    EXPECT_EQ(a8[i][0], x[i]);
+    EXPECT_EQ(a8[i][1], a8_rad_s[i]);
+    EXPECT_NEAR(a8[i][2], 0.2, 1e-12);  // the interval's half width
+  }
+  if (drawn)
+    for (const char* p : {"roots.png", "roots.svg", "findings.png", "findings.svg"})
+      EXPECT_GT(fs::file_size(d + "/plots/" + p), 1000u) << p;
 }
 
 TEST(Envelope, APointsFolderIsNamedByItsSchedulingVariable) {

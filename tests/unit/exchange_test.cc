@@ -3,6 +3,7 @@
 // and back; the results written to .mat read back by matio.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <matio.h>
 #include <sndfile.h>
 #include <unistd.h>
 
@@ -11,6 +12,7 @@
 #include <fstream>
 
 #include "fralab/core/error.h"
+#include "fralab/exchange/envelope_export.h"
 #include "fralab/exchange/mat_file.h"
 #include "fralab/exchange/schedule.h"
 #include "fralab/exchange/tape_series.h"
@@ -168,6 +170,66 @@ TEST(MatFile, ValuesReadBackThroughMatio) {
         write_mat_file(p, {{"1x", MatValue::scalar(1)}});
       },
       ThrowsMessage<InputError>(HasSubstr("'1x' is not a MATLAB name")));
+}
+
+// One value of a struct path ("findings", "finding_01", "value") in a .mat file, read by matio.
+std::vector<double> mat_struct_doubles(const std::string& file,
+                                       const std::vector<std::string>& path) {
+  mat_t* m = Mat_Open(file.c_str(), MAT_ACC_RDONLY);
+  if (!m) return {};
+  matvar_t* top = Mat_VarRead(m, path[0].c_str());
+  std::vector<double> out;
+  matvar_t* v = top;
+  for (size_t i = 1; v && i < path.size(); ++i)
+    v = Mat_VarGetStructFieldByName(v, path[i].c_str(), 0);
+  if (v && v->class_type == MAT_C_DOUBLE && v->data) {
+    const double* d = static_cast<const double*>(v->data);
+    out.assign(d, d + v->dims[0] * v->dims[1]);
+  }
+  Mat_VarFree(top);
+  Mat_Close(m);
+  return out;
+}
+
+// An envelope (envelope.json as fralab envelope writes it) to .mat: a real state's |root| is
+// 1/tau, a finding's values and law read back; a document of another format is refused by name.
+TEST(EnvelopeExport, TheEnvelopesTablesReadBackThroughMatio) {
+  const fs::path d = fs::path(tmp("envelope"));
+  fs::create_directories(d);
+  Json env = Json::parse(R"({"format": "fralab-envelope/1", "schedule_by": "speed_pct",
+    "points": [{"name": "speed_pct_70", "x": 70}, {"name": "speed_pct_95", "x": 95}],
+    "states": [{"label": "plant", "kind": "real", "at_every_point": true, "monotone": true,
+      "flags": "", "values": [
+        {"point": "speed_pct_70", "x": 70, "tau_s": 1.25, "spread": [1.2, 1.3], "rel_sigma": 0.02,
+         "scope": "plant", "paths": ["Wf:N"]},
+        {"point": "speed_pct_95", "x": 95, "tau_s": 0.4, "spread": [0.4, 0.4],
+         "scope": "plant", "paths": ["Wf:N"]}]}],
+    "findings": [{"cause": "pole_shift", "scope": "input", "input": "A8", "output": "",
+      "parameter": "to_rad_s", "text": "t", "missing_at": [],
+      "law": {"form": "linear", "a": -16.8, "b": 0.44, "b_sigma": 0.01, "criterion": 1},
+      "values": [{"point": "speed_pct_70", "x": 70, "value": 27.2, "sigma": 0.2, "simulated": 3.14},
+                 {"point": "speed_pct_95", "x": 95, "value": 38.2, "sigma": 0.3}]}],
+    "leave_one_out": []})");
+  json_save_file((d / "envelope.json").string(), env);
+  ASSERT_TRUE(is_envelope_dir(d.string()));
+  const std::string out = (d / "e.mat").string();
+  export_envelope_mat(d.string(), out);
+  EXPECT_EQ(mat_struct_doubles(out, {"points", "x"}), (std::vector<double>{70, 95}));
+  EXPECT_EQ(mat_struct_doubles(out, {"states", "state_01", "root_rad_s"}),
+            (std::vector<double>{1 / 1.25, 1 / 0.4}));
+  const auto sigma = mat_struct_doubles(out, {"states", "state_01", "rel_sigma"});
+  ASSERT_EQ(sigma.size(), 2u);
+  EXPECT_EQ(sigma[0], 0.02);
+  EXPECT_TRUE(std::isnan(sigma[1])) << "unknown: NaN";
+  EXPECT_EQ(mat_struct_doubles(out, {"findings", "finding_01", "value"}),
+            (std::vector<double>{27.2, 38.2}));
+  EXPECT_EQ(mat_struct_doubles(out, {"findings", "finding_01", "law", "b"}),
+            (std::vector<double>{0.44}));
+  env["format"] = "fralab-envelope/9";
+  json_save_file((d / "envelope.json").string(), env);
+  EXPECT_THAT(
+      [&] { export_envelope_mat(d.string(), out); },
+      ThrowsMessage<InputError>(HasSubstr("envelope.json: /format: not fralab-envelope/1")));
 }
 
 // The start event's measurement chain is a key of its own in a schedule and reads back typed; a

@@ -111,10 +111,18 @@ struct EnvelopeReport {
   /// written.
   std::string scheduled_model;
   std::vector<LeaveOneOut> leave_one_out;  // inner points, in x order
+  bool plots = false;  // DIR/plots/roots and findings rendered (the markdown shows them)
 };
 
 /// Joins the points' results (see above). Points in any order; sorted by x.
 EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOptions& o = {});
+
+/// The pictures in DIR/plots, PNG and SVG: `roots` (the root migration: each state's |root| in
+/// rad/s, 1/tau for a real pole, wn for a pair, against the scheduling variable, sigma as error
+/// bars; the twelve states at the most points) and `findings` (each finding's parameter per point
+/// with its sigma and its law's curve). The data and the gnuplot script stay beside them. false
+/// when gnuplot is missing or fails.
+bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir);
 
 /// `fralab-envelope/1` (docs/formats.md §26) and its markdown.
 Json envelope_json(const EnvelopeReport& r);
