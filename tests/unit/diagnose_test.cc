@@ -279,6 +279,52 @@ TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   EXPECT_NEAR(-d.extended.inputs[0].actuator->poles.at(0).real, 35, 0.03 * 35);
 }
 
+// A resonance moves as a whole: the pair of z's path at 30 rad/s, damped 0.3 in the simulation, at
+// 36 rad/s damped 0.15 in the truth. One pole_shift carries both (no damping_error claims the same
+// pair), the damping's 1-sigma interval holds the truth and excludes the simulation's, and the
+// extended model has the moved pair.
+TEST(Diagnose, APairsPoleShiftFitsItsDamping) {
+  constexpr double kWnTol = 0.01, kZetaTol = 0.03;
+  Model truth = simulation();
+  path(truth, "z").tf.poles[1] = Root::Pair(36, 0.15);
+  const Diagnosis d = diagnose(simulation(), measure(truth));
+  const Finding f = only_finding(d);
+  EXPECT_EQ(f.cause, CauseKind::kPoleShift);
+  EXPECT_EQ(f.output, "z");
+  EXPECT_NEAR(f.parameters.at("from_rad_s"), 30, 1e-12);
+  EXPECT_NEAR(f.parameters.at("to_rad_s") / 36, 1.0, kWnTol);
+  EXPECT_NEAR(f.parameters.at("from_zeta"), 0.3, 1e-12);
+  EXPECT_NEAR(f.parameters.at("to_zeta") / 0.15, 1.0, kZetaTol);
+  EXPECT_EQ(f.parameters.at("zeta"), f.parameters.at("to_zeta"));
+  ASSERT_TRUE(f.intervals.count("to_zeta"));
+  EXPECT_LT(f.intervals.at("to_zeta")[0], 0.15 * (1 + kZetaTol));
+  EXPECT_GT(f.intervals.at("to_zeta")[1], 0.15 * (1 - kZetaTol));
+  EXPECT_LT(f.intervals.at("to_zeta")[1], 0.3);
+  EXPECT_THAT(f.explanation, HasSubstr("damped"));
+  for (const auto& p : d.extended.paths) {
+    if (p.output == "z") {
+      EXPECT_NEAR(p.tf.poles[1].wn / 36, 1.0, kWnTol);
+      EXPECT_NEAR(p.tf.poles[1].zeta / 0.15, 1.0, kZetaTol);
+    }
+  }
+}
+
+// A pair moved at its simulated damping: the damping is not fitted (the second parameter does not
+// lower chi2 by its penalty), to_zeta stays the simulation's, and the finding says so.
+TEST(Diagnose, APairsPoleShiftKeepsADampingTheDataDoNotResolve) {
+  Model truth = simulation();
+  path(truth, "z").tf.poles[1] = Root::Pair(36, 0.3);
+  const Finding f = only_finding(diagnose(simulation(), measure(truth)));
+  EXPECT_EQ(f.cause, CauseKind::kPoleShift);
+  EXPECT_NEAR(f.parameters.at("to_rad_s") / 36, 1.0, 0.01);
+  EXPECT_EQ(f.parameters.at("to_zeta"), f.parameters.at("from_zeta"));
+  EXPECT_EQ(f.parameters.at("to_zeta"), 0.3);
+  EXPECT_THAT(f.explanation, HasSubstr("the simulated damping 0.3 is kept"));
+  ASSERT_TRUE(f.intervals.count("to_zeta"));
+  EXPECT_LT(f.intervals.at("to_zeta")[0], 0.3);
+  EXPECT_GT(f.intervals.at("to_zeta")[1], 0.3);
+}
+
 TEST(Diagnose, MissingResonancePeak) {
   Model truth = simulation();
   path(truth, "y").tf.poles.push_back(Root::Pair(12, 0.1));

@@ -38,6 +38,14 @@ struct IntervalDomain {
   double floor = 1e-6;
 };
 
+/// A parameter besides the primary one that the data may resolve (a moved pair's damping): its
+/// 1-sigma interval is reported; `fitted`: the data resolve it, so the joint refinement and the
+/// decision of a finding's place count it as free. A scale: its interval stays positive.
+struct SecondaryParameter {
+  std::string key;
+  bool fitted = false;
+};
+
 class CauseUnit {
  public:
   virtual ~CauseUnit() = default;
@@ -46,6 +54,10 @@ class CauseUnit {
   virtual const char* name() const = 0;
   virtual PrimaryParameter primary_parameter(const Finding& f) const = 0;
   virtual IntervalDomain interval_domain() const { return {}; }
+  virtual std::vector<SecondaryParameter> secondary_parameters(const Finding&) const { return {}; }
+  /// Brings the parameters a finding reports but does not fit (a moved pair's zeta, = to_zeta) in
+  /// step with those fitted, once the later stages have moved them.
+  virtual void settle(Finding&) const {}
   /// Extends the model by the finding.
   virtual void apply(Model& m, const Finding& f) const = 0;
   /// Whether two fits of this cause on different pairs are the same effect (scope grouping). A

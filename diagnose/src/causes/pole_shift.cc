@@ -1,11 +1,16 @@
 // pole_shift: F = D_from(s) / D_to(s): one real pole or pair of the simulated chain (actuator for
-// u_X:X; path and sensor for X:O) moved from `from` to `to` (pairs keep their damping, reported as
-// zeta), from_rad_s and to_rad_s. Search: ln to over [from / r, from * r] with
-// r = DiagnoseOptions::pole_shift_range, grid then Brent's method; one candidate per simulated
-// pole. Consistent across pairs: from and to within DiagnoseOptions::consistent_rel.
+// u_X:X; path and sensor for X:O) moved from `from` to `to`, from_rad_s and to_rad_s. Search: ln to
+// over [from / r, from * r] with r = DiagnoseOptions::pole_shift_range, grid then Brent's method;
+// one candidate per simulated pole. A pair moves as a whole: its damping is then fitted with its
+// frequency (alternate Brent searches from the frequency found at the simulated damping, ln zeta
+// over [ln 0.002, ln 2]), and kept when the second parameter lowers chi2 by more than its BIC
+// penalty ln 2N; otherwise the pair keeps the simulated damping. Reported as from_zeta (the
+// simulation's), to_zeta (the data's; equal to from_zeta when kept) and zeta (= to_zeta, the moved
+// pair's damping). Consistent across pairs: from and to within DiagnoseOptions::consistent_rel.
 #include <cmath>
 
 #include "cause.h"
+#include "fralab/core/numerics.h"
 
 namespace fralab::diag {
 namespace {
@@ -25,6 +30,15 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
   return v;
 }
 
+constexpr double kZetaMin = 0.002, kZetaMax = 2.0;  // the damping's search range
+constexpr int kDampingRounds = 8;                   // frequency / damping alternations at most
+
+// A pair's damping was fitted (the data resolve it) when it differs from the simulation's.
+bool damping_fitted(const Finding& f) {
+  const auto from = f.parameters.find("from_zeta"), to = f.parameters.find("to_zeta");
+  return from != f.parameters.end() && to != f.parameters.end() && from->second != to->second;
+}
+
 class PoleShift final : public LinearCause {
  public:
   CauseKind kind() const override { return CauseKind::kPoleShift; }
@@ -34,26 +48,63 @@ class PoleShift final : public LinearCause {
     return {"to_rad_s", f.parameters.at("from_rad_s")};
   }
   IntervalDomain interval_domain() const override { return {true, 1e-6}; }
+  // A pair's damping: its interval is reported either way; it is free only when fitted.
+  std::vector<SecondaryParameter> secondary_parameters(const Finding& f) const override {
+    if (!f.parameters.count("to_zeta")) return {};
+    return {{"to_zeta", damping_fitted(f)}};
+  }
+  void settle(Finding& f) const override {
+    if (const auto z = f.parameters.find("to_zeta"); z != f.parameters.end())
+      f.parameters["zeta"] = z->second;
+  }
   void fit(const Model& m, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
     constexpr int kGrid = 120;
     for (const Root& r : chain_poles(m, p)) {
       const double from = r.pair ? r.wn : -r.real;
-      auto F = [&](double lto) {
+      auto F = [&](double lto, double zeta) {
         const double to = std::exp(lto);
         Root q = r;
-        if (q.pair)
+        if (q.pair) {
           q.wn = to;
-        else
+          q.zeta = zeta;
+        } else {
           q.real = -to;
+        }
         return factor_of(p.w, [&](C s) { return r.factor(s) / q.factor(s); });
       };
-      const double lto = minimise_1d([&](double x) { return chi2(p, F(x)); },
+      const double lto = minimise_1d([&](double x) { return chi2(p, F(x, r.zeta)); },
                                      std::log(from / opt.pole_shift_range),
                                      std::log(from * opt.pole_shift_range), kGrid);
-      Cause c{kind(), {{"from_rad_s", from}, {"to_rad_s", std::exp(lto)}}, F(lto), 0, 1, ""};
-      if (r.pair) c.params["zeta"] = r.zeta;
+      Cause c{kind(), {{"from_rad_s", from}, {"to_rad_s", std::exp(lto)}}, F(lto, r.zeta), 0, 1,
+              ""};
       c.chi2 = chi2(p, c.F);
+      if (r.pair) {
+        c.params["zeta"] = c.params["from_zeta"] = c.params["to_zeta"] = r.zeta;
+        // The pair as a whole: its damping over the whole range at the frequency found, then the
+        // two alternately, each near its last value, until both settle.
+        double l2 = lto, lz = std::log(r.zeta);
+        lz = minimise_1d([&](double x) { return chi2(p, F(l2, std::exp(x))); }, std::log(kZetaMin),
+                         std::log(kZetaMax), 40);
+        for (int round = 0; round < kDampingRounds; ++round) {
+          const double l2_was = l2, lz_was = lz;
+          l2 = detail::brent_minimum([&](double x) { return chi2(p, F(x, std::exp(lz))); },
+                                     l2 - 0.1, l2 + 0.1, 24);
+          lz = detail::brent_minimum([&](double x) { return chi2(p, F(l2, std::exp(x))); },
+                                     std::max(std::log(kZetaMin), lz - 0.5),
+                                     std::min(std::log(kZetaMax), lz + 0.5), 24);
+          if (std::abs(l2 - l2_was) < 1e-5 && std::abs(lz - lz_was) < 1e-4) break;
+        }
+        const std::vector<C> F2 = F(l2, std::exp(lz));
+        const double c2 = chi2(p, F2);
+        if (c.chi2 - c2 > std::log(2.0 * double(p.w.size()))) {
+          c.params["to_rad_s"] = std::exp(l2);
+          c.params["zeta"] = c.params["to_zeta"] = std::exp(lz);
+          c.F = F2;
+          c.chi2 = c2;
+          c.k = 2;
+        }
+      }
       out->push_back(std::move(c));
     }
   }
@@ -69,14 +120,27 @@ class PoleShift final : public LinearCause {
         best = &r;
     }
     if (!best) return;
-    if (best->pair)
+    if (best->pair) {
       best->wn = to;
-    else
+      if (const auto z = f.parameters.find("to_zeta"); z != f.parameters.end())
+        best->zeta = z->second;
+    } else {
       best->real = -to;
+    }
   }
   std::string explain(const Finding& f) const override {
-    return "the simulated pole at " + fmt(f.parameters.at("from_rad_s")) + " rad/s sits at " +
-           fmt(f.parameters.at("to_rad_s")) + " rad/s in the data";
+    std::string ex = "the simulated pole at " + fmt(f.parameters.at("from_rad_s")) +
+                     " rad/s sits at " + fmt(f.parameters.at("to_rad_s")) + " rad/s in the data";
+    if (!f.parameters.count("to_zeta")) return ex;
+    const double from_zeta = f.parameters.at("from_zeta"), to_zeta = f.parameters.at("to_zeta");
+    std::string band;
+    if (const auto it = f.intervals.find("to_zeta"); it != f.intervals.end())
+      band = " (1-sigma " + (std::isfinite(it->second[0]) ? fmt(it->second[0]) : "-") + " to " +
+             (std::isfinite(it->second[1]) ? fmt(it->second[1]) : "-") + ")";
+    if (damping_fitted(f))
+      return ex + ", damped " + fmt(to_zeta) + band + ", not " + fmt(from_zeta);
+    return ex + "; the simulated damping " + fmt(from_zeta) +
+           " is kept: the data do not resolve another" + band;
   }
 };
 

@@ -27,6 +27,16 @@ std::vector<C> product_of(const std::vector<Cause>& cs, size_t n, bool without_g
   return L;
 }
 
+// The simulated pole pair a candidate moves or re-damps (its frequency in the simulation; 0: none).
+// A pole_shift of a pair fits its damping too, so a pair claimed by one of pole_shift and
+// damping_error is not offered to the other on the same measured pair.
+double claimed_pair(const Cause& c) {
+  if (c.cause == CauseKind::kPoleShift && c.params.count("from_zeta"))
+    return c.params.at("from_rad_s");
+  if (c.cause == CauseKind::kDampingError) return c.params.at("wn_rad_s");
+  return 0;
+}
+
 // A nonlinear element of one width on a multisine curve, and the linear causes refitted on top.
 struct ElementAtWidth {
   double chi2 = INFINITY;
@@ -108,6 +118,10 @@ std::vector<Cause> PairCauseFit::linear_causes() {
     const Cause* best = nullptr;
     double best_bic = INFINITY;
     for (const auto& c : cs) {
+      bool claimed = false;
+      for (const Cause& f : found)
+        claimed |= claimed_pair(c) > 0 && claimed_pair(c) == claimed_pair(f);
+      if (claimed) continue;
       double bic = c.chi2 + c.k * std::log(2.0 * n_);
       if (bic < best_bic) best_bic = bic, best = &c;
     }

@@ -1,6 +1,7 @@
 // Stage 5b, the findings sized together (docs/method/diagnosis.md, "The stages"): findings that
 // touch the same pairs (linked through shared pairs into groups) have their primary parameters
-// refined jointly, every finding in place: chi2 = sum over the group's pairs and points of
+// refined jointly (with any other parameter the data resolve, as a moved pair's damping), every
+// finding in place: chi2 = sum over the group's pairs and points of
 // |G_meas - G_model|^2 / sigma_eff^2 (the fitting measurement), minimised by Levenberg-Marquardt
 // on forward-difference derivatives (a parameter whose cause's domain is positive in its
 // logarithm). Fitted one after the other, each cause is sized on what the others left: a pole
@@ -47,7 +48,7 @@ void joint(DiagnosisRun& r) {
   std::vector<Finding>& fs = r.findings;
   for (const std::vector<size_t>& group : groups_of(fs)) {
     if (group.size() < 2) continue;
-    // The free parameters: each finding's primary one.
+    // The free parameters: each finding's primary one and those of its others the data resolve.
     struct Param {
       size_t finding;
       std::string key;
@@ -60,6 +61,10 @@ void joint(DiagnosisRun& r) {
       if (key.empty() || !fs[i].parameters.count(key)) continue;
       const bool positive = unit.interval_domain().positive && fs[i].parameters.at(key) > 0;
       params.push_back({i, key, positive});
+      // The parameters besides it that the data resolve (a moved pair's damping), scales all.
+      for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
+        if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
+          params.push_back({i, sp.key, true});
     }
     if (params.size() < 2) continue;
     std::vector<const PairFit*> pairs;

@@ -1,7 +1,8 @@
 // Stage 6, resolved by the data (docs/method/diagnosis.md, "The stages"): each finding's primary
 // parameter (its cause's unit names it) gets a 1-sigma interval, where chi2 over the finding's
 // pairs, every other finding in place and this parameter alone moved, rises by
-// s = max(1, chi2_min / N) above its minimum; a finding whose simulated value (or absence) does
+// s = max(1, chi2_min / N) above its minimum (and so each other parameter its cause reports, as a
+// moved pair's damping); a finding whose simulated value (or absence) does
 // not raise chi2 by more than s is dropped, said why.
 #include <algorithm>
 #include <array>
@@ -99,6 +100,17 @@ void resolve(DiagnosisRun& r) {
         return chi2_of_model(extended_by(r, moved, findings.size())) - (c_min + s);
       };
       f.intervals[key] = parameter_interval(chi2_at, f.parameters.at(key), unit.interval_domain());
+    }
+    // The other parameters the cause reports an interval for (a moved pair's damping), each moved
+    // alone the same way; scales, so positive.
+    for (const SecondaryParameter& sp : unit.secondary_parameters(f)) {
+      if (!f.parameters.count(sp.key)) continue;
+      auto chi2_at = [&](double v) {
+        std::vector<Finding> moved = findings;
+        moved[i].parameters[sp.key] = v;
+        return chi2_of_model(extended_by(r, moved, findings.size())) - (c_min + s);
+      };
+      f.intervals[sp.key] = parameter_interval(chi2_at, f.parameters.at(sp.key), {true, 1e-6});
     }
     if (c_sim - c_min > s) {
       kept.push_back(f);

@@ -75,6 +75,8 @@ void summarise(DiagnosisRun& r) {
   std::vector<Finding>& findings = r.findings;
   bool have_val = false;
   for (const auto& mp : r.data) have_val |= !mp.validation.points.empty();
+  for (auto& f : findings) cause_unit(f.cause)->settle(f);
+  for (auto& x : d.dropped) cause_unit(x.finding.cause)->settle(x.finding);
   d.extended = extended_by(r, findings, findings.size());
   for (auto& f : findings) {
     Model one = r.sim;  // the simulation plus this finding alone

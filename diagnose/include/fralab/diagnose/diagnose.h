@@ -18,7 +18,12 @@
 //   missing_resonance   F = 1 / (s^2/wn^2 + 2 zeta s/wn + 1)     wn_rad_s, zeta (a peak; a notch is
 //                       its inverse, reported with zeta < 0 ... as "notch": true)
 //   pole_shift          F = D_from(s) / D_to(s), one real pole or pair of the simulated chain moved
-//                       (pairs keep their damping)          from_rad_s, to_rad_s
+//                       (a pair as a whole: its damping fitted with its frequency when the extra
+//                       parameter lowers chi2 by more than ln 2N, else the simulation's, said so)
+//                                                            from_rad_s, to_rad_s; a pair's
+//                       from_zeta, to_zeta (= from_zeta when kept) and zeta (= to_zeta), the
+//                       damping's 1-sigma interval reported; a pair claimed by a pole_shift is
+//                       not also a damping_error on the same measured pair
 //   damping_error       F = D_sim(s) / D(s; wn, to_zeta), a simulated pair's damping wrong
 //                                                            wn_rad_s, from_zeta, to_zeta
 //   sign_error          F = -1                                   sign = -1
