@@ -530,6 +530,28 @@ TEST(Diagnose, AFindingTheValidationDoesNotConfirmIsDropped) {
 
 // A residual no cause of the catalogue describes (a gain ripple across the band) is reported as
 // unexplained with its band, not forced into findings that leave it beyond the uncertainty.
+// Without a validation measurement a finding earns its place on the data fitted (its removal must
+// raise chi2 by more than its penalty and raise the error): a real effect stays, and the noise of a
+// measurement of the simulation itself leaves nothing reported.
+TEST(Diagnose, WithoutValidationAFindingEarnsItsPlaceOnTheDataFitted) {
+  Model truth = simulation();
+  path(truth, "y").tf.gain *= std::pow(10.0, 1.0 / 20);  // +1 dB
+  std::vector<MeasuredPair> data = measure(truth);
+  for (auto& mp : data) mp.validation.points.clear();
+  const Diagnosis d = diagnose(simulation(), data);
+  ASSERT_EQ(d.findings.size(), 1u);
+  EXPECT_EQ(d.findings[0].cause, CauseKind::kGainMismatch);
+  EXPECT_NEAR(d.findings[0].parameters.at("gain_db"), 1.0, 0.05);
+  EXPECT_THAT(d.dropped, IsEmpty());
+  EXPECT_EQ(d.validation_after, -1);
+  std::vector<MeasuredPair> noisy = measure(simulation());
+  for (auto& mp : noisy) {
+    mp.frd = mp.validation;
+    mp.validation.points.clear();
+  }
+  EXPECT_THAT(diagnose(simulation(), noisy).findings, IsEmpty());
+}
+
 TEST(Diagnose, WhatTheCatalogueCannotExplainIsSaid) {
   auto data = measure(simulation());
   for (auto& mp : data) {

@@ -61,16 +61,19 @@
 // finding whose removal from the extended model does not raise its pairs' validation error is
 // dropped (Diagnosis::dropped, with the figures), one at a time, the least useful first, until
 // every remaining finding helps and the extended model beats the simulation on the validation
-// data as a whole. A pair still beyond its uncertainty under the extended model is reported as
-// unexplained (band, residual, the best candidate refused and why), never forced onto a cause.
-// A cause is accepted when it lowers chi2 by more than its parameters' BIC penalty (k ln 2N) and
-// by at least 25 %; a second cause may follow on what remains. Scope: the same cause with
-// consistent parameters (delays within 0.5 ms or 10 %, corners within 10 %, gains within 0.3 dB:
-// DiagnoseOptions) in
-// every measured path into one output is reported once for that output (a sensor), in every path
-// from one input for that input (its actuator or calibration), everywhere for the plant.
-// Error metric (summary.metric): the rms over points of |ln(G_model / G_meas)| (nepers and radians
-// combined), per finding over the paths it covers, in total over every pair.
+// data as a whole. Without one, on the data fitted: a finding removed from the extended model must
+// raise chi2 over its pairs by more than its parameters' BIC penalty (k ln 2N) and must raise its
+// pairs' error; the one whose removal raises the error least is dropped first, one at a time. A
+// finding whose removal lowers the error is never reported. A pair still beyond its uncertainty
+// under the extended model is reported as unexplained (band, residual, the best candidate refused
+// and why), never forced onto a cause. A cause is accepted when it lowers chi2 by more than its
+// parameters' BIC penalty (k ln 2N) and by at least 25 %; a second cause may follow on what
+// remains. Scope: the same cause with consistent parameters (delays within 0.5 ms or 10 %, corners
+// within 10 %, gains within 0.3 dB: DiagnoseOptions) in every measured path into one output is
+// reported once for that output (a sensor), in every path from one input for that input (its
+// actuator or calibration), everywhere for the plant. Error metric (summary.metric): the rms over
+// points of |ln(G_model / G_meas)| (nepers and radians combined), per finding over the paths it
+// covers, in total over every pair.
 #pragma once
 
 #include <array>
@@ -192,7 +195,8 @@ struct PairReport {  // per pair, for the report
   double error_sim = 0, error_ext = 0;
 };
 
-/// A finding fitted but not reported: it did not earn its place on the validation measurement.
+/// A finding fitted but not reported: not resolved by the data, or it did not earn its place (on
+/// the validation measurement, or without one on the data fitted).
 struct DroppedFinding {
   Finding finding;
   std::string reason;
