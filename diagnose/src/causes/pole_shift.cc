@@ -33,10 +33,12 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
 constexpr double kZetaMin = 0.002, kZetaMax = 2.0;  // the damping's search range
 constexpr int kDampingRounds = 8;                   // frequency / damping alternations at most
 
-// A pair's damping was fitted (the data resolve it) when it differs from the simulation's.
+// A pair's damping was fitted (the data resolve it) when it differs from the simulation's; beyond
+// rounding, as the mean of several paths' equal values may carry.
 bool damping_fitted(const Finding& f) {
   const auto from = f.parameters.find("from_zeta"), to = f.parameters.find("to_zeta");
-  return from != f.parameters.end() && to != f.parameters.end() && from->second != to->second;
+  return from != f.parameters.end() && to != f.parameters.end() &&
+         std::abs(from->second - to->second) > 1e-9 * from->second;
 }
 
 class PoleShift final : public LinearCause {
