@@ -273,9 +273,10 @@ TEST(Envelope, TheRootMigrationPlotsEachStatesRootAgainstTheSchedulingVariable) 
     EXPECT_EQ(a8[i][1], a8_rad_s[i]);
     EXPECT_NEAR(a8[i][2], 0.2, 1e-12);  // the interval's half width
   }
-  if (drawn)
+  if (drawn) {
     for (const char* p : {"roots.png", "roots.svg", "findings.png", "findings.svg"})
       EXPECT_GT(fs::file_size(d + "/plots/" + p), 1000u) << p;
+  }
 }
 
 TEST(Envelope, APointsFolderIsNamedByItsSchedulingVariable) {

@@ -204,6 +204,62 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
   return c;
 }
 
+bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value) {
+  const double old = e.value;
+  auto same = [&](double v) { return std::abs(v - old) <= 1e-12 * std::abs(old); };
+  // The real root at -old among `roots`, moved to -value.
+  auto move_real = [&](std::vector<Root>& roots) {
+    for (Root& r : roots)
+      if (!r.pair && same(-r.real)) {
+        r.real = -value;
+        return true;
+      }
+    return false;
+  };
+  ModelPath* p = find_path(engine, e.output, e.input);
+  const int in = engine.input_index(e.input), out = engine.output_index(e.output);
+  switch (e.cause) {
+    case CauseKind::kTimeDelay:
+      if (!p) return false;
+      p->tf.delay_s = value;
+      return true;
+    case CauseKind::kGainMismatch:
+      if (!p) return false;
+      p->tf.gain *= std::pow(10.0, (value - old) / 20);
+      return true;
+    case CauseKind::kMissingLag:  // in the path, else in the output's sensor
+      if (p && move_real(p->tf.poles)) return true;
+      return out >= 0 && engine.outputs[size_t(out)].sensor &&
+             move_real(engine.outputs[size_t(out)].sensor->poles);
+    case CauseKind::kMissingLead:
+      return p && move_real(p->tf.zeros);
+    case CauseKind::kPoleShift:
+      if (e.scope == Scope::kInput)
+        return in >= 0 && engine.inputs[size_t(in)].actuator &&
+               move_real(engine.inputs[size_t(in)].actuator->poles);
+      return p && move_real(p->tf.poles);
+    case CauseKind::kHysteresis:
+      if (in < 0) return false;
+      for (NonlinearitySpec& n : engine.inputs[size_t(in)].nonlinearity)
+        if (n.type == "hysteresis") {
+          n.width = value;
+          return true;
+        }
+      return false;
+    case CauseKind::kMissingResonance:
+    case CauseKind::kDampingError:
+      if (!p) return false;
+      for (Root& r : p->tf.poles)
+        if (r.pair && same(e.cause == CauseKind::kDampingError ? r.zeta : r.wn)) {
+          (e.cause == CauseKind::kDampingError ? r.zeta : r.wn) = value;
+          return true;
+        }
+      return false;
+    default:
+      return false;
+  }
+}
+
 Score score(const RandomCase& c, const std::vector<Finding>& findings) {
   Score s;
   s.findings = int(findings.size());

@@ -37,6 +37,12 @@ struct RandomCase {
 /// Case `index` of the sequence drawn from `seed`; n_hidden < 0: 0-2 at random.
 RandomCase random_case(uint64_t seed, int index, int n_hidden = -1);
 
+/// Sets a hidden effect's parameter in `engine` (as random_case made it, e.value the value it
+/// holds) to `value`: the same element moved (a delay, a corner, a gain in dB, a moved pole, a
+/// backlash width, a resonance's wn, a damping). false for an effect without such a parameter
+/// (sign_error, missing_path) or when the element is not found.
+bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value);
+
 /// Precision and recall of a diagnosis against a case's hidden effects.
 struct Score {
   int findings = 0, true_findings = 0, hidden = 0, found = 0;
