@@ -151,6 +151,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   joint(r);
   resolve(r);
   earn_place(r);
+  level(r);
   summarise(r);
   return std::move(r.d);
 }
@@ -220,6 +221,18 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"pairs", f.pairs},
                              {"intervals", intervals_json(f)}});
     if (f.tf) j["findings"].back()["tf"] = tf_to_json(*f.tf);
+    if (f.level) {
+      Json iv = Json::array();
+      for (const auto& x : f.level->intervals)
+        iv.push_back({std::isfinite(x[0]) ? Json(x[0]) : Json(nullptr),
+                      std::isfinite(x[1]) ? Json(x[1]) : Json(nullptr)});
+      j["findings"].back()["level_dependence"] = {
+          {"parameter", f.level->parameter},
+          {"levels", f.level->levels},
+          {"values", f.level->values},
+          {"intervals", iv},
+          {"slope", std::isfinite(f.level->slope) ? Json(f.level->slope) : Json(nullptr)}};
+    }
   }
   j["measurement_chain"] = chain_to_json(d.chain);
   j["dropped"] = Json::array();

@@ -136,5 +136,39 @@ TEST(DiagnoseRealData, SilverboxHighLevelArrow) {
   check_level({"arrow_h1_high_amplitude.csv", 444.0, 0.0492, -0.54});
 }
 
+// Two levels at once: the BLA (input rms 22.3 mV) fitted, the high-level arrow (33 mV) as the
+// validation measurement. The resonance found on the first is not the second's: the pole shift is
+// named level-dependent, with its frequency per level (the free fits' 436.9 and 444.0 rad/s,
+// within 0.5 %) and its slope, rising with the level (a hardening spring); the levels are the
+// curves' input rms (PROVENANCE.md), given to the points as their excitation amplitude.
+TEST(DiagnoseRealData, SilverboxAtTwoLevelsIsNamedLevelDependent) {
+  constexpr double kBla = 22.3e-3, kHigh = 33e-3;  // input rms, V
+  std::vector<MeasuredPair> data = measured("bla_random_odd_multisine.csv");
+  data[0].validation = measured("arrow_h1_high_amplitude.csv")[0].frd;
+  for (FrdPoint& p : data[0].frd.points) p.amplitude = kBla;
+  for (FrdPoint& p : data[0].validation.points) p.amplitude = kHigh;
+  const Diagnosis d = diagnose(silverbox_simulation(), data);
+  const std::string json = diagnosis_to_json(d).dump(1);
+  const Finding* shift = nullptr;
+  for (const Finding& f : d.findings)
+    if (f.cause == CauseKind::kPoleShift) shift = &f;
+  ASSERT_NE(shift, nullptr) << json;
+  ASSERT_TRUE(shift->level.has_value()) << json;
+  const LevelDependence& l = *shift->level;
+  EXPECT_EQ(l.parameter, "to_rad_s");
+  ASSERT_EQ(l.values.size(), 2u);
+  EXPECT_EQ(l.levels, (std::vector<double>{kBla, kHigh}));
+  EXPECT_NEAR(l.values[0] / 436.9, 1.0, kWnTol) << json;
+  EXPECT_NEAR(l.values[1] / 444.0, 1.0, kWnTol) << json;
+  EXPECT_GT(l.slope, 0) << "the resonance rises with the level";
+  EXPECT_NEAR(l.slope, (l.values[1] - l.values[0]) / (kHigh - kBla), 1e-9);
+  EXPECT_THAT(shift->explanation, ::testing::HasSubstr("level-dependent"));
+  // One level only (the same curve as its own validation): nothing is level-dependent.
+  std::vector<MeasuredPair> same = measured("bla_random_odd_multisine.csv");
+  same[0].validation = same[0].frd;
+  for (const Finding& f : diagnose(silverbox_simulation(), same).findings)
+    EXPECT_FALSE(f.level.has_value()) << to_string(f.cause);
+}
+
 }  // namespace
 }  // namespace fralab

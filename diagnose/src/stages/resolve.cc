@@ -13,13 +13,7 @@
 #include "stages.h"
 
 namespace fralab::diag {
-namespace {
 
-// The 1-sigma interval of a parameter: where g(v) = chi2(v) - (chi2_min + s) crosses zero on
-// each side of the fitted value v0 (g(v0) < 0). The bracket starts 1e-3 |v0| (or the domain's
-// floor, in the parameter's units) away and doubles, at most 60 times; the crossing is found by
-// TOMS 748. A positive domain (corners, frequencies, widths) stays positive. +-inf when g never
-// turns positive.
 std::array<double, 2> parameter_interval(const std::function<double(double)>& g, double v0,
                                          const IntervalDomain& domain) {
   const bool positive = domain.positive;
@@ -53,8 +47,6 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
   }
   return out;
 }
-
-}  // namespace
 
 void resolve(DiagnosisRun& r) {
   const DiagnoseOptions& opt = r.opt;

@@ -4,6 +4,7 @@
 // rad/s, s = jw.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <map>
 #include <optional>
@@ -71,6 +72,14 @@ double error_over(const DiagnosisRun& r, const Model& m, const std::vector<std::
 double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
                   const std::function<std::optional<C>(double, size_t)>& model);
 
+/// The 1-sigma interval of a parameter: where g(v) = chi2(v) - (chi2_min + s) crosses zero on
+/// each side of the fitted value v0 (g(v0) < 0). The bracket starts 1e-3 |v0| (or the domain's
+/// floor, in the parameter's units) away and doubles, at most 60 times; the crossing is found by
+/// TOMS 748. A positive domain (corners, frequencies, widths) stays positive. +-inf when g never
+/// turns positive.
+std::array<double, 2> parameter_interval(const std::function<double(double)>& g, double v0,
+                                         const IntervalDomain& domain);
+
 // The stages (docs/method/diagnosis.md, "The stages").
 /// 1. The usable points of every pair against the simulation, and the multisines.
 void prepare(DiagnosisRun& r);
@@ -87,6 +96,9 @@ void joint(DiagnosisRun& r);
 void resolve(DiagnosisRun& r);
 /// 7. On the validation measurement, the findings that do not lower its error are dropped.
 void earn_place(DiagnosisRun& r);
+/// 7b. With a validation measurement at another level, the findings whose parameter differs
+/// there beyond its sigmas are marked level-dependent (level.cc).
+void level(DiagnosisRun& r);
 /// 8-9. The extended model, the errors, each finding's explanation, and the per-pair report.
 void summarise(DiagnosisRun& r);
 

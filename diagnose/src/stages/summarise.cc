@@ -20,6 +20,16 @@ std::string explain(const Finding& f) {
     ex += own ? "; in the actuator's own response " + f.pairs[0]
               : "; common to every path from " + f.input + ": its actuator or calibration";
   if (f.scope == Scope::kPlant) ex += "; common to every path: a plant state";
+  if (f.level) {
+    const LevelDependence& l = *f.level;
+    auto at = [&](size_t k) {
+      return fmt(l.values[k]) +
+             (l.levels[k] > 0 ? " at level " + fmt(l.levels[k])
+                              : std::string(k ? " on the validation data" : " on the data fitted"));
+    };
+    ex += "; level-dependent, not one linear value: " + l.parameter + " " + at(0) + ", " + at(1) +
+          (std::isfinite(l.slope) ? " (slope " + fmt(l.slope) + " per unit of level)" : "");
+  }
   return ex;
 }
 

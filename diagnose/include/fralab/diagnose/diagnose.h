@@ -168,6 +168,17 @@ struct MeasuredPair {
   Frd validation;    // an independent measurement (other seed or amplitude); may be empty
 };
 
+/// A finding whose parameter differs between two excitation levels beyond its sigmas (the
+/// fitting measurement and the validation one, stage 7b): not one linear cause. levels: the
+/// median excitation amplitude of each (peak, input units; 0 unknown), values and 1-sigma
+/// intervals of the parameter at each, slope d value / d level (NaN when a level is unknown).
+struct LevelDependence {
+  std::string parameter;
+  std::vector<double> levels, values;
+  std::vector<std::array<double, 2>> intervals;
+  double slope = 0;
+};
+
 struct Finding {
   CauseKind cause = CauseKind::kGainMismatch;
   Scope scope = Scope::kPath;
@@ -183,6 +194,8 @@ struct Finding {
   /// missing_path: the path fitted (the extended model's new path; its gain follows
   /// parameters["gain"]).
   std::optional<Tf> tf;
+  /// Set when the parameter depends on the level (see LevelDependence).
+  std::optional<LevelDependence> level;
 };
 
 struct PairReport {  // per pair, for the report
