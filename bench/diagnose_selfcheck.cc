@@ -1,5 +1,7 @@
 // fralab-bench-diagnose: the diagnosis's randomised self-check. N random plants
-// (tests/util/random_plant.h), each hiding 0-2 effects, go through the real processes
+// (tests/util/random_plant.h, each hiding 0-2 effects; or with --plants machine,
+// tests/util/random_machine.h: shaped like real machines, 0-3 effects that may share pairs) go
+// through the real processes
 // (`fralab diagnose --engine`, measurement and validation included); prints per case the findings
 // that were not hidden and the hidden effects that were missed, then precision (true findings /
 // all findings) and recall (hidden effects named at their place within tolerance / hidden).
@@ -13,6 +15,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "random_machine.h"
 #include "random_plant.h"
 
 using namespace fralab;
@@ -55,13 +58,19 @@ int main(int argc, char** argv) {
   app.add_option("--points-per-decade", ppd)->capture_default_str();
   app.add_option("--excitation", excitation, "stepped or auto (any of fralab's)")
       ->capture_default_str();
+  std::string plants = "random";
+  app.add_option("--plants", plants,
+                 "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
+                 "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap)")
+      ->check(CLI::IsMember({"random", "machine"}))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const std::string bin =
       std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
   Score total;
   int failing = 0, complete = 0, partial = 0, failed = 0;
   for (int i = first; i < first + cases; ++i) {
-    const RandomCase c = random_case(seed, i);
+    const RandomCase c = plants == "machine" ? random_machine_case(seed, i) : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);
@@ -101,11 +110,12 @@ int main(int argc, char** argv) {
   const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
   const double recall = total.hidden ? double(total.found) / total.hidden : 1.0;
   std::printf(
-      "selfcheck: %d cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d findings), "
+      "selfcheck: %d %s cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d "
+      "findings), "
       "recall %.3f (%d of %d hidden effects), %d failing cases; excitation %s: %d runs complete, "
       "%d partial, %d failed\n",
-      cases, (unsigned long long)seed, band.c_str(), ppd, precision, total.true_findings,
-      total.findings, recall, total.found, total.hidden, failing, excitation.c_str(), complete,
-      partial, failed);
+      cases, plants.c_str(), (unsigned long long)seed, band.c_str(), ppd, precision,
+      total.true_findings, total.findings, recall, total.found, total.hidden, failing,
+      excitation.c_str(), complete, partial, failed);
   return precision >= min_precision && recall >= min_recall ? 0 : 1;
 }

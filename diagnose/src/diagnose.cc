@@ -149,6 +149,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   fit_causes(r);
   scope(r);
   joint(r);
+  if (regroup(r)) joint(r);
   resolve(r);
   earn_place(r);
   level(r);

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "fralab/plant/lti.h"
+#include "random_machine.h"
 #include "test_util.h"
 
 namespace fralab {
@@ -263,6 +264,64 @@ TEST(Diagnose, TwoOverlappingEffectsOnOnePathAreSizedJointly) {
   EXPECT_NEAR(pole->parameters.at("to_rad_s") / 3.3, 1.0, kPoleTol) << diagnosis_to_json(d).dump(1);
   EXPECT_NEAR(gain->parameters.at("gain_db"), 0.5, kGainTolDb) << diagnosis_to_json(d).dump(1);
   EXPECT_LT(d.validation_after, kAtTheNoise * kRelSigma);
+}
+
+// The machine-shaped self-check's case 17 (tests/util/random_machine.h, seed 1): one input, five
+// outputs, a slow mode in every path moved 0.914 -> 2.153 rad/s, and the output Y3's calibration
+// +3.59 dB on its one weak path. Fitted alone, Y3's path splits the two as a larger shift and a
+// smaller gain, which vetoed the plant's group; sized jointly, its shift agrees with the other
+// paths', and the five become one plant finding (regroup) beside the path's gain.
+TEST(Diagnose, PathFindingsConsistentAfterJointSizingBecomeOnePlantFinding) {
+  constexpr double kPoleTol = 0.01, kGainTolDb = 0.1;
+  const testing::RandomCase c = testing::random_machine_case(1, 17);
+  ASSERT_EQ(c.engine.inputs.size(), 1u);
+  const std::string in = c.engine.inputs[0].name;
+  std::vector<std::string> pairs{"u_" + in + ":" + in};
+  for (const ModelOutput& o : c.engine.outputs) pairs.push_back(in + ":" + o.name);
+  const double amplitude = 0.02 * c.engine.inputs[0].full_scale;
+  std::mt19937_64 rng(kValidationSeed);
+  std::vector<MeasuredPair> data;
+  for (const std::string& pair : pairs) {
+    MeasuredPair mp;
+    mp.pair = mp.frd.pair = mp.validation.pair = pair;
+    for (const bool validation : {false, true})
+      for (int k = 0; k <= 25; ++k) {
+        const double w = 0.1 * std::pow(10.0, k / 10.0);  // 0.1-31 rad/s, 10 per decade
+        const double a = validation ? 1.5 * amplitude : amplitude;
+        Complex g = *model_pair_response(c.engine, pair, w, a);
+        const double sigma = kRelSigma * std::abs(g);
+        if (validation) g = with_noise(g, sigma, rng);
+        FrdPoint p;
+        p.w = w, p.mag = std::abs(g), p.phase_deg = std::arg(g) * 180 / M_PI;
+        p.sigma = sigma, p.amplitude = a, p.input = in;
+        (validation ? mp.validation : mp.frd).points.push_back(p);
+      }
+    data.push_back(mp);
+  }
+  const Diagnosis d = diagnose(c.simulation, data);
+  const std::string json = diagnosis_to_json(d).dump(1);
+  const Finding* pole = nullptr;
+  const Finding* gain = nullptr;
+  for (const Finding& f : d.findings) {
+    if (f.cause == CauseKind::kPoleShift) {
+      EXPECT_EQ(pole, nullptr) << "one pole shift, not one per path" << json;
+      pole = &f;
+    }
+    if (f.cause == CauseKind::kGainMismatch) gain = &f;
+  }
+  ASSERT_NE(pole, nullptr) << json;
+  ASSERT_NE(gain, nullptr) << json;
+  ASSERT_EQ(c.hidden.size(), 2u);
+  const testing::HiddenEffect& moved =
+      c.hidden[0].cause == CauseKind::kPoleShift ? c.hidden[0] : c.hidden[1];
+  const testing::HiddenEffect& calibration = &moved == &c.hidden[0] ? c.hidden[1] : c.hidden[0];
+  ASSERT_EQ(moved.cause, CauseKind::kPoleShift);
+  ASSERT_EQ(calibration.cause, CauseKind::kGainMismatch);
+  EXPECT_EQ(pole->scope, Scope::kPlant) << json;
+  EXPECT_NEAR(pole->parameters.at("to_rad_s") / moved.value, 1.0, kPoleTol) << json;
+  EXPECT_EQ(gain->scope, Scope::kPath);
+  EXPECT_EQ(gain->output, calibration.output);
+  EXPECT_NEAR(gain->parameters.at("gain_db"), calibration.value, kGainTolDb) << json;
 }
 
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {

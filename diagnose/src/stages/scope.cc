@@ -2,7 +2,11 @@
 // parameters in every measured path into one output is one finding at that output (its sensor), in
 // every path from one input one finding at that input (its actuator or calibration), everywhere
 // one finding of the plant; what is left stays with its path (or, on an actuator pair, its input).
-// The findings fitted jointly over several pairs come first.
+// The findings fitted jointly over several pairs come first. After the joint sizing (5b), path
+// findings that have become consistent over a whole scope are joined the same way (regroup): two
+// effects that overlap on one path can split wrongly in its own fit (a plant pole moved and an
+// output's gain, fitted on that path as a larger shift and a smaller gain) and veto the group.
+#include <algorithm>
 #include <functional>
 
 #include "stages.h"
@@ -89,6 +93,60 @@ void scope(DiagnosisRun& r) {
         r, r.raw[a].c, p.output.empty() ? Scope::kInput : Scope::kPath, p.input, p.output, {a}));
     if (!r.raw[a].c.detail.empty()) r.findings.back().explanation = r.raw[a].c.detail;
   }
+}
+
+bool regroup(DiagnosisRun& r) {
+  bool merged = false;
+  // Path findings of one cause, now consistent over every position pair `sel` takes (at least
+  // min_pairs), become one finding at `scope`, its parameters their mean.
+  auto merge = [&](const std::function<bool(const PairFit&)>& sel, Scope scope,
+                   const std::string& in, const std::string& out, size_t min_pairs) {
+    std::vector<std::string> scope_pairs;
+    for (const PairFit& p : r.pairs)
+      if (!p.output.empty() && sel(p)) scope_pairs.push_back(p.pair);
+    if (scope_pairs.size() < min_pairs) return;
+    std::vector<Finding>& fs = r.findings;
+    auto candidate = [&](const Finding& f) {
+      return f.scope == Scope::kPath && f.pairs.size() == 1 && !f.tf && f.text_parameters.empty() &&
+             std::find(scope_pairs.begin(), scope_pairs.end(), f.pairs[0]) != scope_pairs.end();
+    };
+    for (size_t a = 0; a < fs.size(); ++a) {
+      if (!candidate(fs[a])) continue;
+      const Cause ca{fs[a].cause, fs[a].parameters, {}, 0, 1, ""};
+      std::vector<size_t> m{a};
+      for (size_t b = 0; b < fs.size(); ++b) {
+        if (b == a || !candidate(fs[b])) continue;
+        const Cause cb{fs[b].cause, fs[b].parameters, {}, 0, 1, ""};
+        if (!consistent(ca, cb, r.opt)) continue;
+        bool dup = false;
+        for (size_t x : m) dup |= fs[x].pairs[0] == fs[b].pairs[0];
+        if (!dup) m.push_back(b);
+      }
+      if (m.size() != scope_pairs.size()) continue;
+      Finding g;
+      g.cause = fs[a].cause;
+      g.scope = scope;
+      g.input = in;
+      g.output = out;
+      for (const auto& [key, v] : fs[a].parameters) {
+        double sum = 0;
+        for (size_t x : m) sum += fs[x].parameters.at(key);
+        g.parameters[key] = sum / double(m.size());
+      }
+      for (size_t x : m) g.pairs.push_back(fs[x].pairs[0]);
+      std::sort(m.begin(), m.end());
+      for (size_t k = m.size(); k-- > 0;) fs.erase(fs.begin() + long(m[k]));
+      fs.push_back(g);
+      merged = true;
+      a = size_t(-1);  // the list changed: look again from its start
+    }
+  };
+  merge([](const PairFit&) { return true; }, Scope::kPlant, "", "", 3);
+  for (const auto& o : r.sim.outputs)
+    merge([&](const PairFit& p) { return p.output == o.name; }, Scope::kOutput, "", o.name, 2);
+  for (const auto& i : r.sim.inputs)
+    merge([&](const PairFit& p) { return p.input == i.name; }, Scope::kInput, i.name, "", 2);
+  return merged;
 }
 
 }  // namespace fralab::diag

@@ -92,6 +92,9 @@ void scope(DiagnosisRun& r);
 /// 5b. Findings that share pairs get their primary parameters refined together, every finding in
 /// place (joint.cc).
 void joint(DiagnosisRun& r);
+/// 5c. After 5b, path findings of one cause now consistent over every pair of a scope (the plant,
+/// an output, an input) become one finding there; true when any did (scope.cc).
+bool regroup(DiagnosisRun& r);
 /// 6. Each finding's primary parameter gets its 1-sigma interval; the unresolved are dropped.
 void resolve(DiagnosisRun& r);
 /// 7. On the validation measurement, the findings that do not lower its error are dropped.

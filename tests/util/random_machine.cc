@@ -1,0 +1,192 @@
+#include "random_machine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace fralab::testing {
+
+namespace {
+
+ModelPath* path_of(Model& m, const std::string& out, const std::string& in) {
+  for (auto& p : m.paths)
+    if (p.output == out && p.input == in) return &p;
+  return nullptr;
+}
+
+}  // namespace
+
+RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int inputs, int outputs) {
+  std::mt19937_64 g(seed * 2654435761u + uint64_t(index) * 40503u + 7u);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto logu = [&](double lo, double hi) { return lo * std::pow(hi / lo, u(g)); };
+  RandomCase c;
+  c.name = "machine" + std::to_string(index);
+  Model& m = c.simulation;
+  m.name = "random machine " + std::to_string(index);
+  m.speed_pct = 90;
+  const int ni_drawn = 1 + int(g() % 3), no_drawn = 2 + int(g() % 4);
+  const int ni = inputs > 0 ? inputs : ni_drawn, no = outputs > 0 ? outputs : no_drawn;
+  static const char* in_units[] = {"mm", "deg", "lb/hr"};
+  static const double in_scale[] = {10.0, 100.0, 3000.0};
+  for (int i = 0; i < ni; ++i) {
+    ModelInput in;
+    in.name = "U" + std::to_string(i);
+    const int k = int(g() % 3);
+    in.units = in_units[k];
+    in.full_scale = in_scale[k];
+    in.test_amplitude_pct = 2;
+    Tf a;
+    a.poles = {Root::Real(-logu(15, 60))};
+    in.actuator = a;
+    m.inputs.push_back(in);
+    m.steady_state[in.name] = 0.5 * in.full_scale;
+  }
+  static const char* out_units[] = {"psia", "rpm", "degR", "1"};
+  static const double out_scale[] = {0.5, 500.0, 50.0, 0.01};  // a strong path's gain per unit
+  const double rotor = logu(0.3, 3.0);                         // the slow mode, s
+  for (int o = 0; o < no; ++o) {
+    ModelOutput out;
+    out.name = "Y" + std::to_string(o);
+    const int k = int(g() % 4);
+    out.units = out_units[k];
+    const double fast = logu(10, 60);  // the fast dynamics of every path into this output
+    double strongest = 0;
+    for (int i = 0; i < ni; ++i) {
+      const ModelInput& in = m.inputs[size_t(i)];
+      const bool weak = u(g) < 0.25;
+      const double gain = out_scale[k] / in.full_scale * 10 * logu(0.5, 2) *
+                          (weak ? logu(0.03, 0.1) : 1.0) * (u(g) < 0.3 ? -1 : 1);
+      Tf t;
+      t.gain = gain;
+      t.poles = {Root::Real(-1 / rotor), Root::Real(-fast)};
+      if (u(g) < 0.3) t.zeros = {Root::Real(-logu(0.5, 5) / rotor)};
+      m.paths.push_back({out.name, in.name, t, Json::object()});
+      strongest = std::max(strongest, std::abs(gain) * in.full_scale * 0.02);
+    }
+    out.noise_rms = strongest * logu(0.003, 0.01);
+    m.outputs.push_back(out);
+    m.steady_state[out.name] = 100 * out_scale[k];
+  }
+  c.engine = m;
+  const int nh = n_hidden >= 0 ? n_hidden : int(g() % 4);
+  // Places taken, so that each hidden effect stays identifiable: one effect of a kind per place.
+  std::vector<std::string> used;
+  auto take = [&](const std::string& key) {
+    if (std::find(used.begin(), used.end(), key) != used.end()) return false;
+    used.push_back(key);
+    return true;
+  };
+  for (int h = 0; h < nh; ++h) {
+    const std::string in = m.inputs[g() % size_t(ni)].name;
+    const std::string out = m.outputs[g() % size_t(no)].name;
+    const int kind = int(g() % 10);
+    HiddenEffect e{};
+    e.input = in, e.output = out, e.scope = Scope::kPath;
+    switch (kind) {
+      case 0: {  // a sensor lag: every path into the output
+        if (!take("sensor-lag:" + out) || !take("sensor:" + out)) continue;
+        ModelOutput& eo = c.engine.outputs[size_t(c.engine.output_index(out))];
+        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(3, 30);
+        e.tol_rel = 0.1;
+        if (ni > 1) e.scope = Scope::kOutput, e.input = "";
+        if (!eo.sensor) eo.sensor = Tf{};
+        eo.sensor->poles.push_back(Root::Real(-e.value));
+        break;
+      }
+      case 1: {  // a sensor's delay
+        if (!take("sensor-delay:" + out)) continue;
+        ModelOutput& eo = c.engine.outputs[size_t(c.engine.output_index(out))];
+        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
+        if (ni > 1) e.scope = Scope::kOutput, e.input = "";
+        if (!eo.sensor) eo.sensor = Tf{};
+        eo.sensor->delay_s += e.value;
+        break;
+      }
+      case 2: {  // an input's calibration: every path from it
+        if (!take("gain-in:" + in)) continue;
+        const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
+        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        // Every path from the input; with one input that is every path: the plant's, once the
+        // scope stage sees three pairs or more.
+        e.scope = ni == 1 && no >= 3 ? Scope::kPlant : Scope::kInput, e.output = "";
+        if (e.scope == Scope::kPlant) e.input = "";
+        for (auto& p : c.engine.paths)
+          if (p.input == in) p.tf.gain *= std::pow(10.0, db / 20);
+        break;
+      }
+      case 3: {  // an output's calibration: every path into it
+        if (!take("gain-out:" + out)) continue;
+        const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
+        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        if (ni > 1) e.scope = Scope::kOutput, e.input = "";
+        for (auto& p : c.engine.paths)
+          if (p.output == out) p.tf.gain *= std::pow(10.0, db / 20);
+        break;
+      }
+      case 4: {  // the actuator's pole
+        if (!take("actuator-pole:" + in)) continue;
+        ModelInput& ein = c.engine.inputs[size_t(c.engine.input_index(in))];
+        const double from = -ein.actuator->poles[0].real, to = from * logu(1.8, 3);
+        e.cause = CauseKind::kPoleShift, e.scope = Scope::kInput, e.output = "";
+        e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        ein.actuator->poles[0].real = -to;
+        break;
+      }
+      case 5: {  // the actuator's backlash, 0.3-0.8 % of full scale (2 % amplitude)
+        if (!take("backlash:" + in)) continue;
+        ModelInput& ein = c.engine.inputs[size_t(c.engine.input_index(in))];
+        e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
+        e.param = "width", e.value = ein.full_scale * logu(0.003, 0.008), e.tol_rel = 0.25;
+        ein.nonlinearity.push_back({"hysteresis", e.value});
+        break;
+      }
+      case 6: {  // the rotor's mode, moved in every path
+        if (!take("rotor")) continue;
+        const double to = (1 / rotor) * logu(1.5, 2.5);
+        e.cause = CauseKind::kPoleShift, e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        // Every path: the plant's from three pairs on; a 1 x 2 plant's two paths are its input's.
+        e.scope = ni * no >= 3 ? Scope::kPlant : Scope::kInput;
+        e.output = "";
+        if (e.scope == Scope::kPlant) e.input = "";
+        for (auto& p : c.engine.paths) p.tf.poles[0].real = -to;
+        break;
+      }
+      case 7: {  // a path's delay
+        if (!take("path-delay:" + in + ":" + out)) continue;
+        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
+        path_of(c.engine, out, in)->tf.delay_s += e.value;
+        break;
+      }
+      case 8: {  // a path's missing lag
+        if (!take("path-lag:" + in + ":" + out)) continue;
+        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(2, 30);
+        e.tol_rel = 0.1;
+        path_of(c.engine, out, in)->tf.poles.push_back(Root::Real(-e.value));
+        break;
+      }
+      case 9: {  // a path the simulation lacks
+        if (!take("path-missing:" + in + ":" + out)) continue;
+        e.cause = CauseKind::kMissingPath, e.param = "gain";
+        e.value = path_of(c.engine, out, in)->tf.gain;
+        e.tol_rel = 0.1;
+        auto& sp = c.simulation.paths;
+        sp.erase(
+            std::remove_if(sp.begin(), sp.end(),
+                           [&](const ModelPath& p) { return p.input == in && p.output == out; }),
+            sp.end());
+        break;
+      }
+    }
+    c.hidden.push_back(e);
+  }
+  // A missing path's gain is the engine's path as the other effects left it (a calibration over
+  // it scales it too).
+  for (HiddenEffect& e : c.hidden)
+    if (e.cause == CauseKind::kMissingPath) e.value = path_of(c.engine, e.output, e.input)->tf.gain;
+  return c;
+}
+
+}  // namespace fralab::testing
