@@ -72,6 +72,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
   const int nh = n_hidden >= 0 ? n_hidden : int(g() % 4);
   // Places taken, so that each hidden effect stays identifiable: one effect of a kind per place.
   std::vector<std::string> used;
+  std::vector<int> kinds;  // per hidden effect, the kind drawn
   auto take = [&](const std::string& key) {
     if (std::find(used.begin(), used.end(), key) != used.end()) return false;
     used.push_back(key);
@@ -181,11 +182,47 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       }
     }
     c.hidden.push_back(e);
+    kinds.push_back(kind);
   }
   // A missing path's gain is the engine's path as the other effects left it (a calibration over
   // it scales it too).
   for (HiddenEffect& e : c.hidden)
     if (e.cause == CauseKind::kMissingPath) e.value = path_of(c.engine, e.output, e.input)->tf.gain;
+  // The scope a finding can have is set by the paths the simulation has (a path it lacks is fitted
+  // as a path of its own, effects included): every path from three on is the plant's; two or
+  // more into one output, that output's; from one input, that input's; one path alone, its own.
+  for (size_t h = 0; h < c.hidden.size(); ++h) {
+    HiddenEffect& e = c.hidden[h];
+    if (kinds[h] != 0 && kinds[h] != 1 && kinds[h] != 2 && kinds[h] != 3 && kinds[h] != 6)
+      continue;  // an actuator's own pair, or one path
+    std::vector<const ModelPath*> covered;
+    for (const ModelPath& p : c.simulation.paths)
+      if (e.scope == Scope::kPlant || (e.scope == Scope::kInput && p.input == e.input) ||
+          (e.scope == Scope::kOutput && p.output == e.output) ||
+          (e.scope == Scope::kPath && p.output == e.output))  // a sensor's on a 1-input plant
+        covered.push_back(&p);
+    bool one_input = !covered.empty(), one_output = !covered.empty();
+    for (const ModelPath* p : covered) {
+      one_input &= p->input == covered[0]->input;
+      one_output &= p->output == covered[0]->output;
+    }
+    if (covered.size() == c.simulation.paths.size() && covered.size() >= 3)
+      e.scope = Scope::kPlant, e.input = "", e.output = "";
+    else if (covered.size() >= 2 && one_output)
+      e.scope = Scope::kOutput, e.input = "", e.output = covered[0]->output;
+    else if (covered.size() >= 2 && one_input)
+      e.scope = Scope::kInput, e.input = covered[0]->input, e.output = "";
+    else if (covered.size() == 1)
+      e.scope = Scope::kPath, e.input = covered[0]->input, e.output = covered[0]->output;
+  }
+  // An effect on one path the simulation lacks is inside that missing path's fit: not a finding
+  // of its own.
+  std::vector<HiddenEffect> kept;
+  for (const HiddenEffect& e : c.hidden)
+    if (e.cause == CauseKind::kMissingPath || e.scope != Scope::kPath ||
+        c.simulation.path(e.output, e.input))
+      kept.push_back(e);
+  c.hidden = kept;
   return c;
 }
 
