@@ -336,7 +336,7 @@ void PairAnalyzer::trim() {
   int64_t keep =
       pending_.empty() ? max_seen_ - opt_.reorder_slack_samples : pending_.begin()->first;
   keep = std::min(keep, max_seen_);
-  if (keep - base_ > 1 << 20) {  // trim in large chunks
+  if (keep - base_ > 1 << 16) {  // trim in chunks of 65536 samples (65 s at 1 kHz)
     const int64_t drop = keep - base_;
     x1_.erase(x1_.begin(), x1_.begin() + drop);
     x2_.erase(x2_.begin(), x2_.begin() + drop);
