@@ -9,6 +9,7 @@
 #   bash bench/throughput.sh [SEED]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/load_watch.sh
 B=${FRALAB_BIN:-build/bin}
 seed=${1:-1}
 out=$(mktemp -d)
@@ -19,17 +20,8 @@ for campaign in stepped auto; do
   for g in pair input 11; do
     d="$out/$campaign-$g"
     peak="$out/peak"
-    echo 0 > "$peak"
-    (while :; do
-       l=$(cut -d' ' -f1 /proc/loadavg)
-       awk -v l="$l" -v p="$(cat "$peak")" 'BEGIN{exit !(l>p)}' && echo "$l" > "$peak"
-       sleep 1
-     done) &
-    watcher=$!
-    scripts/isolated.sh $B/fralab measure --engine j85_95 --excitation "$campaign" --seed "$seed" \
-      --analysers "$g" --no-progress --out "$d" > /dev/null
-    kill $watcher 2> /dev/null || true
-    wait $watcher 2> /dev/null || true
+    with_peak_load "$peak" scripts/isolated.sh $B/fralab measure --engine j85_95 \
+      --excitation "$campaign" --seed "$seed" --analysers "$g" --no-progress --out "$d" > /dev/null
     same=-
     if [ "$g" != pair ]; then
       same=yes

@@ -9,6 +9,7 @@
 #   bash bench/throughput_sizes.sh [SIZES...]      # default: 2x2 4x16 8x32
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. bench/load_watch.sh
 B=${FRALAB_BIN:-build/bin}
 sizes=("$@")
 [ ${#sizes[@]} -eq 0 ] && sizes=(2x2 4x16 8x32)
@@ -25,17 +26,9 @@ for size in "${sizes[@]}"; do
   for g in "${groupings[@]}"; do
     d="$out/$size-$g"
     peak="$out/peak"
-    echo 0 > "$peak"
-    (while :; do
-       l=$(cut -d' ' -f1 /proc/loadavg)
-       awk -v l="$l" -v p="$(cat "$peak")" 'BEGIN{exit !(l>p)}' && echo "$l" > "$peak"
-       sleep 1
-     done) &
-    watcher=$!
-    scripts/isolated.sh $B/fralab measure --engine "$out/plant-$size/engine.json" \
-      --excitation auto --analysers "$g" --no-progress --out "$d" > /dev/null
-    kill $watcher 2> /dev/null || true
-    wait $watcher 2> /dev/null || true
+    with_peak_load "$peak" scripts/isolated.sh $B/fralab measure \
+      --engine "$out/plant-$size/engine.json" --excitation auto --analysers "$g" --no-progress \
+      --out "$d" > /dev/null
     /usr/bin/python3 - "$d" "$size" "$g" "$(cat "$peak")" <<'PY'
 import glob, json, sys
 d = sys.argv[1]
