@@ -480,6 +480,17 @@ std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points
   if (points.size() < 2 || !(x >= points.front().x && x <= points.back().x))
     throw InputError(o.schedule_by + " " + num(x) +
                      ": outside the measured points' range; findings are never extrapolated");
+  // At a measured point: that point's own findings, as its diagnosis gives them.
+  for (const EnvelopePoint& p : points) {
+    if (p.x != x) continue;
+    std::vector<Finding> own;
+    if (p.diagnosis.is_object() && p.diagnosis.contains("findings"))
+      for (size_t i = 0; i < p.diagnosis["findings"].size(); ++i)
+        own.push_back(
+            finding_from_json(p.diagnosis["findings"][i],
+                              {p.name + "/diagnosis.json", "/findings/" + std::to_string(i)}));
+    return own;
+  }
   size_t k = 1;
   while (k + 1 < points.size() && points[k].x < x) ++k;
   const EnvelopePoint &lo = points[k - 1], &hi = points[k];
