@@ -36,10 +36,13 @@ struct Quadratic {
   double a1 = 0, a2 = 0;
 };
 
-Quadratic quadratic_of(const std::vector<Root>& rs) {
-  if (rs.size() == 1 && rs[0].pair) return {2 * rs[0].zeta / rs[0].wn, 1 / (rs[0].wn * rs[0].wn)};
-  if (rs.size() == 1) return {-1 / rs[0].real, 0};
-  return {-(1 / rs[0].real + 1 / rs[1].real), 1 / (rs[0].real * rs[1].real)};
+Quadratic quadratic_of_pair(const Root& p) { return {2 * p.zeta / p.wn, 1 / (p.wn * p.wn)}; }
+
+// One or two real roots: (1 - s/r1)(1 - s/r2) = 1 - (1/r1 + 1/r2) s + s^2 / (r1 r2).
+Quadratic quadratic_of_reals(const std::vector<Root>& rs) {
+  const Root &r1 = rs.front(), &r2 = rs.back();
+  if (rs.size() == 1) return {-1 / r1.real, 0};
+  return {-(1 / r1.real + 1 / r2.real), 1 / (r1.real * r2.real)};
 }
 
 void push_roots_of(const Quadratic& q, std::vector<Root>& out) {
@@ -108,7 +111,7 @@ std::vector<Root> blend_roots(const std::vector<Root>& a, const std::vector<Root
       }
       if (group.empty()) return;
       used_p[i] = true;
-      const Quadratic qp = quadratic_of({ps[i]}), qr = quadratic_of(group);
+      const Quadratic qp = quadratic_of_pair(ps[i]), qr = quadratic_of_reals(group);
       const Quadratic &lo = pairs_at_lo ? qp : qr, &hi = pairs_at_lo ? qr : qp;
       push_roots_of({linear(lo.a1, hi.a1, t), linear(lo.a2, hi.a2, t)}, out);
     }
