@@ -124,8 +124,7 @@ void export_envelope_mat(const std::string& dir, const std::string& out_file) {
   const JsonWhere w{file, ""};
   if (json_string_member(j, w, "format") != "fralab-envelope/1")
     json_fail(w / "format", "not fralab-envelope/1");
-  std::vector<std::pair<std::string, MatValue>> vars;
-  vars.emplace_back("schedule_by", MatValue::str(json_string_member(j, w, "schedule_by")));
+  const std::string schedule_by = json_string_member(j, w, "schedule_by");
   MatValue points = MatValue::structure();
   std::vector<std::string> names;
   std::vector<double> xs;
@@ -136,9 +135,8 @@ void export_envelope_mat(const std::string& dir, const std::string& out_file) {
   }
   points.add("name", MatValue::str_list(names));
   points.add("x", MatValue::column(xs));
-  vars.emplace_back("points", points);
-  vars.emplace_back("states", states_of(json_array_member(j, w, "states"), w / "states"));
-  vars.emplace_back("findings", findings_of(json_array_member(j, w, "findings"), w / "findings"));
+  const MatValue states = states_of(json_array_member(j, w, "states"), w / "states");
+  const MatValue findings = findings_of(json_array_member(j, w, "findings"), w / "findings");
   MatValue loo = MatValue::structure();
   std::vector<std::string> point, refused;
   std::vector<double> x, sim, sched, ext;
@@ -160,8 +158,11 @@ void export_envelope_mat(const std::string& dir, const std::string& out_file) {
   loo.add("error_scheduled", MatValue::column(sched));
   loo.add("error_extended", MatValue::column(ext));
   loo.add("refused", MatValue::str_list(refused));
-  vars.emplace_back("leave_one_out", loo);
-  write_mat_file(out_file, vars);
+  write_mat_file(out_file, {{"schedule_by", MatValue::str(schedule_by)},
+                            {"points", points},
+                            {"states", states},
+                            {"findings", findings},
+                            {"leave_one_out", loo}});
 }
 
 }  // namespace fralab
