@@ -207,8 +207,11 @@ TEST(Envelope, ScheduledFindingsFollowTheirLawsBetweenThePoints) {
   // At a measured point: its own findings (85 %: no delay there, A8 at its own 32.4 rad/s).
   const std::vector<Finding> at85 = scheduled_findings(pts, 85);
   ASSERT_EQ(at85.size(), 2u);
-  for (const Finding& f : at85)
-    if (f.cause == CauseKind::kPoleShift) EXPECT_EQ(f.parameters.at("to_rad_s"), 32.4);
+  for (const Finding& f : at85) {
+    if (f.cause == CauseKind::kPoleShift) {
+      EXPECT_EQ(f.parameters.at("to_rad_s"), 32.4);
+    }
+  }
 }
 
 // DIR/scheduled_model.json at 85 % from diagnoses at 70 and 95 %: the simulation set (j85_70_sim
