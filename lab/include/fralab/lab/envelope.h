@@ -143,9 +143,10 @@ std::string envelope_point_name(const std::string& schedule_by, double x);
 
 /// The findings of the scheduled extended model at x (points as join_points takes them, x within
 /// their range): at a measured point its own findings; else each finding present at both points
-/// around x, as the lower one's diagnosis gives it, its primary parameter from its law over the points (FindingLaw), its other
-/// parameters linearly between the two. A finding at one of the two only is left out and said in
-/// `left_out`. InputError for x outside the points' range (never extrapolated).
+/// around x, as the lower one's diagnosis gives it, its primary parameter from its law over the
+/// points (FindingLaw), its other parameters linearly between the two. A finding at one of the two
+/// only is left out and said in `left_out`. InputError for x outside the points' range (never
+/// extrapolated).
 std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points, double x,
                                         const EnvelopeOptions& o = {},
                                         std::vector<std::string>* left_out = nullptr);
