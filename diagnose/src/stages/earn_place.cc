@@ -57,19 +57,10 @@ void earn_place_by_validation(DiagnosisRun& r) {
 // their points.
 std::pair<double, size_t> chi2_over(const DiagnosisRun& r, const Model& m,
                                     const std::vector<std::string>& which) {
-  double c = 0;
+  const std::vector<const PairFit*> pairs = fitted_pairs(r, which);
   size_t n = 0;
-  for (const std::vector<PairFit>* set : {&r.original, &r.absent})
-    for (const PairFit& p : *set) {
-      if (std::find(which.begin(), which.end(), p.pair) == which.end()) continue;
-      for (size_t q = 0; q < p.w.size(); ++q) {
-        const C g =
-            model_pair_response(m, p.pair, p.w[q], p.amp[q], r.opt.chain, p.ms).value_or(0.0);
-        c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
-      }
-      n += p.w.size();
-    }
-  return {c, n};
+  for (const PairFit* p : pairs) n += p->w.size();
+  return {chi2_of(r, m, pairs), n};
 }
 
 void earn_place_by_criterion(DiagnosisRun& r) {

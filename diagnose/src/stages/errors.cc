@@ -16,6 +16,26 @@ double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
   return detail::rms_log_error(g, meas);
 }
 
+std::vector<const PairFit*> fitted_pairs(const DiagnosisRun& r,
+                                         const std::vector<std::string>& which) {
+  std::vector<const PairFit*> out;
+  for (const std::vector<PairFit>* set : {&r.original, &r.absent})
+    for (const PairFit& p : *set)
+      if (std::find(which.begin(), which.end(), p.pair) != which.end()) out.push_back(&p);
+  return out;
+}
+
+double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const PairFit*>& pairs) {
+  double c = 0;
+  for (const PairFit* p : pairs)
+    for (size_t q = 0; q < p->w.size(); ++q) {
+      const C g =
+          model_pair_response(m, p->pair, p->w[q], p->amp[q], r.opt.chain, p->ms).value_or(0.0);
+      c += std::norm(p->meas[q] - g) / (p->sig[q] * p->sig[q]);
+    }
+  return c;
+}
+
 Model extended_by(const DiagnosisRun& r, const std::vector<Finding>& fs, size_t skip) {
   Model m = r.sim;
   for (size_t i = 0; i < fs.size(); ++i)

@@ -44,24 +44,16 @@ struct ValidationPoints {
 };
 
 ValidationPoints validation_points(const DiagnosisRun& r, const Finding& f) {
-  const DiagnoseOptions& opt = r.opt;
   ValidationPoints v;
   std::vector<double> amp_fit, amp_val;
   for (const MeasuredPair& mp : r.data) {
     if (std::find(f.pairs.begin(), f.pairs.end(), mp.pair) == f.pairs.end()) continue;
     for (const auto& pt : mp.frd.points)
-      if (usable(pt, opt)) amp_fit.push_back(pt.amplitude);
+      if (usable(pt, r.opt)) amp_fit.push_back(pt.amplitude);
     PairFit p;
     p.pair = mp.pair;
-    for (const auto& pt : mp.validation.points) {
-      if (!usable(pt, opt)) continue;
-      const MultisineExcitation* ms = multisine_of(r, mp.pair, pt.line_amplitude, true);
-      const auto s = model_pair_response(r.sim, mp.pair, pt.w, pt.amplitude, opt.chain, ms);
-      if (!s) continue;
-      add_point(p, pt, *s, opt);
-      if (ms) p.ms = ms;
-      amp_val.push_back(pt.amplitude);
-    }
+    add_points(r, p, mp.validation, true);
+    amp_val.insert(amp_val.end(), p.amp.begin(), p.amp.end());
     if (p.w.size() >= 3) {
       v.n += p.w.size();
       v.pairs.push_back(std::move(p));
@@ -75,7 +67,6 @@ ValidationPoints validation_points(const DiagnosisRun& r, const Finding& f) {
 }  // namespace
 
 void level(DiagnosisRun& r) {
-  const DiagnoseOptions& opt = r.opt;
   const size_t nf = r.findings.size();
   // Per finding: its primary parameter, its validation points, whether it is compared.
   std::vector<std::string> keys(nf);
@@ -90,17 +81,13 @@ void level(DiagnosisRun& r) {
     compared[i] = !val[i].pairs.empty() &&
                   !(levels_known && std::abs(val[i].level_val / val[i].level_fit - 1) < 0.05);
   }
+  std::vector<std::vector<const PairFit*>> val_pairs(nf);
+  for (size_t i = 0; i < nf; ++i)
+    for (const PairFit& p : val[i].pairs) val_pairs[i].push_back(&p);
   // chi2 of finding i's validation points with the findings `fs`, i's parameter at v.
   auto chi2_at = [&](std::vector<Finding> fs, size_t i, double v) {
     fs[i].parameters[keys[i]] = v;
-    const Model m = extended_by(r, fs, fs.size());
-    double c = 0;
-    for (const PairFit& p : val[i].pairs)
-      for (size_t q = 0; q < p.w.size(); ++q) {
-        const C g = model_pair_response(m, p.pair, p.w[q], p.amp[q], opt.chain, p.ms).value_or(0.0);
-        c += std::norm(p.meas[q] - g) / (p.sig[q] * p.sig[q]);
-      }
-    return c;
+    return chi2_of(r, extended_by(r, fs, fs.size()), val_pairs[i]);
   };
   // Every compared finding's parameter refitted on the validation data together (findings that
   // share pairs, as a pair's frequency and its gain, move together): rounds of Brent's minimum

@@ -28,6 +28,17 @@ const MultisineExcitation* multisine_of(const DiagnosisRun& r, const std::string
   return it == set.end() ? nullptr : &it->second;
 }
 
+void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve, bool validation) {
+  for (const auto& pt : curve.points) {
+    if (!usable(pt, r.opt)) continue;
+    const MultisineExcitation* ms = multisine_of(r, p.pair, pt.line_amplitude, validation);
+    const auto s = model_pair_response(r.sim, p.pair, pt.w, pt.amplitude, r.opt.chain, ms);
+    if (!s || std::abs(*s) == 0) continue;
+    add_point(p, pt, *s, r.opt);
+    if (ms) p.ms = ms;
+  }
+}
+
 void prepare(DiagnosisRun& r) {
   const Model& sim = r.sim;
   const DiagnoseOptions& opt = r.opt;
@@ -64,14 +75,7 @@ void prepare(DiagnosisRun& r) {
       r.absent.push_back(absent_pair_points(mp, opt));
       continue;
     }
-    for (const auto& pt : mp.frd.points) {
-      if (!usable(pt, opt)) continue;
-      const MultisineExcitation* ms = multisine_of(r, mp.pair, pt.line_amplitude, false);
-      auto s = model_pair_response(sim, mp.pair, pt.w, pt.amplitude, opt.chain, ms);
-      if (!s || std::abs(*s) == 0) continue;
-      add_point(p, pt, *s, opt);
-      if (ms) p.ms = ms;
-    }
+    add_points(r, p, mp.frd, false);
     if (p.w.size() >= 3) r.pairs.push_back(std::move(p));
   }
   r.original = r.pairs;  // before the findings (sigma_eff: fit_causes copies its own back)

@@ -49,30 +49,15 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
 }
 
 void resolve(DiagnosisRun& r) {
-  const DiagnoseOptions& opt = r.opt;
   std::vector<Finding>& findings = r.findings;
   std::vector<Finding> kept;
   for (size_t i = 0; i < findings.size(); ++i) {
     Finding& f = findings[i];
     // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
-    std::vector<const PairFit*> mine;
+    const std::vector<const PairFit*> mine = fitted_pairs(r, f.pairs);
     size_t n = 0;
-    for (const std::vector<PairFit>* set : {&r.original, &r.absent})
-      for (const auto& p : *set)
-        if (std::find(f.pairs.begin(), f.pairs.end(), p.pair) != f.pairs.end()) {
-          mine.push_back(&p);
-          n += p.w.size();
-        }
-    auto chi2_of_model = [&](const Model& m) {
-      double c = 0;
-      for (const PairFit* p : mine)
-        for (size_t q = 0; q < p->w.size(); ++q) {
-          const C g =
-              model_pair_response(m, p->pair, p->w[q], p->amp[q], opt.chain, p->ms).value_or(0.0);
-          c += std::norm(p->meas[q] - g) / (p->sig[q] * p->sig[q]);
-        }
-      return c;
-    };
+    for (const PairFit* p : mine) n += p->w.size();
+    auto chi2_of_model = [&](const Model& m) { return chi2_of(r, m, mine); };
     const double c_min = chi2_of_model(extended_by(r, findings, findings.size()));
     const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
     const CauseUnit& unit = *cause_unit(f.cause);

@@ -68,6 +68,19 @@ Model extended_by(const DiagnosisRun& r, const std::vector<Finding>& fs, size_t 
 double error_over(const DiagnosisRun& r, const Model& m, const std::vector<std::string>& which,
                   bool validation);
 
+/// The fitting data's pairs (r.original, then r.absent) named in `which`, in that order.
+std::vector<const PairFit*> fitted_pairs(const DiagnosisRun& r,
+                                         const std::vector<std::string>& which);
+
+/// chi2 of model m over the points of `pairs`: the sum of |G_meas - G_m|^2 / sigma_eff^2, each
+/// point at its own amplitude or multisine, through the lab's chain.
+double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const PairFit*>& pairs);
+
+/// Appends to p the usable points of `curve` (its pair's fitting or validation measurement), each
+/// with the simulation's response there and the multisine it was measured by; a point where the
+/// simulation gives no response, or zero, is left out.
+void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve, bool validation);
+
 /// The error metric of one pair under a response function (no response: the point counts as 0).
 double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
                   const std::function<std::optional<C>(double, size_t)>& model);
