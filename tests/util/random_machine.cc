@@ -6,16 +6,6 @@
 
 namespace fralab::testing {
 
-namespace {
-
-ModelPath* path_of(Model& m, const std::string& out, const std::string& in) {
-  for (auto& p : m.paths)
-    if (p.output == out && p.input == in) return &p;
-  return nullptr;
-}
-
-}  // namespace
-
 RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int inputs, int outputs) {
   std::mt19937_64 g(seed * 2654435761u + uint64_t(index) * 40503u + 7u);
   std::uniform_real_distribution<double> u(0, 1);
@@ -158,20 +148,20 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
         if (!take("path-delay:" + in + ":" + out)) continue;
         e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
         e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
-        path_of(c.engine, out, in)->tf.delay_s += e.value;
+        c.engine.path(out, in)->tf.delay_s += e.value;
         break;
       }
       case 8: {  // a path's missing lag
         if (!take("path-lag:" + in + ":" + out)) continue;
         e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(2, 30);
         e.tol_rel = 0.1;
-        path_of(c.engine, out, in)->tf.poles.push_back(Root::Real(-e.value));
+        c.engine.path(out, in)->tf.poles.push_back(Root::Real(-e.value));
         break;
       }
       case 9: {  // a path the simulation lacks
         if (!take("path-missing:" + in + ":" + out)) continue;
         e.cause = CauseKind::kMissingPath, e.param = "gain";
-        e.value = path_of(c.engine, out, in)->tf.gain;
+        e.value = c.engine.path(out, in)->tf.gain;
         e.tol_rel = 0.1;
         auto& sp = c.simulation.paths;
         sp.erase(
@@ -187,7 +177,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
   // A missing path's gain is the engine's path as the other effects left it (a calibration over
   // it scales it too).
   for (HiddenEffect& e : c.hidden)
-    if (e.cause == CauseKind::kMissingPath) e.value = path_of(c.engine, e.output, e.input)->tf.gain;
+    if (e.cause == CauseKind::kMissingPath) e.value = c.engine.path(e.output, e.input)->tf.gain;
   // The scope a finding can have is set by the paths the simulation has (a path it lacks is fitted
   // as a path of its own, effects included): every path from three on is the plant's; two or
   // more into one output, that output's; from one input, that input's; one path alone, its own.

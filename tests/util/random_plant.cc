@@ -21,12 +21,6 @@ std::string name_of(std::mt19937_64& g, const char* prefix, int i) {
   return std::string(prefix) + syl[g() % 10] + syl[g() % 10] + std::to_string(i);
 }
 
-ModelPath* find_path(Model& m, const std::string& out, const std::string& in) {
-  for (auto& p : m.paths)
-    if (p.output == out && p.input == in) return &p;
-  return nullptr;
-}
-
 }  // namespace
 
 std::string HiddenEffect::describe() const {
@@ -85,7 +79,7 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
   std::vector<std::string> used;  // one effect per path or input, so each is identifiable
   for (int h = 0; h < nh; ++h) {
     const std::string in = m.inputs[g() % ni].name, out = m.outputs[g() % no].name;
-    ModelPath* ep = find_path(c.engine, out, in);
+    ModelPath* ep = c.engine.path(out, in);
     // A path the simulation lacks (kind 11) is drawn from its own generator, 1 effect in 12, so
     // the other kinds' cases are the same sequence with or without it.
     int kind = int(g() % 11);
@@ -170,7 +164,7 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
         if (!pr) {
           const Root pair = Root::Pair(logu(5, 25), 0.4);
           ep->tf.poles.push_back(pair);
-          find_path(c.simulation, out, in)->tf.poles.push_back(pair);
+          c.simulation.path(out, in)->tf.poles.push_back(pair);
           pr = &ep->tf.poles.back();
         }
         e.cause = CauseKind::kDampingError, e.param = "to_zeta",
@@ -216,7 +210,7 @@ bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value) {
       }
     return false;
   };
-  ModelPath* p = find_path(engine, e.output, e.input);
+  ModelPath* p = engine.path(e.output, e.input);
   const int in = engine.input_index(e.input), out = engine.output_index(e.output);
   switch (e.cause) {
     case CauseKind::kTimeDelay:
