@@ -26,12 +26,14 @@ std::string terminal(PlotFormat f, int width, int height, int font) {
 
 const char* extension(PlotFormat f) { return f == PlotFormat::kSvg ? ".svg" : ".png"; }
 
+}  // namespace
+
 bool run_gnuplot(const std::string& script_path) {
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return false;
-  return std::system(("gnuplot '" + script_path + "' >/dev/null 2>&1").c_str()) == 0;
+  std::string quoted = "'";  // the path in single quotes, a quote in it as '\''
+  for (char c : script_path) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return std::system(("gnuplot " + quoted + "' >/dev/null 2>&1").c_str()) == 0;
 }
-
-}  // namespace
 
 bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& dir,
                        const std::string& script, PlotFormat format) {

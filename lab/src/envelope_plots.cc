@@ -2,11 +2,11 @@
 // variable, with its sigma) and the findings across points with their laws.
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "fralab/analyze/bode_plot.h"
 #include "fralab/core/text.h"
 #include "fralab/lab/envelope.h"
 
@@ -32,12 +32,6 @@ std::string law_expression(const FindingLaw& f) {
   if (f.law == "linear") return a + " + (" + b + ") * x";
   if (f.law == "power") return a + " * x ** (" + b + ")";
   return a;
-}
-
-std::string shell_quoted(const std::string& s) {
-  std::string r = "'";
-  for (char c : s) r += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return r + "'";
 }
 
 // The tracks drawn: those at two points or more, the longest first.
@@ -127,9 +121,7 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
     gp << "unset multiplot\nset output\n";
   }
   std::ofstream(pd + "/envelope.gp") << gp.str();
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return false;
-  return std::system(
-             ("gnuplot " + shell_quoted(pd + "/envelope.gp") + " >/dev/null 2>&1").c_str()) == 0;
+  return run_gnuplot(pd + "/envelope.gp");
 }
 
 }  // namespace fralab

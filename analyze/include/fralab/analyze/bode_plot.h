@@ -40,6 +40,10 @@ bool render_bode_plots(const std::vector<BodePlot>& plots, const std::string& di
                        const std::string& script = "plots.gp",
                        PlotFormat format = PlotFormat::kPng);
 
+/// Runs gnuplot on a script file (the path quoted for the shell); false when gnuplot is not
+/// installed or the script fails. Output and errors are discarded.
+bool run_gnuplot(const std::string& script_path);
+
 /// An SVG file a render wrote, from its <svg element on (its XML prolog and doctype dropped), to
 /// be written inline into an HTML page; "" when the file is missing or holds no <svg.
 std::string inline_svg(const std::string& svg_file);
