@@ -480,32 +480,36 @@ std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points
   if (points.size() < 2 || !(x >= points.front().x && x <= points.back().x))
     throw InputError(o.schedule_by + " " + num(x) +
                      ": outside the measured points' range; findings are never extrapolated");
+  // Finding i of a point's diagnosis.json, and their count.
+  auto finding = [](const EnvelopePoint& p, size_t i) {
+    return finding_from_json(p.diagnosis["findings"][i],
+                             {p.name + "/diagnosis.json", "/findings/" + std::to_string(i)});
+  };
+  auto count = [](const EnvelopePoint& p) {
+    return p.diagnosis.is_object() && p.diagnosis.contains("findings")
+               ? p.diagnosis["findings"].size()
+               : size_t(0);
+  };
   // At a measured point: that point's own findings, as its diagnosis gives them.
   for (const EnvelopePoint& p : points) {
     if (p.x != x) continue;
     std::vector<Finding> own;
-    if (p.diagnosis.is_object() && p.diagnosis.contains("findings"))
-      for (size_t i = 0; i < p.diagnosis["findings"].size(); ++i)
-        own.push_back(
-            finding_from_json(p.diagnosis["findings"][i],
-                              {p.name + "/diagnosis.json", "/findings/" + std::to_string(i)}));
+    for (size_t i = 0; i < count(p); ++i) own.push_back(finding(p, i));
     return own;
   }
   size_t k = 1;
   while (k + 1 < points.size() && points[k].x < x) ++k;
   const EnvelopePoint &lo = points[k - 1], &hi = points[k];
   // The finding of a law at one point, as its diagnosis.json gives it.
-  auto at = [](const EnvelopePoint& p, const FindingLaw& l) -> std::optional<Finding> {
-    if (!p.diagnosis.is_object() || !p.diagnosis.contains("findings")) return std::nullopt;
-    const Json& fs = p.diagnosis["findings"];
-    for (size_t i = 0; i < fs.size(); ++i) {
+  auto at = [&](const EnvelopePoint& p, const FindingLaw& l) -> std::optional<Finding> {
+    for (size_t i = 0; i < count(p); ++i) {
+      const Json& f = p.diagnosis["findings"][i];
       auto word = [&](const char* k) {
-        return fs[i].contains(k) && fs[i][k].is_string() ? fs[i][k].get<std::string>() : "";
+        return f.contains(k) && f[k].is_string() ? f[k].get<std::string>() : "";
       };
       if (word("cause") == l.cause && word("scope") == l.scope && word("input") == l.input &&
           word("output") == l.output)
-        return finding_from_json(fs[i],
-                                 {p.name + "/diagnosis.json", "/findings/" + std::to_string(i)});
+        return finding(p, i);
     }
     return std::nullopt;
   };
@@ -534,8 +538,10 @@ std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points
   return out;
 }
 
-Model scheduled_model_at(const std::string& file, double x) {
-  const Json j = json_load_file(file);
+namespace {
+
+// The scheduled extended model of the document j read from `file`, at x.
+Model scheduled_model_of(const Json& j, const std::string& file, double x) {
   const JsonWhere w{file, ""};
   if (json_string_member(j, w, "format") != kScheduledModelFormat)
     json_fail(w / "format", std::string("not ") + kScheduledModelFormat);
@@ -570,6 +576,12 @@ Model scheduled_model_at(const std::string& file, double x) {
   return ext;
 }
 
+}  // namespace
+
+Model scheduled_model_at(const std::string& file, double x) {
+  return scheduled_model_of(json_load_file(file), file, x);
+}
+
 Model load_model_or_scheduled(const std::string& spec) {
   if (!fs::exists(spec))
     if (const auto at = parse_model_at(spec); at && fs::is_regular_file(at->set)) {
@@ -578,7 +590,7 @@ Model load_model_or_scheduled(const std::string& spec) {
         const std::string key = j.value("schedule_by", "");
         if (at->schedule_by != key && at->schedule_by != "speed_pct")  // speed_pct: the default
           throw InputError(spec + ": the scheduled model is scheduled by " + key);
-        return scheduled_model_at(at->set, at->x);
+        return scheduled_model_of(j, at->set, at->x);
       }
     }
   return load_model_or_embedded(spec);
