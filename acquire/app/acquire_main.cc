@@ -67,6 +67,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     Model model = load_model_or_embedded(engine);
+    o.validate();
+    o.block = block_samples(model, o);
     const std::unique_ptr<Campaign> campaign = make_campaign(model, o, run_id);
     const Campaign& camp = *campaign;
 

@@ -35,7 +35,7 @@ namespace fralab {
 struct AcquisitionLoopOptions {
   std::string run_id = "run";
   std::vector<std::string> consumers = {"plant"};  // who must acknowledge ("plant" is added)
-  AcquireOptions acquire;                          // block, window, speed and sample rate are its
+  AcquireOptions acquire;  // block (sized: >= 1), window, speed and sample rate are its
   double ready_timeout_s = 30;
   FlowOptions flow;  // retransmission waits and the stall timeout
   /// Polled while running: true stops the run (a signal): an "abort" status and a block holding

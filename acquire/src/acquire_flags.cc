@@ -186,8 +186,10 @@ std::vector<AcquireField> make_acquire_fields() {
           "--speed", "/speed", "1 = real time, 100 = 100x, 0 = as fast as consumers keep up", kShow,
           Written::kAlways, [](auto& o) -> auto& { return o.speed; }),
       value_field(
-          "--block", "/block", "samples per command block", kShow, Written::kAlways,
-          [](auto& o) -> auto& { return o.block; }),
+          "--block", "/block",
+          "samples per command and tape block; 0: half a second of samples, at most what keeps "
+          "a tape block under 60 kB",
+          kShow, Written::kAlways, [](auto& o) -> auto& { return o.block; }),
       value_field(
           "--window", "/window", "blocks in flight ahead of the slowest consumer", kShow,
           Written::kAlways, [](auto& o) -> auto& { return o.window; }),

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 
 #include "fralab/acquire/model_info.h"
 
@@ -26,7 +27,7 @@ Excitation excitation_from_string(const std::string& s) {
 }
 
 void AcquireOptions::validate() const {
-  if (block < 1) throw InputError("--block must be >= 1");
+  if (block < 0) throw InputError("--block must be >= 1 (or 0: sized to the sample rate)");
   if (window < 1) throw InputError("--window must be >= 1");
   if (!(speed >= 0)) throw InputError("--speed must be >= 0");
   if (free_running && !(speed > 0))
@@ -68,17 +69,14 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
                                         const std::string& run_id) {
   o.validate();
   const SteppedSineOptions so = stepped_sine_options(model, o);
-  if (o.block * 8.0 * (model.inputs.size() * 2 + model.outputs.size() + 2) > 60000) {
-    throw InputError("--block " + std::to_string(o.block) +
-                     " would make tape blocks over 60 kB (LCM fragments); use a smaller block");
-  }
+  const int block = block_samples(model, o);
   const std::vector<int> excite = select_inputs(model, o.inputs);
   auto cin = campaign_inputs(model, o.amplitude_pct, o.amplitude_scale);
   switch (o.excitation) {
     case Excitation::kStepped:
       if (o.adaptive.enabled())
         return std::make_unique<AdaptiveSineCampaign>(cin, excite, so, o.adaptive.pilot_cycles,
-                                                      o.block, run_id,
+                                                      block, run_id,
                                                       parse_decisions(o.adaptive_decided));
       return std::make_unique<SteppedSineCampaign>(cin, excite, plan_stepped_sine(so),
                                                    so.sample_rate_hz, run_id);
@@ -112,7 +110,25 @@ std::unique_ptr<AutoIntegrator> make_auto_integrator(Campaign& c, const Model& m
   return std::make_unique<AutoIntegrator>(*adaptive, outputs, o.adaptive, first_sample);
 }
 
+int block_samples(const Model& model, const AcquireOptions& o) {
+  const double bytes_per_sample = 8.0 * double(model.inputs.size() * 2 + model.outputs.size() + 2);
+  const int most = int(std::floor(kMaxTapeBlockBytes / bytes_per_sample));
+  if (o.block > 0) {
+    if (o.block > most)
+      throw InputError("--block " + std::to_string(o.block) + " would make tape blocks over " +
+                       std::to_string(int(kMaxTapeBlockBytes / 1000)) +
+                       " kB (LCM fragments); at most " + std::to_string(most) + " samples for " +
+                       model.name);
+    return o.block;
+  }
+  const int half_second = int(std::lround(0.5 * o.sample_rate_hz));
+  return std::max(1, std::min(half_second, most));
+}
+
 int64_t command_block_count(const Campaign& c, int block) {
+  if (block < 1)
+    throw InputError("command blocks of " + std::to_string(block) +
+                     " samples: size the block first (block_samples)");
   return (c.total_samples() + block - 1) / block;
 }
 
@@ -137,6 +153,9 @@ Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
 
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id) {
+  if (block < 1)
+    throw InputError("command block of " + std::to_string(block) +
+                     " samples: size the block first (block_samples)");
   const int64_t s0 = seq * block;
   const int n = int(std::min<int64_t>(block, c.total_samples() - s0));
   std::vector<std::vector<double>> cmd;

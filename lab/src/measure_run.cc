@@ -167,6 +167,7 @@ void MeasureRun::read_options(const MeasureOptions& given) {
   }
   model_ = load_model_or_scheduled(o_.engine);
   o_.acquire.validate();
+  o_.acquire.block = block_samples(model_, o_.acquire);  // run.json and every process: the number
   const std::vector<int> excite = select_inputs(model_, o_.acquire.inputs);
   fs::create_directories(dir_.frd_dir());
   fs::create_directories(dir_.logs_dir());

@@ -98,6 +98,7 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
   for (const auto& out : model.outputs) outs.push_back(out.name);
   AcquireOptions ao = o.acquire;
   ao.inputs = join(input_names);
+  ao.block = block_samples(model, ao);  // the number every process is given
   auto start = [&](ProcessSpec spec) { plan.processes.push_back(std::move(spec)); };
 
   std::vector<std::string> rec = {

@@ -637,11 +637,12 @@ TEST(Lab, ReportHtmlRendersInHeadlessChromium) {
 // A plant that is not in lockstep: on its own clock at real time, with jittered ticks, fed from a
 // command buffer kept well ahead, the free-running plant gives the lockstep numbers bit for bit
 // (the same commands at the same samples). (A buffer run dry is the next test's subject, forced.)
-// A short J85 run (two steps of Wf, 5-10 Hz, 46 command blocks of 0.1 s), measured in lockstep
-// into DIR/lockstep for the free-running tests to compare with.
+// A short J85 run (two steps of Wf, 5-10 Hz, 46 command blocks of 0.1 s: --block 100, so that a
+// plant's tick is short against a step), measured in lockstep into DIR/lockstep for the
+// free-running tests to compare with.
 const std::string kFreeRun =
     " --engine j85_95 --input Wf --band 5:10 --points-per-decade 3 "
-    "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --no-progress";
+    "--min-integrate-s 1 --settle-time-constant-s 0.2 --seed 5 --block 100 --no-progress";
 void measure_lockstep(const std::string& d) {
   Cmd lock = sh(kBin + "/fralab measure" + kFreeRun + " --out " + d + "/lockstep");
   ASSERT_EQ(lock.status, 0) << lock.output;

@@ -216,7 +216,7 @@ TEST(AcquireFlags, TheArgvKeepsItsOrder) {
                                              "--speed",
                                              "0",
                                              "--block",
-                                             "100",
+                                             "0",
                                              "--window",
                                              "2",
                                              "--settle-time-constant-s",
@@ -247,7 +247,7 @@ TEST(AcquireFlags, AutoIsAnExcitationOfTheLabOnly) {
 TEST(AcquireFlags, TheJsonFormHasEveryKey) {
   EXPECT_EQ(acquire_options_to_json(AcquireOptions{}).dump(),
             R"({"adaptive":{"pilot_cycles":4,"sigma_target":0.0},"adaptive_decided":"",)"
-            R"("amplitude_pct":-1.0,"amplitude_scale":1.0,"band":"0.04:100","block":100,)"
+            R"("amplitude_pct":-1.0,"amplitude_scale":1.0,"band":"0.04:100","block":0,)"
             R"("excitation":"stepped","free_running":false,"inputs":"","lead":10,)"
             R"("max_repeats":3,"min_cycles":8,"min_integrate_s":4.0,)"
             R"("multisine_design":"orthogonal","multisine_phases":"low-crest",)"

@@ -66,6 +66,34 @@ TEST(Acquisition, BadOptionsAreNamed) {
   EXPECT_EQ(excitation_from_string(to_string(Excitation::kSweep)), Excitation::kSweep);
 }
 
+TEST(Acquisition, BlocksAreSizedToTheSampleRateUnderADatagram) {
+  Model m = load_model_or_embedded("j85_95");  // 4 inputs, 5 outputs: 2 x 4 + 5 + 2 = 15 channels
+  AcquireOptions o = short_run();
+  ASSERT_EQ(o.block, 0);
+  EXPECT_EQ(block_samples(m, o), 500);  // half a second at 1 kHz; 500 x 15 x 8 B = 60 kB
+  o.sample_rate_hz = 400;
+  EXPECT_EQ(block_samples(m, o), 200);  // half a second
+  o.sample_rate_hz = 1000;
+  while (m.outputs.size() < 16) {
+    auto extra = m.outputs.back();
+    extra.name += "x";
+    m.outputs.push_back(extra);
+  }
+  EXPECT_EQ(block_samples(m, o), 288);  // 26 channels: floor(60000 / (8 x 26))
+  o.block = 100;
+  EXPECT_EQ(block_samples(m, o), 100);  // given, kept
+  o.block = 289;
+  try {
+    block_samples(m, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--block 289"));
+    EXPECT_THAT(e.what(), HasSubstr("at most 288"));
+  }
+  o.block = -1;
+  EXPECT_THROW(o.validate(), InputError);
+}
+
 TEST(Lockstep, ThePlantEchoesCommandsAndRefusesAGap) {
   const Model m = load_model_or_embedded("j85_95");
   const auto camp = make_campaign(m, short_run(), "r");

@@ -215,6 +215,7 @@ AcquireOptions adaptive_run(double sigma_target) {
   o.slowest_time_constant_s = 0.3;
   o.amplitude_pct = 2.0;
   o.adaptive.sigma_target = sigma_target;
+  o.block = 100;  // steps start on 0.1 s boundaries (the engine-time figures below count blocks)
   return o;
 }
 

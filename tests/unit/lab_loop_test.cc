@@ -77,6 +77,7 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   o.min_integrate_s = so.min_integrate_s;
   o.slowest_time_constant_s = so.slowest_time_constant_s;
   o.amplitude_pct = 2.0;
+  o.block = block_samples(m, o);
   const auto camp = make_campaign(m, o, "memq-run");
 
   lcm::LCM bus("memq://");
@@ -94,6 +95,7 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   AcquisitionLoopOptions lo;
   lo.run_id = "memq-run";
   lo.consumers = {"analyze", "recorder"};
+  lo.acquire = o;
   AcquisitionNode acquisition(bus, bus, *camp, lo);
   plant.announce_ready();
   analyser.announce_ready();
@@ -199,6 +201,7 @@ TEST(LabLoop, TheAdaptiveAcquisitionDecidesAsTheOfflineRun) {
   o.slowest_time_constant_s = 0.5;
   o.amplitude_pct = 2.0;
   o.adaptive.sigma_target = 0.01;
+  o.block = block_samples(m, o);
   const auto camp = make_campaign(m, o, "memq-run");
   const auto integrator = make_auto_integrator(*camp, m, o);
   ASSERT_NE(integrator, nullptr);
@@ -245,6 +248,7 @@ TEST(LabLoop, AConsumerThatNeverSaysReadyIsNamed) {
   AcquireOptions o;
   o.band = "1:2";
   o.points_per_decade = 1;
+  o.block = block_samples(m, o);
   const auto camp = make_campaign(m, o, "r");
   lcm::LCM bus("memq://");
   ASSERT_TRUE(bus.good());
@@ -252,6 +256,7 @@ TEST(LabLoop, AConsumerThatNeverSaysReadyIsNamed) {
   AcquisitionLoopOptions lo;
   lo.run_id = "r";
   lo.consumers = {"analyze-silent"};
+  lo.acquire = o;
   lo.ready_timeout_s = 0.3;
   AcquisitionNode acquisition(bus, bus, *camp, lo);
   plant.announce_ready();

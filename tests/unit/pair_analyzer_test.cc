@@ -479,6 +479,7 @@ TEST(PairAnalyzer, RealisationsGiveTheBestLinearApproximationWithTheNonlinearPar
   // rms 0.0707 of a full scale of 1: peaks well inside it
   AcquireOptions o = fralab::testing::random_phase_multisine("0.1:20", 6, 10, 8);
   o.slowest_time_constant_s = 0.1;
+  o.block = block_samples(m, o);
   const auto camp = make_campaign(m, o, "test");
   auto tape = [&](double c, double noise) {
     std::mt19937_64 g(5);

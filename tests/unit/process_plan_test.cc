@@ -176,6 +176,7 @@ TEST(ProcessPlan, EachProcessGetsTheRunsArguments) {
                           "matrix"));
   AcquireOptions ao = o.acquire;
   const Model m = load_model_or_embedded("j85_95");
+  ao.block = 500;  // sized: half a second at 1 kHz, 15 tape channels under 60 kB
   std::vector<std::string> acq = {
       "/bin/fralab-acquire",
       "--engine",
@@ -217,7 +218,8 @@ TEST(ProcessPlan, PlantOptionsReachThePlant) {
   EXPECT_THAT(process(plan(o), "plant").argv,
               ElementsAre("/bin/fralab-plant", "--model", kDir + "/engine.json", "--lcm-url", kUrl,
                           "--seed", "3", "--run-id", kRun, "--sample-rate", "1000", "--no-noise",
-                          "--free-running", "--speed", "4", "--tick", "100", "--jitter-ms", "2.5"));
+                          "--free-running", "--speed", "4", "--tick", "500", "--jitter-ms", "2.5"));
+  // (--tick: the block sized for the J85's 15 tape channels at 1 kHz, half a second.)
 }
 
 TEST(ProcessPlan, AResumedRunReplaysAppendsAndAnalysesAtTheEnd) {

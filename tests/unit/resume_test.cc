@@ -32,6 +32,7 @@ struct Fixture {
     o.points_per_decade = 2;
     o.min_cycles = 2;
     o.min_integrate_s = 0;
+    o.block = 100;  // blocks of 0.1 s: several to each step, so a lost one leaves others whole
     run = simulate_campaign(model, o, false, 1);
   }
   ~Fixture() { std::filesystem::remove(tape); }

@@ -87,7 +87,9 @@ AcquireOptions random_phase_multisine(const std::string& band, int points_per_de
   return o;
 }
 
-TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed) {
+TapeRun simulate_campaign(const Model& m, const AcquireOptions& given, bool noise, uint64_t seed) {
+  AcquireOptions o = given;
+  o.block = block_samples(m, o);  // as fralab-acquire sizes it
   const std::unique_ptr<Campaign> camp = make_campaign(m, o, "test");
   SimulatorOptions opt;
   opt.sample_rate_hz = o.sample_rate_hz;

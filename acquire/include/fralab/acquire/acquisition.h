@@ -44,9 +44,12 @@ struct AcquireOptions {
   double settle_cycles = 1.0;  // stepped sine: settle at least this many cycles per step
   double sample_rate_hz = 1000.0;
   double slowest_time_constant_s = -1;  // settling; < 0: the model's slowest (largest 1/|pole|)
-  int block = 100;                      // samples per command block
-  int window = 2;                       // blocks in flight ahead of the slowest consumer
-  double speed = 0;                     // 1 = real time, 0 = as fast as the consumers keep up
+  // Samples per command (and tape) block; 0: sized by block_samples (half a second of samples, at
+  // most what keeps a tape block under 60 kB). Results do not depend on it: only the messages'
+  // count does, and with it the lab's speed.
+  int block = 0;
+  int window = 2;    // blocks in flight ahead of the slowest consumer
+  double speed = 0;  // 1 = real time, 0 = as fast as the consumers keep up
   // A free-running plant: it runs on its own clock at `speed` (> 0) x real time,
   // playing commands from a buffer; the acquisition keeps `lead` blocks of commands ahead of the
   // plant's clock (no acknowledgement awaited), watches the tape for held samples (channel
@@ -80,7 +83,20 @@ std::unique_ptr<AutoIntegrator> make_auto_integrator(Campaign& c, const Model& m
                                                      const AcquireOptions& o,
                                                      int64_t first_sample = 0);
 
-/// Number of command blocks of `block` samples that carry the whole campaign.
+/// The largest tape block, bytes: LCM 1.3.1 loses a fragmented message whose fragments arrive out
+/// of order (docs/lcm-protocol.md), so a block stays under one datagram.
+inline constexpr double kMaxTapeBlockBytes = 60000;
+
+/// Samples per block of a run of `o` on model `m`: o.block when > 0 (InputError, naming --block,
+/// when its tape block, 8 bytes a sample on 2 n_inputs + n_outputs + 2 channels, would exceed
+/// kMaxTapeBlockBytes); for 0, half a second of samples at o.sample_rate_hz, at most what keeps
+/// the tape block under that size, at least 1. A tape block is what every consumer decodes and
+/// acknowledges, so its size sets the messages per second of engine time: 100 samples a block
+/// ran the J85 stepped lab at 186x real time, 500 at 284x (docs/validation.md).
+int block_samples(const Model& m, const AcquireOptions& o);
+
+/// Number of command blocks of `block` samples (>= 1, a sized block; InputError otherwise) that
+/// carry the whole campaign.
 int64_t command_block_count(const Campaign& c, int block);
 
 /// The block that ends an aborted run: `n` samples from `start_sample` of every input's command
@@ -89,7 +105,7 @@ Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
                   double sample_rate_hz, const std::string& run_id);
 
 /// Command block `seq`: samples [seq * block, ...) of every input's command (channels u_<input>)
-/// and the reference (ref_phase, rad; ref_freq_hz), final_block on the last one.
+/// and the reference (ref_phase, rad; ref_freq_hz), final_block on the last one. block >= 1.
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id);
 
