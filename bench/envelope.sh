@@ -6,14 +6,15 @@
 # simulation and own extended model, and the bounds: at most twice the own model's error and a
 # third of the simulation's), and the scheduled model measured at 90 %. Run after
 # scripts/build.sh (about 3 min on two idle cores):
-#   bash bench/envelope.sh [OUT]
+#   bash bench/envelope.sh [OUT [ENVELOPE FLAGS...]]     # e.g. OUT --no-validation
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${FRALAB_BIN:-build/bin}
 out=${1:-$(mktemp -d)}
+shift || true
 start=$(date +%s)
 scripts/isolated.sh $B/fralab envelope --engine j85 --simulation j85_sim --no-progress \
-  --out "$out/envelope" > "$out/envelope.log"
+  --out "$out/envelope" "$@" > "$out/envelope.log"
 wall=$(($(date +%s) - start))
 scripts/isolated.sh $B/fralab measure --engine "$out/envelope/scheduled_model.json@90" \
   --excitation auto --no-progress --out "$out/at90" > /dev/null

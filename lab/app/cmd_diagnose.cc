@@ -23,6 +23,9 @@ void add_diagnose_command(CLI::App& app) {
   c->add_option("--measured", dc->measured, "or: a measure output folder");
   c->add_option("--out", dc->out)->required();
   c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
+  c->add_flag("!--no-validation", dc->validation,
+              "with --engine: no second measurement to validate on (each finding earns its place "
+              "on the fitting data; half the engine time)");
   add_measure_flags(c, dc->measure);
   auto op = std::make_shared<std::string>();
   add_operating_point_flag(c, *op);

@@ -28,6 +28,9 @@ void add_envelope_command(CLI::App& app) {
                 "the operating_point key the points are ordered and the laws fitted by")
       ->capture_default_str();
   c->add_flag("!--no-plots", ec->plots, "skip the gnuplot figures");
+  c->add_flag("!--no-validation", ec->validation,
+              "no validation measurement at each point (fralab diagnose --no-validation); the "
+              "leave-one-out still checks the schedule");
   add_measure_flags(c, ec->measure);
   c->callback([ec] {
     const EnvelopeReport r = run_envelope(

@@ -66,17 +66,22 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     m.out = c.out + "/measure";
     if (const MeasureResult r = measure(m); r.partial())
       res.partial.push_back(partial_run_message(r, m.out));
-    // An independent measurement for validation, not used for fitting: another noise seed and a
-    // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
-    MeasureOptions v = m;
-    v.seed = m.seed + 1;
-    v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
-    v.out = MeasureDir(m.out).validation().root;
-    if (const MeasureResult r = measure(v); r.partial())
-      res.partial.push_back(partial_run_message(r, v.out));
     data_dir = m.out;
-    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed) +
-                "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
+    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed);
+    if (c.validation) {
+      // An independent measurement for validation, not used for fitting: another noise seed and
+      // a second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are
+      // verified.
+      MeasureOptions v = m;
+      v.seed = m.seed + 1;
+      v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
+      v.out = MeasureDir(m.out).validation().root;
+      if (const MeasureResult r = measure(v); r.partial())
+        res.partial.push_back(partial_run_message(r, v.out));
+      data_name += "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
+    } else {
+      data_name += "; no validation measurement)";
+    }
   }
   const MeasuredFolder folder = read_measured_folder(data_dir);
   const auto& data = folder.data;

@@ -675,6 +675,7 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
       d.measure = c.measure;
       d.measure.engine = e.spec;
       d.plots = c.plots;
+      d.validation = c.validation;
       const DiagnoseResult res = run_diagnose(d);
       say("point " + name + ": " + res.summary);
     }

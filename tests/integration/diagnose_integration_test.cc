@@ -72,14 +72,14 @@ int run(const std::string& cmd) {
 
 // Runs the diagnosis of `truth` against the simulation; returns diagnosis.json.
 Json diagnose(const std::string& name, const Model& truth, bool plots = false,
-              std::string* out_dir = nullptr) {
+              std::string* out_dir = nullptr, const std::string& flags = "") {
   const std::string d = fralab::testing::tmpdir(name, "fralab_diag_");
   save_model(d + "/sim.json", simulation());
   save_model(d + "/truth.json", truth);
   const std::string cmd = kBin + "/fralab diagnose --simulation " + d + "/sim.json --engine " + d +
                           "/truth.json --excitation stepped --band 0.2:30 --points-per-decade 6 "
                           "--min-integrate-s 2 " +
-                          (plots ? "" : "--no-plots ") + "--out " + d + "/out";
+                          (plots ? "" : "--no-plots ") + flags + " --out " + d + "/out";
   if (out_dir) *out_dir = d + "/out";
   EXPECT_EQ(run(cmd), 0) << cmd << "\n" << d;
   return json_load_file(d + "/out/diagnosis.json");
@@ -127,6 +127,26 @@ TEST(Diagnose, DelayInOnePath) {
   EXPECT_NEAR((*f)["parameters"]["delay_s"].get<double>(), 0.012, 0.5e-3);
   EXPECT_EQ(d["findings"].size(), 1u) << d.dump(1);
   expect_gain(d);
+}
+
+// Without the validation measurement: one measurement (no measure/validation folder), the same
+// finding with its parameter, the error on the fitting data lowered, no validation figures.
+TEST(Diagnose, WithoutValidationOneMeasurementFindsTheDelay) {
+  Model t = simulation();
+  t.path("Y1", "U1")->tf.delay_s = 0.012;
+  std::string dir;
+  Json d = diagnose("delay_noval", t, false, &dir, "--no-validation");
+  EXPECT_TRUE(fs::exists(dir + "/measure/run.json"));
+  EXPECT_FALSE(fs::exists(dir + "/measure/validation"));
+  const Json* f = find(d, "time_delay");
+  ASSERT_TRUE(f) << d.dump(1);
+  EXPECT_EQ((*f)["input"], "U1");
+  EXPECT_EQ((*f)["output"], "Y1");
+  EXPECT_NEAR((*f)["parameters"]["delay_s"].get<double>(), 0.012, 0.5e-3);
+  EXPECT_EQ(d["findings"].size(), 1u) << d.dump(1);
+  EXPECT_LT(d["summary"]["error_after"].get<double>(),
+            0.3 * d["summary"]["error_before"].get<double>());
+  EXPECT_FALSE(d["summary"].contains("validation_error_after")) << d["summary"].dump();
 }
 
 TEST(Diagnose, MissingLagInOnePath) {

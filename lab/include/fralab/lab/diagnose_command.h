@@ -19,6 +19,11 @@ struct DiagnoseCommand {
   std::string out;
   MeasureOptions measure;  // flags of `measure`
   bool plots = true;
+  /// With `engine`: the second measurement (another seed, 1.5x the amplitude) that checks the
+  /// extended model on data it was not fitted to. Off (--no-validation), each finding earns its
+  /// place on the fitting data alone (its removal must raise chi2 by more than k ln 2N and raise
+  /// the error: diagnose.h), and the engine time halves.
+  bool validation = true;
 };
 
 struct DiagnoseResult {

@@ -136,6 +136,7 @@ struct EnvelopeCommand {
   EnvelopeOptions options;
   MeasureOptions measure;  // every measure flag (engine and out are set per point)
   bool plots = true;
+  bool validation = true;  // each point's validation measurement (DiagnoseCommand::validation)
 };
 
 /// The folder name of a point: "<schedule_by>_<x>" (x without trailing zeros).
