@@ -229,9 +229,10 @@ void AutoIntegrator::feed_events() {
     const std::string in = c_.inputs()[size_t(x)].name;
     AnalyzerOptions ao;
     ao.input = in;
+    const auto store = std::make_shared<SampleStore>();  // each block's channels kept once
     for (const std::string& out : outputs_)
-      an_.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao));
-    an_.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao));
+      an_.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao, store));
+    an_.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao, store));
   }
   const auto& ev = c_.events();
   while (fed_ < ev.size() && ev[fed_].sample < c_.window_end(g_) &&

@@ -9,7 +9,9 @@ TapeFeeder::TapeFeeder(const std::vector<std::string>& pairs, const AnalyzerOpti
                        std::string run_id)
     : run_id_(std::move(run_id)) {
   if (pairs.empty()) throw InputError("no --pair given: name at least one pair E1:E2");
-  for (const auto& p : pairs) an_.push_back(std::make_unique<PairAnalyzer>(p, opt));
+  // One store for all: each block reaches every analyser (deliver()), its channels kept once.
+  const auto store = std::make_shared<SampleStore>();
+  for (const auto& p : pairs) an_.push_back(std::make_unique<PairAnalyzer>(p, opt, store));
 }
 
 TapeFeeder::Fed TapeFeeder::feed(const std::string& channel, const void* data, int size) {

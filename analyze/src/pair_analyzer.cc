@@ -19,10 +19,21 @@ void AnalyzerOptions::validate() const {
   if (reorder_slack_samples < 0) throw InputError("analyzer: reorder_slack_samples must be >= 0");
 }
 
-PairAnalyzer::PairAnalyzer(const std::string& pair, const AnalyzerOptions& options)
-    : pair_(pair), opt_(options) {
+PairAnalyzer::PairAnalyzer(const std::string& pair, const AnalyzerOptions& options,
+                           std::shared_ptr<SampleStore> store)
+    : pair_(pair),
+      opt_(options),
+      store_(store ? std::move(store) : std::make_shared<SampleStore>()) {
   opt_.validate();
   std::tie(e1_, e2_) = split_pair(pair);
+  for (const std::string& ch : {e1_, e2_, std::string("ref_phase")}) store_->keep(ch);
+  reader_ = store_->add_reader();
+}
+
+PairAnalyzer::~PairAnalyzer() { store_->remove_reader(reader_); }
+
+const double* PairAnalyzer::samples(const std::string& ch, int64_t n) const {
+  return store_->channel(ch)->data() + (n - store_->base());
 }
 
 bool PairAnalyzer::wants(const StatusEvent& st) const {
@@ -121,8 +132,7 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
     Window w{st, settle_step_ == st.step && settle_from_ <= st.sample ? settle_from_ : st.sample,
              st.excitation == Excitation::kMultisine ? orthogonal_inputs(st) : std::vector<int>{}};
     for (int i : w.ins)
-      for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]})
-        extra_.emplace(ch, std::vector<double>(x1_.size(), NAN));
+      for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]}) store_->keep(ch);
     pending_[st.sample] = std::move(w);
   } else if (st.state == RunState::kDone || st.state == RunState::kAbort) {
     done_seen_ = true;
@@ -138,57 +148,30 @@ void PairAnalyzer::on_block(const Block& b) {
                      (c1 < 0 ? e1_ : e2_) + " (pair " + pair_ + ")");
   }
   if (seqs_.count(b.seq)) return;  // duplicate delivery: the first copy counts
-  // Samples are kept contiguously from base_: a block 10^7 samples (2.8 h at 1 kHz) beyond what is
-  // kept (a gap no retransmitting run leaves, and 250 MB to hold), or 10^8 before it, is no block
-  // of this run's stream (a corrupt record).
-  const int64_t kept_end = base_ + int64_t(have_.size());
-  if (b.start_sample > kept_end + 10000000 || b.start_sample + b.n_samples < base_ - 100000000)
+  // Samples are kept contiguously from the store's base: a block 10^7 samples (2.8 h at 1 kHz)
+  // beyond what is kept (a gap no retransmitting run leaves, and 250 MB to hold), or 10^8 before
+  // it, is no block of this run's stream (a corrupt record).
+  const int64_t base = store_->base(), kept_end = store_->end();
+  if (b.start_sample > kept_end + 10000000 || b.start_sample + b.n_samples < base - 100000000)
     throw InputError("tape block seq " + std::to_string(b.seq) + " starts at sample " +
                      std::to_string(b.start_sample) + ", far from the samples so far (" +
-                     std::to_string(base_) + "-" + std::to_string(kept_end) + "): corrupt");
+                     std::to_string(base) + "-" + std::to_string(kept_end) + "): corrupt");
   ++blocks_seen_;
   seqs_[b.seq] = {b.start_sample, b.start_sample + b.n_samples};
-  // The first block: kept from the run's start, or from reorder slack before it when it is late
-  // (an analyser started mid-run does not hold the hours before it joined).
-  if (x1_.empty() && have_.empty())
-    base_ = b.start_sample > 2 * opt_.reorder_slack_samples
-                ? b.start_sample - opt_.reorder_slack_samples
-                : std::min<int64_t>(b.start_sample, 0);
   const int64_t end = b.start_sample + b.n_samples;
-  if (end - base_ > int64_t(x1_.size())) {
-    x1_.resize(end - base_, 0.0);
-    x2_.resize(end - base_, 0.0);
-    ref_.resize(end - base_, NAN);
-    have_.resize(end - base_, 0);
-  }
-  for (auto& [name, v] : extra_)
-    if (v.size() < x1_.size()) v.resize(x1_.size(), NAN);
-  const int cr = b.channel_index("ref_phase");  // the generator's reference (sweeps use it)
-  for (int k = 0; k < b.n_samples; ++k) {
-    const int64_t n = b.start_sample + k - base_;
-    if (n < 0) continue;  // already discarded
-    x1_[n] = b.at(c1, k);
-    x2_[n] = b.at(c2, k);
-    if (cr >= 0) ref_[n] = b.at(cr, k);
-    have_[n] = 1;
-  }
-  for (size_t c = 0; c < b.channels.size(); ++c) {
-    auto it = extra_.find(b.channels[c]);
-    if (it == extra_.end()) continue;
-    for (int k = 0; k < b.n_samples; ++k) {
-      const int64_t n = b.start_sample + k - base_;
-      if (n >= 0) it->second[n] = b.at(int(c), k);
-    }
-  }
+  // Stored once for every pair sharing the store (the first of them to see the block). The first
+  // block: kept from the run's start, or from reorder slack before it when it is late (an
+  // analyser started mid-run does not hold the hours before it joined).
+  store_->add(b, opt_.reorder_slack_samples);
   held_.add(b);  // a free-running plant's dry buffer
   max_seen_ = std::max(max_seen_, end);
   try_complete(false);
 }
 
 bool PairAnalyzer::covers(int64_t a, int64_t b) const {
-  if (a < base_ || b - base_ > int64_t(have_.size())) return false;
+  if (a < store_->base() || b > store_->end()) return false;
   for (int64_t n = a; n < b; ++n) {
-    if (!have_[n - base_]) return false;
+    if (!store_->have(n)) return false;
   }
   return true;
 }
@@ -199,9 +182,9 @@ std::string PairAnalyzer::describe_gaps(int64_t a, int64_t b) const {
     out += (out.empty() ? "" : ", ") + std::string("samples ") + std::to_string(first) + "-" +
            std::to_string(last);
   };
-  auto have = [&](int64_t n) { return have_[size_t(n - base_)] != 0; };
+  auto have = [&](int64_t n) { return store_->have(n); };
   // Samples outside what is stored are one gap each side (no sample-by-sample walk there).
-  const int64_t lo = std::max(a, base_), hi = std::min(b, base_ + int64_t(have_.size()));
+  const int64_t lo = std::max(a, store_->base()), hi = std::min(b, store_->end());
   if (lo >= hi) {
     add(a, b - 1);
   } else {
@@ -332,32 +315,23 @@ void PairAnalyzer::flush() {
 }
 
 void PairAnalyzer::trim() {
-  // Keep samples from the earliest pending window (or the newest data if none is pending).
+  // This pair needs samples from its earliest pending window (or the newest data if none is
+  // pending); the store drops what no pair needs.
   int64_t keep =
       pending_.empty() ? max_seen_ - opt_.reorder_slack_samples : pending_.begin()->first;
-  keep = std::min(keep, max_seen_);
-  if (keep - base_ > 1 << 16) {  // trim in chunks of 65536 samples (65 s at 1 kHz)
-    const int64_t drop = keep - base_;
-    x1_.erase(x1_.begin(), x1_.begin() + drop);
-    x2_.erase(x2_.begin(), x2_.begin() + drop);
-    ref_.erase(ref_.begin(), ref_.begin() + drop);
-    for (auto& [name, v] : extra_)
-      v.erase(v.begin(), v.begin() + std::min<int64_t>(drop, v.size()));
-    have_.erase(have_.begin(), have_.begin() + drop);
-    base_ = keep;
-  }
+  store_->release(reader_, std::min(keep, max_seen_));
 }
 
 FrdPoint PairAnalyzer::compute(const Window& win) {
   const StatusEvent& st = win.st;
   const size_t L = size_t(st.n_samples);
-  const double* a = x1_.data() + (st.sample - base_);
-  const double* b = x2_.data() + (st.sample - base_);
+  const double* a = samples(e1_, st.sample);
+  const double* b = samples(e2_, st.sample);
   const double dphi = 2 * std::numbers::pi * st.frequency_hz / st.sample_rate_hz;
   // A stepped sine's reference is the status's phase and frequency; a sweep's is the recorded
   // per-sample reference phase (tape channel ref_phase).
   const bool sweep = st.excitation == Excitation::kSweep;
-  const double* rp = ref_.data() + (st.sample - base_);
+  const double* rp = samples("ref_phase", st.sample);
   if (sweep) {
     for (size_t k = 0; k < L; ++k) {
       if (std::isnan(rp[k])) {
@@ -455,8 +429,8 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
   fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()),
                                         FFTW_ESTIMATE);
   std::vector<std::vector<std::complex<double>>> X1(M), X2(M);
-  const double* a = x1_.data() + (st.sample - base_);
-  const double* b = x2_.data() + (st.sample - base_);
+  const double* a = samples(e1_, st.sample);
+  const double* b = samples(e2_, st.sample);
   for (int p = 0; p < M; ++p) {
     std::copy(a + size_t(p) * P, a + size_t(p + 1) * P, buf.begin());
     fftw_execute(plan);
@@ -533,10 +507,9 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
     return ex;
   }
   auto channel = [&](const std::string& ch) -> const double* {
-    auto it = extra_.find(ch);
-    if (it == extra_.end() || st.sample - base_ + st.n_samples > int64_t(it->second.size()))
-      return nullptr;
-    const double* c = it->second.data() + (st.sample - base_);
+    const std::vector<double>* v = store_->channel(ch);
+    if (!v || st.sample - store_->base() + st.n_samples > int64_t(v->size())) return nullptr;
+    const double* c = samples(ch, st.sample);
     for (int64_t k = 0; k < st.n_samples; ++k)
       if (std::isnan(c[k])) return nullptr;
     return c;
@@ -583,8 +556,8 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   ex.nl.assign(L, 0.0);
   std::vector<Complex> x2_mean(P / 2 + 1, 0.0);
   std::vector<std::vector<Complex>> pos_mean(ins.size(), std::vector<Complex>(P / 2 + 1, 0.0));
-  const double* a = x1_.data() + (st.sample - base_);
-  const double* b = x2_.data() + (st.sample - base_);
+  const double* a = samples(e1_, st.sample);
+  const double* b = samples(e2_, st.sample);
   for (int p = 0; p < M; ++p) {
     const auto s1 = period_spectrum(a, p);
     const auto s2 = period_spectrum(b, p);

@@ -55,11 +55,13 @@
 
 #include <complex>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "fralab/analyze/sample_store.h"
 #include "fralab/core/block.h"
 #include "fralab/core/frd.h"
 
@@ -85,7 +87,13 @@ struct AnalyzerOptions {
 
 class PairAnalyzer {
  public:
-  PairAnalyzer(const std::string& pair, const AnalyzerOptions& options = {});
+  /// `store`: the samples, shared with the other analysers of the same tape stream (each block
+  /// given to every one of them, in the same order: TapeFeeder); nullptr: its own.
+  PairAnalyzer(const std::string& pair, const AnalyzerOptions& options = {},
+               std::shared_ptr<SampleStore> store = nullptr);
+  ~PairAnalyzer();
+  PairAnalyzer(const PairAnalyzer&) = delete;
+  PairAnalyzer& operator=(const PairAnalyzer&) = delete;
 
   void on_status(const StatusEvent& status);
   void on_block(const Block& block);
@@ -141,19 +149,19 @@ class PairAnalyzer {
   std::map<int64_t, Window> pending_;  // by start sample
   std::vector<FrdPoint> points_, fresh_;
   std::vector<FrdPoint> realisation_points_;  // a multisine's, each realisation's (frd(): BLA)
-  // sample store from base_
-  int64_t base_ = 0;
-  std::vector<double> x1_, x2_, ref_;  // ref_: the tape's ref_phase (NaN when absent)
-  // Channels an orthogonal multisine needs besides E1 and E2 (the commands u_X and positions X of
-  // its inputs), registered by its status; kept as x1_ (NaN: absent).
-  std::map<std::string, std::vector<double>> extra_;
+  // The samples: E1, E2, the tape's ref_phase (NaN when absent) and the channels an orthogonal
+  // multisine needs besides (the commands u_X and positions X of its inputs, kept from its status
+  // on), possibly shared with other pairs; this pair is reader `reader_` of it.
+  std::shared_ptr<SampleStore> store_;
+  int reader_ = 0;
+  /// Channel `ch` from sample n (n >= store_->base(); the channel kept).
+  const double* samples(const std::string& ch, int64_t n) const;
   struct Group {
     StatusEvent st;                         // its first experiment's status (lines, inputs)
     std::vector<int> ins;                   // its inputs
     std::map<int, Experiment> experiments;  // by experiment e
   };
   std::map<int, Group> groups_;  // by realisation
-  std::vector<char> have_;
   // Samples a free-running plant held (tape channel "underrun"), and the last settle status (its
   // step and start sample).
   HeldSamples held_;

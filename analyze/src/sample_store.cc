@@ -1,0 +1,58 @@
+#include "fralab/analyze/sample_store.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace fralab {
+
+void SampleStore::keep(const std::string& channel) {
+  ch_.emplace(channel, std::vector<double>(have_.size(), NAN));
+}
+
+const std::vector<double>* SampleStore::channel(const std::string& name) const {
+  const auto it = ch_.find(name);
+  return it == ch_.end() ? nullptr : &it->second;
+}
+
+bool SampleStore::add(const Block& b, int64_t slack) {
+  if (seqs_.count(b.seq)) return false;
+  seqs_[b.seq] = 1;
+  if (have_.empty() && seqs_.size() == 1)
+    base_ =
+        b.start_sample > 2 * slack ? b.start_sample - slack : std::min<int64_t>(b.start_sample, 0);
+  const int64_t last = b.start_sample + b.n_samples;
+  if (last - base_ > int64_t(have_.size())) {
+    for (auto& [name, v] : ch_) v.resize(size_t(last - base_), NAN);
+    have_.resize(size_t(last - base_), 0);
+  }
+  const int64_t k0 = std::max<int64_t>(0, base_ - b.start_sample);  // before base: dropped
+  for (size_t c = 0; c < b.channels.size(); ++c) {
+    const auto it = ch_.find(b.channels[c]);
+    if (it == ch_.end()) continue;
+    double* v = it->second.data() + (b.start_sample - base_);
+    for (int64_t k = k0; k < b.n_samples; ++k) v[k] = b.at(int(c), int(k));
+  }
+  for (int64_t k = k0; k < b.n_samples; ++k) have_[size_t(b.start_sample + k - base_)] = 1;
+  return true;
+}
+
+int SampleStore::add_reader() {
+  keep_[next_reader_] = std::numeric_limits<int64_t>::min();
+  return next_reader_++;
+}
+
+void SampleStore::remove_reader(int reader) { keep_.erase(reader); }
+
+void SampleStore::release(int reader, int64_t keep) {
+  keep_[reader] = keep;
+  int64_t needed = std::numeric_limits<int64_t>::max();
+  for (const auto& [r, k] : keep_) needed = std::min(needed, k);
+  const int64_t drop = std::min<int64_t>(needed, end()) - base_;
+  if (drop <= 1 << 16 || drop < int64_t(have_.size()) - drop) return;
+  for (auto& [name, v] : ch_) v.erase(v.begin(), v.begin() + drop);
+  have_.erase(have_.begin(), have_.begin() + drop);
+  base_ += drop;
+}
+
+}  // namespace fralab
