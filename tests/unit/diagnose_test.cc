@@ -324,6 +324,77 @@ TEST(Diagnose, PathFindingsConsistentAfterJointSizingBecomeOnePlantFinding) {
   EXPECT_NEAR(gain->parameters.at("gain_db"), calibration.value, kGainTolDb) << json;
 }
 
+// The machine-shaped self-check's case 35 (seed 1): three inputs, two outputs, a 7.36 ms delay in
+// the output Y1's sensor; of the three paths into Y1 one is weak (its response far below the
+// strongest, its points as noisy as the output's noise makes them). The two strong paths each fit
+// the delay; the weak one, alone, cannot tell it. Applied there, the delay costs no chi2 the noise
+// can tell, so the three are one finding at the output, its sensor.
+TEST(Diagnose, ASensorDelayTheWeakPathCannotTellIsStillTheOutputs) {
+  constexpr double kDelayTolS = 0.3e-3, kNoiseOfStrongest = 0.005;
+  const testing::RandomCase c = testing::random_machine_case(1, 35);
+  ASSERT_EQ(c.hidden.size(), 1u);
+  ASSERT_EQ(c.hidden[0].cause, CauseKind::kTimeDelay);
+  ASSERT_EQ(c.hidden[0].scope, Scope::kOutput);
+  const std::string out = c.hidden[0].output;
+  std::vector<std::string> pairs;
+  for (const ModelInput& in : c.engine.inputs) {
+    pairs.push_back("u_" + in.name + ":" + in.name);
+    for (const ModelOutput& o : c.engine.outputs) pairs.push_back(in.name + ":" + o.name);
+  }
+  auto w_of = [](int k) { return 0.6 * std::pow(10.0, k / 5.0); };  // 0.6-126 rad/s, 5 a decade
+  auto response = [&](const std::string& pair, double w, bool validation) {
+    const auto [e1, e2] = split_pair(pair);
+    const std::string in = e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
+    const double a =
+        (validation ? 0.03 : 0.02) * c.engine.inputs[size_t(c.engine.input_index(in))].full_scale;
+    return *model_pair_response(c.engine, pair, w, a);
+  };
+  // Each output's noise: a fraction of its strongest path's response at that frequency.
+  auto strongest = [&](const std::string& o, double w) {
+    double s = 0;
+    for (const ModelInput& in : c.engine.inputs)
+      s = std::max(s, std::abs(response(in.name + ":" + o, w, false)));
+    return s;
+  };
+  std::mt19937_64 rng(kValidationSeed);
+  std::vector<MeasuredPair> data;
+  double weakest = 1;  // the weakest path into `out`, relative to the strongest
+  for (const std::string& pair : pairs) {
+    const auto [e1, e2] = split_pair(pair);
+    const bool actuator = e1.rfind("u_", 0) == 0;
+    MeasuredPair mp;
+    mp.pair = mp.frd.pair = mp.validation.pair = pair;
+    for (const bool validation : {false, true})
+      for (int k = 0; k <= 11; ++k) {
+        const double w = w_of(k);
+        Complex g = response(pair, w, validation);
+        const double sigma =
+            actuator ? kRelSigma * std::abs(g)
+                     : std::max(kRelSigma * std::abs(g), kNoiseOfStrongest * strongest(e2, w));
+        if (e2 == out && !actuator && !validation)
+          weakest = std::min(weakest, std::abs(g) / strongest(e2, w));
+        g = with_noise(g, sigma, rng);
+        FrdPoint p;
+        p.w = w, p.mag = std::abs(g), p.phase_deg = std::arg(g) * 180 / M_PI;
+        p.input = actuator ? e1.substr(2) : e1;
+        p.sigma = sigma,
+        p.amplitude = (validation ? 0.03 : 0.02) *
+                      c.engine.inputs[size_t(c.engine.input_index(p.input))].full_scale;
+        (validation ? mp.validation : mp.frd).points.push_back(p);
+      }
+    data.push_back(mp);
+  }
+  ASSERT_LT(weakest, 0.1) << "the case has a weak path into " << out;
+  const Diagnosis d = diagnose(c.simulation, data);
+  const std::string json = diagnosis_to_json(d).dump(1);
+  ASSERT_EQ(d.findings.size(), 1u) << json;
+  const Finding& f = d.findings[0];
+  EXPECT_EQ(f.cause, CauseKind::kTimeDelay) << json;
+  EXPECT_EQ(f.scope, Scope::kOutput) << json;
+  EXPECT_EQ(f.output, out) << json;
+  EXPECT_NEAR(f.parameters.at("delay_s"), c.hidden[0].value, kDelayTolS) << json;
+}
+
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});

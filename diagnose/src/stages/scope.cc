@@ -5,8 +5,11 @@
 // The findings fitted jointly over several pairs come first. After the joint sizing (5b), path
 // findings that have become consistent over a whole scope are joined the same way (regroup): two
 // effects that overlap on one path can split wrongly in its own fit (a plant pole moved and an
-// output's gain, fitted on that path as a larger shift and a smaller gain) and veto the group.
+// output's gain, fitted on that path as a larger shift and a smaller gain) and veto the group. A
+// scope's pair where no fit found the cause (a weak path) joins the group when the cause costs it
+// no more than one parameter's chi2 penalty, and at least as many pairs found it as did not.
 #include <algorithm>
+#include <cmath>
 #include <functional>
 
 #include "stages.h"
@@ -122,7 +125,26 @@ bool regroup(DiagnosisRun& r) {
         for (size_t x : m) dup |= fs[x].pairs[0] == fs[b].pairs[0];
         if (!dup) m.push_back(b);
       }
-      if (m.size() != scope_pairs.size()) continue;
+      // The scope's other pairs: at most a path finding of the same cause each (its parameter
+      // not within the cause's tolerance of the group's), nothing else.
+      std::vector<std::string> rest;
+      for (const std::string& q : scope_pairs) {
+        bool found = false;
+        for (size_t x : m) found |= fs[x].pairs[0] == q;
+        if (!found) rest.push_back(q);
+      }
+      if (!rest.empty() && (m.size() < 2 || m.size() < rest.size())) continue;
+      std::vector<size_t> replaced = m;  // the group's findings and the rest's own
+      bool clear = true;
+      for (size_t x = 0; x < fs.size(); ++x)
+        for (const std::string& q : rest) {
+          if (std::find(fs[x].pairs.begin(), fs[x].pairs.end(), q) == fs[x].pairs.end()) continue;
+          if (candidate(fs[x]) && fs[x].cause == fs[a].cause)
+            replaced.push_back(x);
+          else
+            clear = false;
+        }
+      if (!clear) continue;
       Finding g;
       g.cause = fs[a].cause;
       g.scope = scope;
@@ -134,9 +156,31 @@ bool regroup(DiagnosisRun& r) {
         g.parameters[key] = sum / double(m.size());
       }
       for (size_t x : m) g.pairs.push_back(fs[x].pairs[0]);
-      std::sort(m.begin(), m.end());
-      for (size_t k = m.size(); k-- > 0;) fs.erase(fs.begin() + long(m[k]));
-      fs.push_back(g);
+      std::vector<Finding> joined;
+      for (size_t x = 0; x < fs.size(); ++x)
+        if (std::find(replaced.begin(), replaced.end(), x) == replaced.end())
+          joined.push_back(fs[x]);
+      joined.push_back(g);
+      // A pair of the scope whose own fit did not find the cause, or found it off the group's
+      // value (a weak path: its points few or noisy), joins the group when the group's cause
+      // there costs no more chi2 than one parameter's BIC penalty, ln 2N over its N points, above
+      // what it had: the data cannot tell the two apart, and the scope is what the pairs that can
+      // tell say. A pair the group's cause fits worse keeps the findings per path.
+      if (!rest.empty()) {
+        const Model before = extended_by(r, fs, fs.size()),
+                    after = extended_by(r, joined, joined.size());
+        bool quiet = true;
+        for (const std::string& q : rest) {
+          const auto qp = fitted_pairs(r, {q});
+          size_t n = 0;
+          for (const PairFit* p : qp) n += p->w.size();
+          const double rise = chi2_of(r, after, qp) - chi2_of(r, before, qp);
+          quiet &= rise <= std::log(2.0 * double(std::max<size_t>(n, 1)));
+        }
+        if (!quiet) continue;
+        for (const std::string& q : rest) joined.back().pairs.push_back(q);
+      }
+      fs = std::move(joined);
       merged = true;
       a = size_t(-1);  // the list changed: look again from its start
     }
