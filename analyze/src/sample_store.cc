@@ -26,14 +26,15 @@ bool SampleStore::add(const Block& b, int64_t slack) {
     for (auto& [name, v] : ch_) v.resize(size_t(last - base_), NAN);
     have_.resize(size_t(last - base_), 0);
   }
-  const int64_t k0 = std::max<int64_t>(0, base_ - b.start_sample);  // before base: dropped
+  const int64_t off = b.start_sample - base_;     // sample k of the block at index off + k
+  const int64_t k0 = std::max<int64_t>(0, -off);  // before base: dropped
   for (size_t c = 0; c < b.channels.size(); ++c) {
     const auto it = ch_.find(b.channels[c]);
     if (it == ch_.end()) continue;
-    double* v = it->second.data() + (b.start_sample - base_);
-    for (int64_t k = k0; k < b.n_samples; ++k) v[k] = b.at(int(c), int(k));
+    std::vector<double>& v = it->second;
+    for (int64_t k = k0; k < b.n_samples; ++k) v[size_t(off + k)] = b.at(int(c), int(k));
   }
-  for (int64_t k = k0; k < b.n_samples; ++k) have_[size_t(b.start_sample + k - base_)] = 1;
+  for (int64_t k = k0; k < b.n_samples; ++k) have_[size_t(off + k)] = 1;
   return true;
 }
 
