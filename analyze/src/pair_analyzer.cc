@@ -110,14 +110,15 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
   }
   if (st.state == RunState::kIntegrate) {
     if (!wants(st)) return;
-    // A window of more than 10^9 samples (11 days at 1 kHz) or before the run, or a multisine
-    // line of an input the status does not list, is no status the acquisition makes: a corrupt
-    // record.
+    // A window of more than 10^9 samples (11 days at 1 kHz), before the run or from beyond 2^62
+    // samples (where its end plus the reorder slack would overflow), or a multisine line of an
+    // input the status does not list, is no status the acquisition makes: a corrupt record.
     bool lines_ok = st.lines.size() == st.line_input.size();
     for (int i : st.line_input) lines_ok = lines_ok && i >= 0 && i < int(st.inputs.size());
     if (st.n_samples <= 0 || st.n_cycles <= 0 || !(st.frequency_hz > 0) ||
         !(st.sample_rate_hz > 0) || st.n_samples > 1000000000 || st.sample < 0 ||
-        !std::isfinite(st.frequency_hz) || !std::isfinite(st.sample_rate_hz) ||
+        st.sample > (int64_t(1) << 62) || !std::isfinite(st.frequency_hz) ||
+        !std::isfinite(st.sample_rate_hz) ||
         (st.excitation == Excitation::kMultisine && !lines_ok)) {
       FrdPoint p;
       p.step = st.step;

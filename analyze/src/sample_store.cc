@@ -49,8 +49,11 @@ void SampleStore::release(int reader, int64_t keep) {
   keep_[reader] = keep;
   int64_t needed = std::numeric_limits<int64_t>::max();
   for (const auto& [r, k] : keep_) needed = std::min(needed, k);
-  const int64_t drop = std::min<int64_t>(needed, end()) - base_;
-  if (drop <= 1 << 16 || drop < int64_t(have_.size()) - drop) return;
+  // (A reader that has not said holds the lowest int64: nothing goes, and no arithmetic on it.)
+  const int64_t upto = std::min(needed, end());
+  if (upto <= base_ || upto - base_ <= int64_t(1) << 16) return;
+  const int64_t drop = upto - base_;
+  if (drop < int64_t(have_.size()) - drop) return;
   for (auto& [name, v] : ch_) v.erase(v.begin(), v.begin() + drop);
   have_.erase(have_.begin(), have_.begin() + drop);
   base_ += drop;

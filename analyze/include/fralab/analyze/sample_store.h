@@ -26,7 +26,9 @@ class SampleStore {
   void keep(const std::string& channel);
   /// Stores block b's kept channels. The first block fixes base(): its start, or `slack` samples
   /// before it when it starts later than 2 x slack (a reader joining a run late does not hold the
-  /// hours before it). A block already stored (its seq) is not stored again: false.
+  /// hours before it). A block already stored (its seq) is not stored again: false. The caller
+  /// refuses blocks far from what is stored (PairAnalyzer::on_block: a corrupt record), so that
+  /// start_sample + n_samples and the arrays' growth stay bounded.
   bool add(const Block& b, int64_t slack);
   bool empty() const { return have_.empty(); }
   int64_t base() const { return base_; }
