@@ -80,9 +80,7 @@ AcquisitionNode::AcquisitionNode(lcm::LCM& data, lcm::LCM& control, const Campai
       campaign_(campaign),
       o_(std::move(o)),
       acks_(std::make_unique<Acks>(o_.run_id, FlowControl(o_.consumers, o_.flow))) {
-  if (o_.acquire.block < 1)
-    throw InputError("acquisition: block " + std::to_string(o_.acquire.block) +
-                     " samples; size it first (block_samples, acquire/acquisition.h)");
+  require_sized_block(o_.acquire.block, "acquisition");
   sub_ = control_.subscribe(kAckChannel, &Acks::on_ack, acks_.get());
   sub_->setQueueCapacity(100000);
   if (o_.acquire.free_running || o_.auto_integrator) {

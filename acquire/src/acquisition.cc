@@ -125,10 +125,14 @@ int block_samples(const Model& model, const AcquireOptions& o) {
   return std::max(1, std::min(half_second, most));
 }
 
-int64_t command_block_count(const Campaign& c, int block) {
+void require_sized_block(int block, const std::string& what) {
   if (block < 1)
-    throw InputError("command blocks of " + std::to_string(block) +
-                     " samples: size the block first (block_samples)");
+    throw InputError(what + ": blocks of " + std::to_string(block) +
+                     " samples; size the block first (block_samples)");
+}
+
+int64_t command_block_count(const Campaign& c, int block) {
+  require_sized_block(block, "command blocks");
   return (c.total_samples() + block - 1) / block;
 }
 
@@ -153,9 +157,7 @@ Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
 
 Block command_block(const Campaign& c, int64_t seq, int block, double sample_rate_hz,
                     const std::string& run_id) {
-  if (block < 1)
-    throw InputError("command block of " + std::to_string(block) +
-                     " samples: size the block first (block_samples)");
+  require_sized_block(block, "command block");
   const int64_t s0 = seq * block;
   const int n = int(std::min<int64_t>(block, c.total_samples() - s0));
   std::vector<std::vector<double>> cmd;

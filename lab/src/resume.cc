@@ -76,7 +76,7 @@ ResumePoint plan_adaptive_resume(const std::string& tape, const std::string& run
 
 ResumePoint plan_resume(const std::string& tape, const std::string& run_id, const Campaign& c,
                         int block) {
-  if (block < 1) throw InputError("resume: blocks of " + std::to_string(block) + " samples");
+  require_sized_block(block, "resume");
   std::set<int64_t> seqs, status_seqs;
   bool done = false;
   read_tape_file(tape, [&](const TapeEvent& ev) {

@@ -95,6 +95,10 @@ inline constexpr double kMaxTapeBlockBytes = 60000;
 /// ran the J85 stepped lab at 186x real time, 500 at 284x (docs/validation.md).
 int block_samples(const Model& m, const AcquireOptions& o);
 
+/// InputError naming `what` unless block >= 1: a block of 0 (--block's "sized") goes through
+/// block_samples before anything counts or cuts samples by it.
+void require_sized_block(int block, const std::string& what);
+
 /// Number of command blocks of `block` samples (>= 1, a sized block; InputError otherwise) that
 /// carry the whole campaign.
 int64_t command_block_count(const Campaign& c, int block);
