@@ -16,8 +16,7 @@ const std::vector<double>* SampleStore::channel(const std::string& name) const {
 }
 
 bool SampleStore::add(const Block& b, int64_t slack) {
-  if (seqs_.count(b.seq)) return false;
-  seqs_[b.seq] = 1;
+  if (!seqs_.insert(b.seq).second) return false;
   if (have_.empty() && seqs_.size() == 1)
     base_ =
         b.start_sample > 2 * slack ? b.start_sample - slack : std::min<int64_t>(b.start_sample, 0);

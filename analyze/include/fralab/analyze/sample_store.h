@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,8 @@ class SampleStore {
   int64_t base_ = 0;
   std::map<std::string, std::vector<double>> ch_;
   std::vector<char> have_;
-  std::map<int64_t, char> seqs_;  // blocks stored, by seq
-  std::map<int, int64_t> keep_;   // per reader: samples it still needs from here on
+  std::set<int64_t> seqs_;       // blocks stored, by seq
+  std::map<int, int64_t> keep_;  // per reader: samples it still needs from here on
   int next_reader_ = 0;
 };
 
