@@ -3,7 +3,7 @@
 # are not fetched again, and apt-get update runs only when something is missing.
 # Usage: setup.sh [--test]
 set -euo pipefail
-PKGS=(build-essential cmake pkg-config git
+PKGS=(build-essential cmake ninja-build pkg-config git
       liblcm-dev liblcm-bin liblcm-java default-jdk-headless libjchart2d-java
       libeigen3-dev libfftw3-dev libgtest-dev libgmock-dev libbenchmark-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libmatio-dev libsndfile1-dev libcmark-gfm-dev
