@@ -12,6 +12,7 @@ cd "$(dirname "$0")/.."
 B=${FRALAB_BIN:-build/bin}
 out=${1:-$(mktemp -d)}
 shift || true
+mkdir -p "$out"
 start=$(date +%s)
 scripts/isolated.sh $B/fralab envelope --engine j85 --simulation j85_sim --no-progress \
   --out "$out/envelope" "$@" > "$out/envelope.log"

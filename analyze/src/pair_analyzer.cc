@@ -557,6 +557,13 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   ex.nl.assign(L, 0.0);
   std::vector<Complex> x2_mean(P / 2 + 1, 0.0);
   std::vector<std::vector<Complex>> pos_mean(ins.size(), std::vector<Complex>(P / 2 + 1, 0.0));
+  // [input q][line j][line, then its neighbours][period]: the positions per period, for their
+  // noise.
+  std::vector<std::vector<std::vector<std::vector<Complex>>>> posp(ins.size());
+  for (auto& pq : posp) {
+    pq.resize(L);
+    for (size_t j = 0; j < L; ++j) pq[j].assign(1 + nbk[j].size(), std::vector<Complex>(M));
+  }
   const double* a = samples(e1_, st.sample);
   const double* b = samples(e2_, st.sample);
   for (int p = 0; p < M; ++p) {
@@ -576,6 +583,10 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
       for (size_t j = 0; j < L; ++j) ex.u[j][q] += su[lines[j]] / double(M);
       const auto sp = period_spectrum(pos[q], p);
       for (size_t k = 0; k < sp.size(); ++k) pos_mean[q][k] += sp[k] / double(M);
+      for (size_t j = 0; j < L; ++j) {
+        posp[q][j][0][p] = sp[lines[j]];
+        for (size_t n = 0; n < nbk[j].size(); ++n) posp[q][j][1 + n][p] = sp[nbk[j][n]];
+      }
     }
   }
   fftw_destroy_plan(plan);
@@ -588,10 +599,18 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   };
   for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, j);
   ex.pos_nl.assign(ins.size(), 0.0);
+  ex.pos_var.assign(L, std::vector<double>(ins.size(), 0.0));
   for (size_t q = 0; q < ins.size(); ++q) {
     std::vector<double> d(L);
     for (size_t j = 0; j < L; ++j) {
       ex.pos[j][q] = pos_mean[q][lines[j]];
+      double ss = 0;
+      for (const std::vector<Complex>& v : posp[q][j]) {
+        Complex m = 0;
+        for (const Complex& c : v) m += c / double(M);
+        for (const Complex& c : v) ss += std::norm(c - m);
+      }
+      ex.pos_var[j][q] = ss / (double(posp[q][j].size()) * double(M) * (M - 1));
       d[j] = distortion(pos_mean[q], j);
     }
     std::nth_element(d.begin(), d.begin() + L / 2, d.end());
@@ -695,6 +714,8 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment
         continue;
       }
       const Complex R = h2 / h1;
+      // Every input's coefficient in both channels (the positions' noise term below).
+      const Eigen::RowVectorXcd d = X2.transpose() * Ui - R * (X1.transpose() * Ui);
       p.mag = std::abs(R);
       p.phase_deg = std::arg(R) * 180 / std::numbers::pi;
       double var = 0, nl = 0;
@@ -713,6 +734,8 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment
         double sz = spread(x.x1[j], x.x2[j]);
         for (size_t n = 0; n < x.nb1[j].size(); ++n) sz += spread(x.nb1[j][n], x.nb2[j][n]);
         var += std::norm(Ui(ee, q)) * sz / (double(1 + x.nb1[j].size()) * double(M) * (M - 1));
+        for (int rr = 0; rr < nu; ++rr)
+          if (by_position[rr]) var += std::norm(Ui(ee, q)) * std::norm(d(rr)) * x.pos_var[j][rr];
         nl += x.nl[j] / nu;
       }
       p.sigma = positive_sigma(std::sqrt(var) / std::abs(h1), p.mag);

@@ -28,11 +28,16 @@
 //       distortion is not a linear function of the references and would otherwise leak into every
 //       other input's estimate; the paths after the position are linear, so its own X:O is then
 //       exact (O's coefficient on X's position);
-//   sigma^2 = sum_e |U^{-1}_eq|^2 var(mean_p z_ep) / |h1_q|^2, z_ep = X2_ep - R X1_ep per period
-//       (the linearised error of h2_q - R h1_q, with the channels' covariance), the variance of
-//       the period mean pooled over line k and the nearest non-excited line each side (the same
-//       z there: noise only, a periodic distortion cancels in the spread), three times the
-//       degrees of freedom of a few periods;
+//   sigma^2 = sum_e |U^{-1}_eq|^2 [var(mean_p z_ep) + sum_r |h2_r - R h1_r|^2 var(U_re)]
+//       / |h1_q|^2, z_ep = X2_ep - R X1_ep per period (the linearised error of h2_q - R h1_q,
+//       with the channels' covariance), the variance of the period mean pooled over line k and
+//       the nearest non-excited line each side (the same z there: noise only, a periodic
+//       distortion cancels in the spread), three times the degrees of freedom of a few periods;
+//       r over the inputs that enter U by their measured position, var(U_re) that position's
+//       period-mean variance pooled the same way (its sensor noise is in the regressor, an error
+//       in every input's estimate that neither channel of the pair carries: at the J85's 95 %
+//       the A8 position's noise put IGV -> P5, a path the engine does not have, 2-5 sigma from
+//       zero over 0.4-8 Hz);
 //   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
 //       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
 //       the nearest non-excited lines relative to |X2(k)|.
@@ -133,7 +138,10 @@ class PairAnalyzer {
     std::vector<std::vector<std::complex<double>>>
         u;  // [line][input q]: period-mean command spectrum
     std::vector<std::vector<std::complex<double>>>
-        pos;                     // [line][input q]: the same of its position
+        pos;  // [line][input q]: the same of its position
+    // [line][input q]: the variance of that period mean (the position's noise, pooled over the
+    // line and its nearest non-excited lines, as sigma pools the pair's channels)
+    std::vector<std::vector<double>> pos_var;
     std::vector<double> pos_nl;  // [input q]: median over lines of its position's distortion
     std::vector<double> nl;      // [line]: E2 on the nearest unexcited lines / |X2|
   };
