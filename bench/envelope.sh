@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Figures for docs/validation.md: the J85 across its envelope (70, 85, 95 % N/Nmax), measured and
-# diagnosed by `fralab envelope` with every input (the auto campaign at each point, validation
-# included): wall and engine time, the findings across points with their laws, leave-one-out at
-# 85 % (the scheduled extended model from 70 and 95 % against the 85 % measurement, beside 85 %'s
+# diagnosed by `fralab envelope` with every input (the auto campaign at each point, measured once):
+# wall and engine time, the findings across points with their laws, leave-one-out at 85 % (the
+# scheduled extended model from 70 and 95 % against the 85 % measurement, beside 85 %'s
 # simulation and own extended model, and the bounds: at most twice the own model's error and a
 # third of the simulation's), and the scheduled model measured at 90 %. Run after
-# scripts/build.sh (about 3 min on two idle cores):
-#   bash bench/envelope.sh [OUT [ENVELOPE FLAGS...]]     # e.g. OUT --no-validation
+# scripts/build.sh (about 1 min on two idle cores):
+#   bash bench/envelope.sh [OUT [ENVELOPE FLAGS...]]     # e.g. OUT --validation
 set -euo pipefail
 cd "$(dirname "$0")/.."
 B=${FRALAB_BIN:-build/bin}

@@ -28,9 +28,12 @@ void add_envelope_command(CLI::App& app) {
                 "the operating_point key the points are ordered and the laws fitted by")
       ->capture_default_str();
   c->add_flag("!--no-plots", ec->plots, "skip the gnuplot figures");
+  auto* with = c->add_flag("--validation", ec->validation,
+                           "a validation measurement at each point too (as fralab diagnose's: "
+                           "another seed, 1.5x the amplitude; twice the engine time)");
   c->add_flag("!--no-validation", ec->validation,
-              "no validation measurement at each point (fralab diagnose --no-validation); the "
-              "leave-one-out still checks the schedule");
+              "each point measured once (the default; the leave-one-out checks the schedule)")
+      ->excludes(with);
   add_measure_flags(c, ec->measure);
   c->callback([ec] {
     const EnvelopeReport r = run_envelope(

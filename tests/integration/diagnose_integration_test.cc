@@ -326,8 +326,9 @@ TEST(Diagnose, J85AutoCampaignFindsTheSameInTenMinutesOfEngineTime) {
 // 27.2, 32.4, 38.2 rad/s (the report's, within 2 %), rising with speed; the combustion delay on
 // Wf -> P3 is the report's 15, 14, 11 ms within 0.5 ms, falling. Leave-one-out at 85 %: the
 // scheduled extended model from 70 and 95 % within twice the error of 85 %'s own extended model
-// and a third of its simulation's; the scheduled model runs at 90 %. Run again, every point is
-// kept; with one point's diagnosis gone, that point alone is measured again.
+// and a third of its simulation's; each point measured once; the scheduled model runs at 90 %.
+// Run again, every point is kept; with one point's diagnosis gone, that point alone is measured
+// again.
 TEST(Envelope, TheJ85AcrossItsSpeedsJoinsTheFindingsWithTheirLaws) {
   constexpr double kActuatorTol = 0.02, kDelayTol = 0.5e-3;
   const std::string d = fralab::testing::tmpdir("envelope", "fralab_diag_") + "/out";
@@ -340,6 +341,11 @@ TEST(Envelope, TheJ85AcrossItsSpeedsJoinsTheFindingsWithTheirLaws) {
   const Json env = json_load_file(d + "/envelope.json");
   EXPECT_EQ(env["format"], "fralab-envelope/1");
   ASSERT_EQ(env["points"].size(), 3u);
+  // Each point measured once by default (`--validation` adds a second measurement per point).
+  for (const char* point : {"speed_pct_70", "speed_pct_85", "speed_pct_95"}) {
+    EXPECT_TRUE(fs::exists(d + "/" + point + "/measure/run.json")) << point;
+    EXPECT_FALSE(fs::exists(d + "/" + point + "/measure/validation")) << point;
+  }
   const Json* a8 = nullptr;
   const Json* delay = nullptr;
   for (const Json& f : env["findings"]) {
