@@ -7,10 +7,13 @@
 // effects that overlap on one path can split wrongly in its own fit (a plant pole moved and an
 // output's gain, fitted on that path as a larger shift and a smaller gain) and veto the group. A
 // scope's pair where no fit found the cause (a weak path) joins the group when the cause costs it
-// no more than one parameter's chi2 penalty, and at least as many pairs found it as did not.
+// no more than one parameter's chi2 penalty, and at least as many pairs found it as did not; a
+// pair that holds other findings too is diagnosed again, alone, against the simulation extended by
+// every other finding (the group's included), and joins on what that finds.
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <set>
 
 #include "stages.h"
 
@@ -102,8 +105,10 @@ bool regroup(DiagnosisRun& r) {
   bool merged = false;
   // Path findings of one cause, now consistent over every position pair `sel` takes (at least
   // min_pairs), become one finding at `scope`, its parameters their mean.
+  std::set<std::string> refitted;  // scope and cause whose rest pairs were fitted again
   auto merge = [&](const std::function<bool(const PairFit&)>& sel, Scope scope,
                    const std::string& in, const std::string& out, size_t min_pairs) {
+    const std::string scope_key = std::string(to_string(scope)) + ":" + in + ":" + out + ":";
     std::vector<std::string> scope_pairs;
     for (const PairFit& p : r.pairs)
       if (!p.output.empty() && sel(p)) scope_pairs.push_back(p.pair);
@@ -135,7 +140,7 @@ bool regroup(DiagnosisRun& r) {
       }
       if (!rest.empty() && (m.size() < 2 || m.size() < rest.size())) continue;
       std::vector<size_t> replaced = m;  // the group's findings and the rest's own
-      bool clear = true;
+      bool clear = true;                 // the rest hold nothing but their own fits of the cause
       for (size_t x = 0; x < fs.size(); ++x)
         for (const std::string& q : rest) {
           if (std::find(fs[x].pairs.begin(), fs[x].pairs.end(), q) == fs[x].pairs.end()) continue;
@@ -144,7 +149,6 @@ bool regroup(DiagnosisRun& r) {
           else
             clear = false;
         }
-      if (!clear) continue;
       Finding g;
       g.cause = fs[a].cause;
       g.scope = scope;
@@ -167,6 +171,39 @@ bool regroup(DiagnosisRun& r) {
       // what it had: the data cannot tell the two apart, and the scope is what the pairs that can
       // tell say. A pair the group's cause fits worse keeps the findings per path.
       if (!rest.empty()) {
+        for (const std::string& q : rest) joined.back().pairs.push_back(q);
+        // A rest pair that holds other findings of its own (fitted beside its own value of the
+        // cause, which may have taken part of them: a lag fitted as a resonance beside a pole
+        // moved too little) has its causes fitted again, alone, against the simulation extended
+        // by every other finding, the group's included (the whole diagnosis on that pair).
+        if (!clear) {
+          auto own = [&](const Finding& f) {
+            return f.scope == Scope::kPath && f.pairs.size() == 1 &&
+                   std::find(rest.begin(), rest.end(), f.pairs[0]) != rest.end();
+          };
+          std::vector<Finding> base;
+          for (const Finding& f : joined)
+            if (!own(f)) base.push_back(f);
+          const Model ext = extended_by(r, base, base.size());
+          std::vector<Finding> refit = base;
+          bool again = false;  // a rest pair that still wants the cause of its own
+          for (const std::string& q : rest) {
+            std::vector<MeasuredPair> one;
+            for (const MeasuredPair& mp : r.data)
+              if (mp.pair == q) one.push_back(mp);
+            const Diagnosis dq = diagnose(ext, one, r.opt);
+            for (const Finding& f : dq.findings)
+              if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
+                again |= f.cause == g.cause;
+                refit.push_back(f);
+              }
+          }
+          // Such a pair is not the group's (and the merge would leave a path finding of the
+          // cause to be grouped again); once tried, a scope and cause is not refitted again in
+          // this pass.
+          if (again || !refitted.insert(scope_key + to_string(g.cause)).second) continue;
+          joined = std::move(refit);
+        }
         const Model before = extended_by(r, fs, fs.size()),
                     after = extended_by(r, joined, joined.size());
         bool quiet = true;
@@ -178,7 +215,6 @@ bool regroup(DiagnosisRun& r) {
           quiet &= rise <= std::log(2.0 * double(std::max<size_t>(n, 1)));
         }
         if (!quiet) continue;
-        for (const std::string& q : rest) joined.back().pairs.push_back(q);
       }
       fs = std::move(joined);
       merged = true;
