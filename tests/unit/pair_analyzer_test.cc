@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <random>
 #include <set>
@@ -374,6 +375,35 @@ TEST(PairAnalyzer, OrthogonalMultisinesMeasureEveryPairOnEveryLine) {
   }
 }
 
+namespace {
+
+// How often the error of an orthogonal multisine's points is within 1 and 2 of their sigmas, over
+// 20 seeds and every point of `pairs`, against truth(E1, E2, w).
+struct Coverage {
+  int n = 0, in1 = 0, in2 = 0;
+};
+Coverage multisine_coverage(
+    const Model& m, const SteppedSineOptions& o, const std::vector<std::string>& pairs,
+    const std::function<Complex(const std::string&, const std::string&, double)>& truth) {
+  Coverage c;
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    auto run = simulate_tape(m, {"a", "b"}, o, true, seed, 100, 2.0, "multisine");
+    for (const std::string& pair : pairs) {
+      auto [e1, e2] = split_pair(pair);
+      for (const auto& p : analyse(run, pair)) {
+        EXPECT_TRUE(p.valid) << p.note;
+        const double err = std::abs(pt(p) - truth(e1, e2, p.w));
+        ++c.n;
+        c.in1 += err < p.sigma;
+        c.in2 += err < 2 * p.sigma;
+      }
+    }
+  }
+  return c;
+}
+
+}  // namespace
+
 // With noise: the propagated sigma covers the error as a complex Gaussian's should (1 sigma:
 // 1 - 1/e = 0.632; 2 sigma: 0.982), over 20 seeds and every line of both inputs' pairs.
 TEST(PairAnalyzer, OrthogonalMultisineSigmaCoversTheError) {
@@ -381,23 +411,12 @@ TEST(PairAnalyzer, OrthogonalMultisineSigmaCoversTheError) {
   for (auto& out : m.outputs) out.noise_rms = 0.02;
   SteppedSineOptions o = band(0.2, 20, 5);
   o.min_cycles = 8;
-  int n = 0, in1 = 0, in2 = 0;
-  for (uint64_t seed = 1; seed <= 20; ++seed) {
-    auto run = simulate_tape(m, {"a", "b"}, o, true, seed, 100, 2.0, "multisine");
-    for (const std::string pair : {"u_a:y", "u_b:z", "u_a:z"}) {
-      auto [e1, e2] = split_pair(pair);
-      for (const auto& p : analyse(run, pair)) {
-        ASSERT_TRUE(p.valid) << p.note;
-        const double err = std::abs(pt(p) - sampled(m, e1.substr(2), e2, p.w));
-        ++n;
-        in1 += err < p.sigma;
-        in2 += err < 2 * p.sigma;
-      }
-    }
-  }
-  ASSERT_GT(n, 600);
-  EXPECT_NEAR(double(in1) / n, 0.632, 0.06);
-  EXPECT_GT(double(in2) / n, 0.93);
+  const Coverage c = multisine_coverage(m, o, {"u_a:y", "u_b:z", "u_a:z"},
+                                        [&](const std::string& e1, const std::string& e2,
+                                            double w) { return sampled(m, e1.substr(2), e2, w); });
+  ASSERT_GT(c.n, 600);
+  EXPECT_NEAR(double(c.in1) / c.n, 0.632, 0.06);
+  EXPECT_GT(double(c.in2) / c.n, 0.93);
 }
 
 // A backlash on b (width 0.01 at a 0.02 peak: the position distorts, median nl > 0.05) is not a
@@ -444,24 +463,13 @@ TEST(PairAnalyzer, OrthogonalMultisineSigmaCoversThePositionNoiseOfADistortingIn
   for (auto& out : m.outputs) out.noise_rms = 0.001;
   SteppedSineOptions o = band(0.2, 20, 5);
   o.min_cycles = 4;
-  int n = 0, in1 = 0, in2 = 0;
-  for (uint64_t seed = 1; seed <= 20; ++seed) {
-    auto run = simulate_tape(m, {"a", "b"}, o, true, seed, 100, 2.0, "multisine");
-    for (const std::string pair : {"a:y", "a:z"}) {
-      auto [e1, e2] = split_pair(pair);
-      for (const auto& p : analyse(run, pair)) {
-        ASSERT_TRUE(p.valid) << p.note;
-        const Complex truth = sampled(m, "a", e2, p.w) / sampled(m, "a", "a", p.w);
-        const double err = std::abs(pt(p) - truth);
-        ++n;
-        in1 += err < p.sigma;
-        in2 += err < 2 * p.sigma;
-      }
-    }
-  }
-  ASSERT_GT(n, 300);
-  EXPECT_NEAR(double(in1) / n, 0.632, 0.07) << in1 << " of " << n;
-  EXPECT_GT(double(in2) / n, 0.93) << in2 << " of " << n;
+  const Coverage c = multisine_coverage(m, o, {"a:y", "a:z"},
+                                        [&](const std::string&, const std::string& e2, double w) {
+                                          return sampled(m, "a", e2, w) / sampled(m, "a", "a", w);
+                                        });
+  ASSERT_GT(c.n, 300);
+  EXPECT_NEAR(double(c.in1) / c.n, 0.632, 0.07) << c.in1 << " of " << c.n;
+  EXPECT_GT(double(c.in2) / c.n, 0.93) << c.in2 << " of " << c.n;
 }
 
 // A corrupt tape: experiment 2's status states other lines (or an input the run does not have).
