@@ -105,7 +105,7 @@ bool regroup(DiagnosisRun& r) {
   bool merged = false;
   // Path findings of one cause, now consistent over every position pair `sel` takes (at least
   // min_pairs), become one finding at `scope`, its parameters their mean.
-  std::set<std::string> refitted;  // scope and cause whose rest pairs were fitted again
+  std::set<std::string> refitted;  // scope and cause whose rest pairs were tried again
   auto merge = [&](const std::function<bool(const PairFit&)>& sel, Scope scope,
                    const std::string& in, const std::string& out, size_t min_pairs) {
     const std::string scope_key = std::string(to_string(scope)) + ":" + in + ":" + out + ":";
@@ -177,6 +177,9 @@ bool regroup(DiagnosisRun& r) {
         // moved too little) has its causes fitted again, alone, against the simulation extended
         // by every other finding, the group's included (the whole diagnosis on that pair).
         if (!clear) {
+          // Once per scope and cause in a pass: every finding of the group is a candidate that
+          // forms the same group, and the pairs' diagnoses would only be run again.
+          if (!refitted.insert(scope_key + to_string(g.cause)).second) continue;
           auto own = [&](const Finding& f) {
             return f.scope == Scope::kPath && f.pairs.size() == 1 &&
                    std::find(rest.begin(), rest.end(), f.pairs[0]) != rest.end();
@@ -199,9 +202,8 @@ bool regroup(DiagnosisRun& r) {
               }
           }
           // Such a pair is not the group's (and the merge would leave a path finding of the
-          // cause to be grouped again); once tried, a scope and cause is not refitted again in
-          // this pass.
-          if (again || !refitted.insert(scope_key + to_string(g.cause)).second) continue;
+          // cause to be grouped again).
+          if (again) continue;
           joined = std::move(refit);
         }
         const Model before = extended_by(r, fs, fs.size()),
