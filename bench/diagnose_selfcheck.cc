@@ -4,7 +4,8 @@
 // through the real processes
 // (`fralab diagnose --engine`, measurement and validation included); prints per case the findings
 // that were not hidden and the hidden effects that were missed, then precision (true findings /
-// all findings) and recall (hidden effects named at their place within tolerance / hidden).
+// all findings), recall (hidden effects named at their place within tolerance / hidden) and how
+// many of those found have their true value inside the finding's 2-sigma interval.
 // `--excitation auto` measures with the auto campaign; the summary counts the runs that completed,
 // ended partial (exit status 3: measured, a later step failed) or failed.
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
@@ -26,16 +27,9 @@ namespace {
 std::vector<Finding> read_findings(const std::string& file) {
   const Json j = json_load_file(file);
   std::vector<Finding> v;
-  for (const auto& jf : j.at("findings")) {
-    Finding f;
-    f.cause = cause_from_string(jf.at("cause"));
-    f.scope = scope_from_string(jf.at("scope"));
-    if (jf.at("input").is_string()) f.input = jf.at("input");
-    if (jf.at("output").is_string()) f.output = jf.at("output");
-    for (const auto& [k, val] : jf.at("parameters").items())
-      if (val.is_number()) f.parameters[k] = val;
-    v.push_back(f);
-  }
+  const Json& fs = j.at("findings");
+  for (size_t k = 0; k < fs.size(); ++k)
+    v.push_back(finding_from_json(fs[k], JsonWhere{file, "/findings/" + std::to_string(k)}));
   return v;
 }
 
@@ -98,6 +92,8 @@ int main(int argc, char** argv) {
     total.true_findings += s.true_findings;
     total.hidden += s.hidden;
     total.found += s.found;
+    total.with_interval += s.with_interval;
+    total.in_two_sigma += s.in_two_sigma;
     const bool ok = s.false_findings.empty() && s.missed.empty();
     failing += !ok;
     std::printf("%s: %zu inputs x %zu outputs, %d hidden, %d findings, %s\n", c.name.c_str(),
@@ -105,6 +101,7 @@ int main(int argc, char** argv) {
                 ok ? "ok" : "FAILING");
     for (const auto& f : s.false_findings) std::printf("    false: %s\n", f.c_str());
     for (const auto& m : s.missed) std::printf("    missed: %s\n", m.c_str());
+    for (const auto& m : s.outside_two_sigma) std::printf("    outside 2 sigma: %s\n", m.c_str());
     std::fflush(stdout);
   }
   const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
@@ -112,10 +109,12 @@ int main(int argc, char** argv) {
   std::printf(
       "selfcheck: %d %s cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d "
       "findings), "
-      "recall %.3f (%d of %d hidden effects), %d failing cases; excitation %s: %d runs complete, "
-      "%d partial, %d failed\n",
+      "recall %.3f (%d of %d hidden effects), %d failing cases; the true value inside the "
+      "finding's 2-sigma interval %.3f (%d of %d found with an interval); excitation %s: %d runs "
+      "complete, %d partial, %d failed\n",
       cases, plants.c_str(), (unsigned long long)seed, band.c_str(), ppd, precision,
       total.true_findings, total.findings, recall, total.found, total.hidden, failing,
-      excitation.c_str(), complete, partial, failed);
+      total.with_interval ? double(total.in_two_sigma) / total.with_interval : 1.0,
+      total.in_two_sigma, total.with_interval, excitation.c_str(), complete, partial, failed);
   return precision >= min_precision && recall >= min_recall ? 0 : 1;
 }

@@ -189,6 +189,19 @@ Finding finding_from_json(const Json& j, const JsonWhere& where) {
   for (size_t i = 0; i < pairs.size(); ++i)
     f.pairs.push_back(json_string(pairs[i], where / "pairs" / i));
   if (j.contains("tf")) f.tf = tf_from_json(j["tf"], where / "tf", nullptr, true);
+  if (j.contains("intervals")) {  // optional; null is an unbounded side
+    const Json& iv = j["intervals"];
+    json_require_object(iv, where / "intervals");
+    for (auto it = iv.begin(); it != iv.end(); ++it) {
+      const JsonWhere at = where / "intervals" / it.key();
+      if (!it->is_array() || it->size() != 2)
+        throw InputError(at.str() + ": an interval is [low, high] (null for an unbounded side)");
+      std::array<double, 2> v{-INFINITY, INFINITY};
+      for (size_t side = 0; side < 2; ++side)
+        if (!(*it)[side].is_null()) v[side] = json_number((*it)[side], at / side);
+      f.intervals[it.key()] = v;
+    }
+  }
   return f;
 }
 

@@ -442,6 +442,81 @@ TEST(Diagnose, APathThatSplitsAnOverlapWronglyIsFittedAgainWithThePlantsPole) {
   EXPECT_NEAR(path_lag->parameters.at("corner_rad_s") / lag->value, 1.0, kCornerTol) << json;
 }
 
+// An output's pole_shift of a pole its sensor does not hold (the plant's slow mode, seen moved at
+// that output only) moves the pole in every path into the output; a path without the pole takes
+// the factor D_from / D_to itself; a pole the sensor holds moves in the sensor. Each extended
+// response is the simulation's times D_from / D_to, to rounding.
+TEST(Diagnose, AnOutputsPoleShiftMovesThePoleWhereItIs) {
+  constexpr double kRel = 1e-12;
+  Model sim = simulation();
+  sim.outputs[0].sensor = tf(1.0, {Root::Real(-50)});
+  sim.paths.push_back({"y", "v", tf(1.0, {Root::Real(-8)}), Json::object()});
+  ModelInput v = sim.inputs[0];
+  v.name = "v";
+  sim.inputs.push_back(v);
+  auto shift = [](double from, double to) {
+    Finding f;
+    f.cause = CauseKind::kPoleShift;
+    f.scope = Scope::kOutput;
+    f.output = "y";
+    f.parameters = {{"from_rad_s", from}, {"to_rad_s", to}};
+    return f;
+  };
+  for (const auto& [from, to] : {std::pair{3.0, 5.0}, std::pair{50.0, 40.0}}) {
+    const Model ext = extend_model(sim, {shift(from, to)});
+    for (const std::string pair : {"u:y", "v:y", "u:z"})
+      for (const double w : {0.3, 3.0, 30.0}) {
+        const Complex s(0, w);
+        const Complex moved = pair == "u:z" ? Complex(1) : (1.0 + s / from) / (1.0 + s / to);
+        const Complex ratio =
+            *model_pair_response(ext, pair, w, 0.02) / *model_pair_response(sim, pair, w, 0.02);
+        EXPECT_NEAR(std::abs(ratio / moved - 1.0), 0, kRel) << pair << " at " << w << " rad/s";
+      }
+    if (from == 3.0) {
+      EXPECT_NEAR(ext.paths[0].tf.poles.at(0).real, -5.0, kRel) << "u:y moves its own pole";
+      EXPECT_EQ(ext.paths[2].tf.zeros.size(), 1u) << "v:y, without the pole, takes the factor";
+      EXPECT_NEAR(ext.outputs[0].sensor->poles.at(0).real, -50.0, kRel);
+    } else {
+      EXPECT_NEAR(ext.outputs[0].sensor->poles.at(0).real, -40.0, kRel) << "the sensor's pole";
+      EXPECT_NEAR(ext.paths[0].tf.poles.at(0).real, -3.0, kRel);
+    }
+  }
+}
+
+// The machine-shaped self-check's case 30 (seed 1): two inputs, four outputs, the plant's slow
+// pole moved 1.60 -> 3.90 rad/s and a 7.5 rad/s lag in Y0's sensor. The lag makes Y0's paths fit
+// the pole apart from the others', so no plant finding forms from the paths' own fits; each
+// output's two paths agree, and the pole came back as four output findings beside Y0's lag. The
+// outputs' findings of one cause and value over every pair are the plant's: two findings, each
+// within its tolerance.
+TEST(Diagnose, ThePlantsPoleSeenAtSomeOutputsIsThePlantsBesideAnotherOutputsLag) {
+  constexpr double kPoleTol = 0.02, kCornerTol = 0.05, kNoiseOfStrongest = 0.005;
+  const testing::RandomCase c = testing::random_machine_case(1, 30);
+  ASSERT_EQ(c.hidden.size(), 2u);
+  const testing::HiddenEffect* pole = nullptr;
+  const testing::HiddenEffect* lag = nullptr;
+  for (const auto& h : c.hidden) {
+    if (h.cause == CauseKind::kPoleShift && h.scope == Scope::kPlant) pole = &h;
+    if (h.cause == CauseKind::kMissingLag && h.scope == Scope::kOutput) lag = &h;
+  }
+  ASSERT_NE(pole, nullptr);
+  ASSERT_NE(lag, nullptr);
+  const Diagnosis d = diagnose(c.simulation, measure_machine_case(c, kNoiseOfStrongest));
+  const std::string json = diagnosis_to_json(d).dump(1);
+  ASSERT_EQ(d.findings.size(), 2u) << json;
+  const Finding* plant = nullptr;
+  const Finding* sensor_lag = nullptr;
+  for (const Finding& f : d.findings) {
+    if (f.cause == CauseKind::kPoleShift && f.scope == Scope::kPlant) plant = &f;
+    if (f.cause == CauseKind::kMissingLag && f.scope == Scope::kOutput) sensor_lag = &f;
+  }
+  ASSERT_NE(plant, nullptr) << json;
+  ASSERT_NE(sensor_lag, nullptr) << json;
+  EXPECT_NEAR(plant->parameters.at("to_rad_s") / pole->value, 1.0, kPoleTol) << json;
+  EXPECT_EQ(sensor_lag->output, lag->output) << json;
+  EXPECT_NEAR(sensor_lag->parameters.at("corner_rad_s") / lag->value, 1.0, kCornerTol) << json;
+}
+
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});

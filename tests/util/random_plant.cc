@@ -272,12 +272,29 @@ Score score(const RandomCase& c, const std::vector<Finding>& findings) {
     }
   }
   for (const auto& h : c.hidden) {
-    bool ok = false;
-    for (const auto& f : findings) ok |= h.matches(f);
-    if (ok)
-      ++s.found;
-    else
+    const Finding* match = nullptr;
+    for (const auto& f : findings)
+      if (!match && h.matches(f)) match = &f;
+    if (!match) {
       s.missed.push_back(h.describe());
+      continue;
+    }
+    ++s.found;
+    const auto v = match->parameters.find(h.param);
+    const auto iv = match->intervals.find(h.param);
+    if (v == match->parameters.end() || iv == match->intervals.end() ||
+        !std::isfinite(iv->second[0]) || !std::isfinite(iv->second[1]))
+      continue;
+    ++s.with_interval;
+    const double lo = v->second - 2 * (v->second - iv->second[0]),
+                 hi = v->second + 2 * (iv->second[1] - v->second);
+    if (h.value >= lo && h.value <= hi) {
+      ++s.in_two_sigma;
+    } else {
+      std::ostringstream d;
+      d << h.describe() << ": found " << v->second << ", 2-sigma " << lo << " .. " << hi;
+      s.outside_two_sigma.push_back(d.str());
+    }
   }
   return s;
 }

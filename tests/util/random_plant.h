@@ -46,7 +46,11 @@ bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value);
 /// Precision and recall of a diagnosis against a case's hidden effects.
 struct Score {
   int findings = 0, true_findings = 0, hidden = 0, found = 0;
-  std::vector<std::string> false_findings, missed;
+  /// Hidden effects found with a two-sided interval on their parameter, and those whose true
+  /// value lies inside the 2-sigma interval, taken from the reported 1-sigma one as
+  /// [v - 2 (v - lo), v + 2 (hi - v)] around the finding's value v.
+  int with_interval = 0, in_two_sigma = 0;
+  std::vector<std::string> false_findings, missed, outside_two_sigma;
 };
 Score score(const RandomCase& c, const std::vector<Finding>& findings);
 

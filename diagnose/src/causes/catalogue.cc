@@ -53,17 +53,22 @@ void LinearCause::apply(Model& m, const Finding& f) const {
     ModelInput& in = m.inputs[m.input_index(f.input)];
     if (!in.actuator) in.actuator = Tf{};
     extend(*in.actuator, f);
-  } else if (f.scope == Scope::kOutput) {
+    return;
+  }
+  if (f.scope == Scope::kOutput) {
     ModelOutput& out = m.outputs[m.output_index(f.output)];
-    if (!out.sensor) out.sensor = Tf{};
-    extend(*out.sensor, f);
-  } else {
-    for (auto& p : m.paths) {
-      if (f.scope == Scope::kPlant || (f.scope == Scope::kInput && p.input == f.input) ||
-          (f.scope == Scope::kPath && p.input == f.input && p.output == f.output)) {
-        extend(p.tf, f);
-      }
+    if (out.sensor && acts_on(*out.sensor, f)) return extend(*out.sensor, f);
+    if (acts_on(Tf{}, f)) {  // a factor: the sensor takes it
+      if (!out.sensor) out.sensor = Tf{};
+      return extend(*out.sensor, f);
     }
+  }
+  for (auto& p : m.paths) {
+    const bool covered = f.scope == Scope::kPlant ||
+                         (f.scope == Scope::kInput && p.input == f.input) ||
+                         (f.scope == Scope::kOutput && p.output == f.output) ||
+                         (f.scope == Scope::kPath && p.input == f.input && p.output == f.output);
+    if (covered) extend(p.tf, f);
   }
 }
 

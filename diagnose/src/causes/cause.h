@@ -78,8 +78,13 @@ class LinearCause : public CauseUnit {
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override = 0;
   /// Extends a transfer function (path, actuator or sensor) by the finding's factor.
   virtual void extend(Tf& t, const Finding& f) const = 0;
-  /// Extends by scope: a finding of the actuator pair u_X:X alone extends X's actuator, one of an
-  /// output its sensor, else every path the scope covers (docs/method/diagnosis.md, "Scope").
+  /// Whether `t` holds what the finding changes: a cause that moves a simulated root (pole_shift,
+  /// damping_error) holds when `t` has that root; a factor (a lag, a gain, a delay), always.
+  virtual bool acts_on(const Tf&, const Finding&) const { return true; }
+  /// Extends by scope: a finding of the actuator pair u_X:X alone extends X's actuator; one of an
+  /// output its sensor, unless it moves a root the sensor does not hold (a plant's mode moved at
+  /// one output): then every path into the output; else every path the scope covers
+  /// (docs/method/diagnosis.md, "Scope").
   void apply(Model& m, const Finding& f) const final;
 };
 

@@ -2,7 +2,7 @@
 // F = D_sim(s) / D(s; wn, to_zeta) with D = s^2/wn^2 + 2 zeta s/wn + 1; parameters wn_rad_s,
 // from_zeta, to_zeta. Search: ln zeta over [ln 0.002, ln 2] (grid then Brent's method), one
 // candidate per simulated pair. Consistent across pairs: wn and to_zeta within
-// DiagnoseOptions::consistent_rel. Extension: the pair nearest wn takes to_zeta.
+// DiagnoseOptions::consistent_rel. Extension: the pair at wn takes to_zeta.
 #include <cmath>
 
 #include "cause.h"
@@ -26,6 +26,10 @@ std::vector<Root> chain_pairs(const Model& m, const PairFit& p) {
   if (m.outputs[o].sensor) add(*m.outputs[o].sensor);
   return v;
 }
+
+// A transfer function holds the pair when one of its pairs is this close (relative): the mean of
+// several paths' wn_rad_s carries rounding only.
+constexpr double kSamePair = 1e-3;
 
 class DampingError final : public LinearCause {
  public:
@@ -56,12 +60,23 @@ class DampingError final : public LinearCause {
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
     return params_within(a, b, {"wn_rad_s", "to_zeta"}, opt.consistent_rel);
   }
-  void extend(Tf& t, const Finding& f) const override {
+  bool acts_on(const Tf& t, const Finding& f) const override {
     const double wn = f.parameters.at("wn_rad_s");
-    Root* best = nullptr;
+    for (const Root& r : t.poles)
+      if (r.pair && std::abs(r.wn - wn) <= kSamePair * wn) return true;
+    return false;
+  }
+  // The held pair takes to_zeta; a transfer function without it takes the factor D_sim / D as a
+  // zero pair and a pole pair.
+  void extend(Tf& t, const Finding& f) const override {
+    const double wn = f.parameters.at("wn_rad_s"), to_zeta = f.parameters.at("to_zeta");
     for (Root& r : t.poles)
-      if (r.pair && (!best || std::abs(r.wn - wn) < std::abs(best->wn - wn))) best = &r;
-    if (best) best->zeta = f.parameters.at("to_zeta");
+      if (r.pair && std::abs(r.wn - wn) <= kSamePair * wn) {
+        r.zeta = to_zeta;
+        return;
+      }
+    t.zeros.push_back(Root::Pair(wn, f.parameters.at("from_zeta")));
+    t.poles.push_back(Root::Pair(wn, to_zeta));
   }
   std::string explain(const Finding& f) const override {
     return "the simulated pair at " + fmt(f.parameters.at("wn_rad_s")) + " rad/s is damped " +

@@ -32,6 +32,9 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
 
 constexpr double kZetaMin = 0.002, kZetaMax = 2.0;  // the damping's search range
 constexpr int kDampingRounds = 8;                   // frequency / damping alternations at most
+// A transfer function holds the moved root when one of its roots is this close (relative): the
+// mean of several paths' from_rad_s carries rounding only.
+constexpr double kSameRoot = 1e-3;
 
 // A pair's damping was fitted (the data resolve it) when it differs from the simulation's; beyond
 // rounding, as the mean of several paths' equal values may carry.
@@ -113,21 +116,35 @@ class PoleShift final : public LinearCause {
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
     return params_within(a, b, {"from_rad_s", "to_rad_s"}, opt.consistent_rel);
   }
+  bool acts_on(const Tf& t, const Finding& f) const override {
+    const double from = f.parameters.at("from_rad_s");
+    for (const Root& r : t.poles)
+      if (std::abs((r.pair ? r.wn : -r.real) - from) <= kSameRoot * from) return true;
+    return false;
+  }
+  // The held root moves (a pair takes to_zeta when fitted); a transfer function without it takes
+  // the factor itself, D_from / D_to, as a zero at the old root and a pole at the new.
   void extend(Tf& t, const Finding& f) const override {
     const double from = f.parameters.at("from_rad_s"), to = f.parameters.at("to_rad_s");
-    Root* best = nullptr;
+    const auto from_zeta = f.parameters.find("from_zeta"), to_zeta = f.parameters.find("to_zeta");
+    const bool pair = from_zeta != f.parameters.end();  // a pair when the finding says so
     for (Root& r : t.poles) {
-      const double v = r.pair ? r.wn : -r.real;
-      if (!best || std::abs(v - from) < std::abs((best->pair ? best->wn : -best->real) - from))
-        best = &r;
+      if (std::abs((r.pair ? r.wn : -r.real) - from) > kSameRoot * from) continue;
+      if (r.pair) {
+        r.wn = to;
+        if (to_zeta != f.parameters.end()) r.zeta = to_zeta->second;
+      } else {
+        r.real = -to;
+      }
+      return;
     }
-    if (!best) return;
-    if (best->pair) {
-      best->wn = to;
-      if (const auto z = f.parameters.find("to_zeta"); z != f.parameters.end())
-        best->zeta = z->second;
+    if (pair) {
+      t.zeros.push_back(Root::Pair(from, from_zeta->second));
+      t.poles.push_back(
+          Root::Pair(to, to_zeta != f.parameters.end() ? to_zeta->second : from_zeta->second));
     } else {
-      best->real = -to;
+      t.zeros.push_back(Root::Real(-from));
+      t.poles.push_back(Root::Real(-to));
     }
   }
   std::string explain(const Finding& f) const override {

@@ -9,7 +9,10 @@
 // scope's pair where no fit found the cause (a weak path) joins the group when the cause costs it
 // no more than one parameter's chi2 penalty, and at least as many pairs found it as did not; a
 // pair that holds other findings too is diagnosed again, alone, against the simulation extended by
-// every other finding (the group's included), and joins on what that finds.
+// every other finding (the group's included), and joins on what that finds. The plant's scope
+// also joins outputs' and inputs' findings (the plant's mode found output by output where one
+// output's own overlap kept the paths apart); a scope of two pairs joins one pair's finding when
+// the other, diagnosed again, leaves fewer findings than the paths' own.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -114,9 +117,23 @@ bool regroup(DiagnosisRun& r) {
       if (!p.output.empty() && sel(p)) scope_pairs.push_back(p.pair);
     if (scope_pairs.size() < min_pairs) return;
     std::vector<Finding>& fs = r.findings;
+    // A finding narrower than the scope, inside it: a path's, or (for the plant) an output's or
+    // an input's, found where the overlap on the others' pairs hid it.
     auto candidate = [&](const Finding& f) {
-      return f.scope == Scope::kPath && f.pairs.size() == 1 && !f.tf && f.text_parameters.empty() &&
-             std::find(scope_pairs.begin(), scope_pairs.end(), f.pairs[0]) != scope_pairs.end();
+      if (f.tf || !f.text_parameters.empty() || f.pairs.empty()) return false;
+      const bool narrower =
+          f.scope == Scope::kPath ||
+          (scope == Scope::kPlant &&
+           (f.scope == Scope::kOutput || (f.scope == Scope::kInput && !f.input.empty())));
+      if (!narrower || (f.scope == Scope::kPath && f.pairs.size() != 1)) return false;
+      for (const std::string& q : f.pairs)
+        if (std::find(scope_pairs.begin(), scope_pairs.end(), q) == scope_pairs.end()) return false;
+      return true;
+    };
+    auto covers = [&](const std::vector<size_t>& m, const std::string& q) {
+      for (size_t x : m)
+        if (std::find(fs[x].pairs.begin(), fs[x].pairs.end(), q) != fs[x].pairs.end()) return true;
+      return false;
     };
     for (size_t a = 0; a < fs.size(); ++a) {
       if (!candidate(fs[a])) continue;
@@ -127,18 +144,15 @@ bool regroup(DiagnosisRun& r) {
         const Cause cb{fs[b].cause, fs[b].parameters, {}, 0, 1, ""};
         if (!consistent(ca, cb, r.opt)) continue;
         bool dup = false;
-        for (size_t x : m) dup |= fs[x].pairs[0] == fs[b].pairs[0];
+        for (const std::string& q : fs[b].pairs) dup |= covers(m, q);
         if (!dup) m.push_back(b);
       }
       // The scope's other pairs: at most a path finding of the same cause each (its parameter
       // not within the cause's tolerance of the group's), nothing else.
       std::vector<std::string> rest;
-      for (const std::string& q : scope_pairs) {
-        bool found = false;
-        for (size_t x : m) found |= fs[x].pairs[0] == q;
-        if (!found) rest.push_back(q);
-      }
-      if (!rest.empty() && (m.size() < 2 || m.size() < rest.size())) continue;
+      for (const std::string& q : scope_pairs)
+        if (!covers(m, q)) rest.push_back(q);
+      const size_t covered = scope_pairs.size() - rest.size();
       std::vector<size_t> replaced = m;  // the group's findings and the rest's own
       bool clear = true;                 // the rest hold nothing but their own fits of the cause
       for (size_t x = 0; x < fs.size(); ++x)
@@ -149,17 +163,24 @@ bool regroup(DiagnosisRun& r) {
           else
             clear = false;
         }
+      // A scope of two pairs, one holding the cause and the other other findings (a sensor lag
+      // where the second path also carries an input's calibration, its own fit a resonance in
+      // place of both): the group is tried, and kept only when it explains the scope by fewer
+      // findings than the paths' own.
+      const bool one_of_two = covered == 1 && rest.size() == 1 && !clear;
+      if (!rest.empty() && !one_of_two && (covered < 2 || covered < rest.size())) continue;
       Finding g;
       g.cause = fs[a].cause;
       g.scope = scope;
       g.input = in;
       g.output = out;
+      // The members' parameters, each weighted by the pairs it covers.
       for (const auto& [key, v] : fs[a].parameters) {
         double sum = 0;
-        for (size_t x : m) sum += fs[x].parameters.at(key);
-        g.parameters[key] = sum / double(m.size());
+        for (size_t x : m) sum += fs[x].parameters.at(key) * double(fs[x].pairs.size());
+        g.parameters[key] = sum / double(covered);
       }
-      for (size_t x : m) g.pairs.push_back(fs[x].pairs[0]);
+      for (size_t x : m) g.pairs.insert(g.pairs.end(), fs[x].pairs.begin(), fs[x].pairs.end());
       std::vector<Finding> joined;
       for (size_t x = 0; x < fs.size(); ++x)
         if (std::find(replaced.begin(), replaced.end(), x) == replaced.end())
@@ -180,9 +201,13 @@ bool regroup(DiagnosisRun& r) {
           // Once per scope and cause in a pass: every finding of the group is a candidate that
           // forms the same group, and the pairs' diagnoses would only be run again.
           if (!refitted.insert(scope_key + to_string(g.cause)).second) continue;
+          // The rest's own findings: those on its pairs alone (a path's, or an output's when the
+          // rest is that output's paths).
           auto own = [&](const Finding& f) {
-            return f.scope == Scope::kPath && f.pairs.size() == 1 &&
-                   std::find(rest.begin(), rest.end(), f.pairs[0]) != rest.end();
+            if (f.pairs.empty() || f.scope == Scope::kPlant) return false;
+            for (const std::string& q : f.pairs)
+              if (std::find(rest.begin(), rest.end(), q) == rest.end()) return false;
+            return true;
           };
           std::vector<Finding> base;
           for (const Finding& f : joined)
@@ -216,7 +241,7 @@ bool regroup(DiagnosisRun& r) {
           const double rise = chi2_of(r, after, qp) - chi2_of(r, before, qp);
           quiet &= rise <= std::log(2.0 * double(std::max<size_t>(n, 1)));
         }
-        if (!quiet) continue;
+        if (!quiet || (one_of_two && joined.size() >= fs.size())) continue;
       }
       fs = std::move(joined);
       merged = true;

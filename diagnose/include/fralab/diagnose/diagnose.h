@@ -250,7 +250,8 @@ double model_error(const Model& m, const Model& sim, const std::vector<MeasuredP
                    const DiagnoseOptions& opt = {}, const std::vector<std::string>& which = {});
 
 /// A finding as diagnosis.json writes it (docs/formats.md §6: cause, scope, input, output,
-/// parameters, pairs, and a missing path's tf); InputError naming `where` and the key.
+/// parameters, pairs, a missing path's tf, and the 1-sigma intervals when present, null an
+/// unbounded side); InputError naming `where` and the key.
 Finding finding_from_json(const Json& j, const JsonWhere& where);
 
 /// The simulation extended by the findings, each as its cause extends a model (the diagnosis'
