@@ -479,12 +479,22 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
       s22 += std::norm(X2[p][k]);
       s12 += std::conj(X1[p][k]) * X2[p][k];
     }
+    // Non-excited neighbours: the nearest unexcited line on each side.
+    const std::vector<int> nb = unexcited_neighbours(excited, k, P);
+    // The spread over periods of z = X2 - r X1, pooled over the line (where z's mean is 0) and
+    // its neighbours (about their own mean: a periodic distortion there cancels), as the
+    // orthogonal design's: a few periods' spread on one line alone is too few degrees of freedom.
+    for (int kk : nb) {
+      std::complex<double> zm = 0;
+      for (int p = 0; p < M; ++p) zm += X2[p][kk] - r * X1[p][kk];
+      zm /= double(M);
+      for (int p = 0; p < M; ++p) se += std::norm(X2[p][kk] - r * X1[p][kk] - zm);
+    }
+    se /= double(1 + nb.size());
     q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
     if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
     q.coherence = std::norm(s12) / (s11 * s22);
-    // Non-excited neighbours: the nearest unexcited line on each side.
     double lvl = 0;
-    const std::vector<int> nb = unexcited_neighbours(excited, k, P);
     for (int kk : nb) {
       std::complex<double> v = 0;
       for (int p = 0; p < M; ++p) v += X2[p][kk];

@@ -149,7 +149,9 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   fit_causes(r);
   scope(r);
   joint(r);
-  if (regroup(r)) joint(r);
+  bool moved = regroup(r);
+  moved |= decompose(r);
+  if (moved) joint(r);
   resolve(r);
   earn_place(r);
   level(r);

@@ -300,6 +300,35 @@ TEST(PairAnalyzer, SweepMeasuresASmoothPlant) {
 // Zippered multisines: both inputs of a 2x2 plant at once on disjoint lines; every input-to-output
 // pair measured at its input's lines to 1e-4 / 0.01 degree of the plant's exact sampled response,
 // and no distortion on the non-excited lines of a linear plant; a backlash shows there.
+// A one-input multisine of two periods: a line's own spread over the periods is one complex
+// degree of freedom, so its sigma alone is an exponential variable (|err| / sigma beyond 2 for 20 %
+// of the points, beyond 3 for 10 %: a weak path's chi2 out of all proportion). Pooled with the
+// nearest non-excited line each side (the same noise, three times the degrees of freedom), the
+// fractions are 8 % and 1.6 % (|err|^2 / sigma^2 ~ F(2, 6)); checked over 40 seeds and every line.
+TEST(PairAnalyzer, AOneInputMultisinesSigmaPoolsTheLinesNextToIt) {
+  Tf t;
+  t.gain = 2.0;
+  t.poles = {Root::Real(-5.0)};
+  const Model m = fralab::testing::siso_model(t, nullptr, nullptr, 0.02);
+  SteppedSineOptions o = band(0.2, 20, 5);
+  o.min_cycles = 2;
+  int n = 0, beyond2 = 0, beyond3 = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    auto run = simulate_tape(m, {"u"}, o, true, seed, 100, 2.0, "multisine");
+    for (const auto& p : analyse(run, "u:y")) {
+      ASSERT_TRUE(p.valid) << p.note;
+      EXPECT_EQ(p.n_cycles, 2);
+      const double err = std::abs(pt(p) - sampled(m, "u", "y", p.w));
+      ++n;
+      beyond2 += err > 2 * p.sigma;
+      beyond3 += err > 3 * p.sigma;
+    }
+  }
+  ASSERT_GT(n, 300);
+  EXPECT_LT(double(beyond2) / n, 0.13) << beyond2 << " of " << n;
+  EXPECT_LT(double(beyond3) / n, 0.04) << beyond3 << " of " << n;
+}
+
 TEST(PairAnalyzer, ZipperedMultisinesMeasureTheWholeMatrixInOneRun) {
   Model m = two_by_two();
   SteppedSineOptions o = band(0.1, 20, 6);

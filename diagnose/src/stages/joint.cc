@@ -44,29 +44,98 @@ std::vector<std::vector<size_t>> groups_of(const std::vector<Finding>& fs) {
 
 }  // namespace
 
+void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
+            const std::vector<const PairFit*>& pairs, size_t min_params) {
+  // The free parameters: each finding's primary one and those of its others the data resolve.
+  struct Param {
+    size_t finding;
+    std::string key;
+    bool log;
+  };
+  std::vector<Param> params;
+  for (size_t i : group) {
+    const CauseUnit& unit = *cause_unit(fs[i].cause);
+    const std::string key = unit.primary_parameter(fs[i]).key;
+    if (key.empty() || !fs[i].parameters.count(key)) continue;
+    const bool positive = unit.interval_domain().positive && fs[i].parameters.at(key) > 0;
+    params.push_back({i, key, positive});
+    // The parameters besides it that the data resolve (a moved pair's damping), scales all.
+    for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
+      if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
+        params.push_back({i, sp.key, true});
+  }
+  if (params.empty() || params.size() < min_params) return;
+  const int np = int(params.size());
+  auto set_x = [&](std::vector<Finding>& f, const Eigen::VectorXd& x) {
+    for (int k = 0; k < np; ++k)
+      f[params[size_t(k)].finding].parameters[params[size_t(k)].key] =
+          params[size_t(k)].log ? std::exp(x(k)) : x(k);
+  };
+  auto residuals = [&](const Eigen::VectorXd& x, Eigen::VectorXd* res) {
+    std::vector<Finding> moved = fs;
+    set_x(moved, x);
+    const Model m = extended_by(r, moved, moved.size());
+    std::vector<double> v;
+    for (const PairFit* p : pairs) {
+      for (size_t q = 0; q < p->w.size(); ++q) {
+        const C g =
+            model_pair_response(m, p->pair, p->w[q], p->amp[q], r.opt.chain, p->ms).value_or(0.0);
+        const C e = (p->meas[q] - g) / p->sig[q];
+        v.push_back(e.real()), v.push_back(e.imag());
+      }
+    }
+    *res = Eigen::Map<Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
+    return res->allFinite();
+  };
+  Eigen::VectorXd x(np);
+  for (int k = 0; k < np; ++k) {
+    const double v = fs[params[size_t(k)].finding].parameters.at(params[size_t(k)].key);
+    x(k) = params[size_t(k)].log ? std::log(v) : v;
+  }
+  Eigen::VectorXd res;
+  if (!residuals(x, &res)) return;
+  const double start = res.squaredNorm();
+  double chi2 = start, lambda = 1e-3;
+  for (int it = 0; it < 50; ++it) {
+    Eigen::MatrixXd J(res.size(), np);
+    for (int k = 0; k < np; ++k) {
+      Eigen::VectorXd xh = x, rh;
+      const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
+      xh(k) += h;
+      if (!residuals(xh, &rh) || rh.size() != res.size()) {
+        J.col(k).setZero();
+        continue;
+      }
+      J.col(k) = (rh - res) / h;
+    }
+    const Eigen::MatrixXd A = J.transpose() * J;
+    const Eigen::VectorXd g = J.transpose() * res;
+    bool accepted = false;
+    for (int tries = 0; tries < 10 && !accepted; ++tries) {
+      Eigen::MatrixXd Ad = A;
+      Ad.diagonal() += lambda * A.diagonal().cwiseMax(1e-12);
+      const Eigen::VectorXd dx = Ad.ldlt().solve(-g);
+      Eigen::VectorXd rn;
+      if (dx.allFinite() && residuals(x + dx, &rn) && rn.squaredNorm() < chi2) {
+        x += dx, res = rn;
+        const double before = chi2;
+        chi2 = rn.squaredNorm();
+        lambda = std::max(lambda / 10, 1e-12);
+        accepted = true;
+        if (before - chi2 < 1e-9 * before) it = 50;  // converged
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!accepted) break;
+  }
+  if (chi2 < start) set_x(fs, x);
+}
+
 void joint(DiagnosisRun& r) {
   std::vector<Finding>& fs = r.findings;
   for (const std::vector<size_t>& group : groups_of(fs)) {
     if (group.size() < 2) continue;
-    // The free parameters: each finding's primary one and those of its others the data resolve.
-    struct Param {
-      size_t finding;
-      std::string key;
-      bool log;
-    };
-    std::vector<Param> params;
-    for (size_t i : group) {
-      const CauseUnit& unit = *cause_unit(fs[i].cause);
-      const std::string key = unit.primary_parameter(fs[i]).key;
-      if (key.empty() || !fs[i].parameters.count(key)) continue;
-      const bool positive = unit.interval_domain().positive && fs[i].parameters.at(key) > 0;
-      params.push_back({i, key, positive});
-      // The parameters besides it that the data resolve (a moved pair's damping), scales all.
-      for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
-        if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
-          params.push_back({i, sp.key, true});
-    }
-    if (params.size() < 2) continue;
     std::vector<const PairFit*> pairs;
     for (const std::vector<PairFit>* set : {&r.original, &r.absent})
       for (const auto& p : *set)
@@ -74,71 +143,7 @@ void joint(DiagnosisRun& r) {
           if (std::find(fs[i].pairs.begin(), fs[i].pairs.end(), p.pair) != fs[i].pairs.end() &&
               std::find(pairs.begin(), pairs.end(), &p) == pairs.end())
             pairs.push_back(&p);
-    const int np = int(params.size());
-    auto set_x = [&](std::vector<Finding>& f, const Eigen::VectorXd& x) {
-      for (int k = 0; k < np; ++k)
-        f[params[size_t(k)].finding].parameters[params[size_t(k)].key] =
-            params[size_t(k)].log ? std::exp(x(k)) : x(k);
-    };
-    auto residuals = [&](const Eigen::VectorXd& x, Eigen::VectorXd* res) {
-      std::vector<Finding> moved = fs;
-      set_x(moved, x);
-      const Model m = extended_by(r, moved, moved.size());
-      std::vector<double> v;
-      for (const PairFit* p : pairs) {
-        for (size_t q = 0; q < p->w.size(); ++q) {
-          const C g =
-              model_pair_response(m, p->pair, p->w[q], p->amp[q], r.opt.chain, p->ms).value_or(0.0);
-          const C e = (p->meas[q] - g) / p->sig[q];
-          v.push_back(e.real()), v.push_back(e.imag());
-        }
-      }
-      *res = Eigen::Map<Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
-      return res->allFinite();
-    };
-    Eigen::VectorXd x(np);
-    for (int k = 0; k < np; ++k) {
-      const double v = fs[params[size_t(k)].finding].parameters.at(params[size_t(k)].key);
-      x(k) = params[size_t(k)].log ? std::log(v) : v;
-    }
-    Eigen::VectorXd res;
-    if (!residuals(x, &res)) continue;
-    const double start = res.squaredNorm();
-    double chi2 = start, lambda = 1e-3;
-    for (int it = 0; it < 50; ++it) {
-      Eigen::MatrixXd J(res.size(), np);
-      for (int k = 0; k < np; ++k) {
-        Eigen::VectorXd xh = x, rh;
-        const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
-        xh(k) += h;
-        if (!residuals(xh, &rh) || rh.size() != res.size()) {
-          J.col(k).setZero();
-          continue;
-        }
-        J.col(k) = (rh - res) / h;
-      }
-      const Eigen::MatrixXd A = J.transpose() * J;
-      const Eigen::VectorXd g = J.transpose() * res;
-      bool accepted = false;
-      for (int tries = 0; tries < 10 && !accepted; ++tries) {
-        Eigen::MatrixXd Ad = A;
-        Ad.diagonal() += lambda * A.diagonal().cwiseMax(1e-12);
-        const Eigen::VectorXd dx = Ad.ldlt().solve(-g);
-        Eigen::VectorXd rn;
-        if (dx.allFinite() && residuals(x + dx, &rn) && rn.squaredNorm() < chi2) {
-          x += dx, res = rn;
-          const double before = chi2;
-          chi2 = rn.squaredNorm();
-          lambda = std::max(lambda / 10, 1e-12);
-          accepted = true;
-          if (before - chi2 < 1e-9 * before) it = 50;  // converged
-        } else {
-          lambda *= 10;
-        }
-      }
-      if (!accepted) break;
-    }
-    if (chi2 < start) set_x(fs, x);
+    refine(r, fs, group, pairs, 2);
   }
 }
 

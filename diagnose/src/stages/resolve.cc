@@ -3,7 +3,8 @@
 // pairs, every other finding in place and this parameter alone moved, rises by
 // s = max(1, chi2_min / N) above its minimum (and so each other parameter its cause reports, as a
 // moved pair's damping); a finding whose simulated value (or absence) does
-// not raise chi2 by more than s is dropped, said why.
+// not raise chi2 by more than s is dropped, said why; so are a lag and a lead at one place that
+// cancel each other.
 #include <algorithm>
 #include <array>
 #include <boost/math/tools/roots.hpp>
@@ -48,7 +49,44 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
   return out;
 }
 
+// A lag and a lead at one place (the same scope, input and output) whose corners are within
+// consistent_rel of each other cancel: each alone is resolved (removing one leaves the other),
+// but the two together are 1 to within the tolerance. Both are dropped, said why, when removing
+// both raises chi2 over their pairs by no more than 2 s (two parameters).
+static void drop_cancelling(DiagnosisRun& r) {
+  std::vector<Finding>& fs = r.findings;
+  for (size_t i = 0; i < fs.size(); ++i)
+    for (size_t j = 0; j < fs.size(); ++j) {
+      const Finding &lag = fs[i], &lead = fs[j];
+      if (lag.cause != CauseKind::kMissingLag || lead.cause != CauseKind::kMissingLead ||
+          lag.scope != lead.scope || lag.input != lead.input || lag.output != lead.output)
+        continue;
+      const double a = lag.parameters.at("corner_rad_s"), b = lead.parameters.at("corner_rad_s");
+      if (std::abs(a - b) > r.opt.consistent_rel * a) continue;
+      const std::vector<const PairFit*> mine = fitted_pairs(r, lag.pairs);
+      size_t n = 0;
+      for (const PairFit* p : mine) n += p->w.size();
+      std::vector<Finding> without;
+      for (size_t x = 0; x < fs.size(); ++x)
+        if (x != i && x != j) without.push_back(fs[x]);
+      const double c_min = chi2_of(r, extended_by(r, fs, fs.size()), mine);
+      const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+      const double c_without = chi2_of(r, extended_by(r, without, without.size()), mine);
+      if (c_without - c_min > 2 * s) continue;
+      const std::string why = " beside it (corners " + fmt(a) + " and " + fmt(b) +
+                              " rad/s): chi2 over their pairs is " + fmt(c_min) +
+                              " with both and " + fmt(c_without) + " without, less than " +
+                              fmt(2 * s) + " apart";
+      r.d.dropped.push_back({lag, "cancels the missing_lead" + why});
+      r.d.dropped.push_back({lead, "cancels the missing_lag" + why});
+      fs = std::move(without);
+      i = size_t(-1);
+      break;
+    }
+}
+
 void resolve(DiagnosisRun& r) {
+  drop_cancelling(r);
   std::vector<Finding>& findings = r.findings;
   std::vector<Finding> kept;
   for (size_t i = 0; i < findings.size(); ++i) {

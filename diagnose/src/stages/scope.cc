@@ -12,10 +12,13 @@
 // every other finding (the group's included), and joins on what that finds. The plant's scope
 // also joins outputs' and inputs' findings (the plant's mode found output by output where one
 // output's own overlap kept the paths apart); a scope of two pairs joins one pair's finding when
-// the other, diagnosed again, leaves fewer findings than the paths' own.
+// the other, diagnosed again, leaves fewer findings than the paths' own. A scope's finding whose
+// pairs hold path findings beside it on fewer than half of them has those pairs diagnosed again
+// the same way, kept on a lower BIC.
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <set>
 
 #include "stages.h"
@@ -78,6 +81,73 @@ void group(DiagnosisRun& r, std::vector<bool>& used, const std::function<bool(co
     for (size_t x : m) used[x] = true;
     r.findings.push_back(make_finding(r, raw[a].c, scope, in, out, m));
   }
+}
+
+// No pair of `rest` has its chi2 raised by more than one parameter's BIC penalty, ln 2N over its
+// N points, going from the findings `before` to `after`.
+bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
+                const std::vector<Finding>& after, const std::vector<std::string>& rest) {
+  const Model mb = extended_by(r, before, before.size()), ma = extended_by(r, after, after.size());
+  for (const std::string& q : rest) {
+    const auto qp = fitted_pairs(r, {q});
+    size_t n = 0;
+    for (const PairFit* p : qp) n += p->w.size();
+    if (chi2_of(r, ma, qp) - chi2_of(r, mb, qp) > std::log(2.0 * double(std::max<size_t>(n, 1))))
+      return false;
+  }
+  return true;
+}
+
+// The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
+// with the rest's own findings dropped (those on its pairs alone: a path's, or an output's when
+// the rest is that output's paths), the scope's finding sized on the pairs that found it together
+// with the other findings there (the members' mean carries one pair's own value, off by up to the
+// tolerance, and another finding on that pair what it took of the overlap, which the rest would
+// then want moved again), and each rest pair diagnosed again, alone, against the simulation
+// extended by all that (the whole diagnosis on that pair): the new findings, or nullopt when a
+// rest pair wants the scope's cause again.
+std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
+                                                    const std::vector<Finding>& with,
+                                                    const std::vector<std::string>& rest) {
+  auto in_rest = [&](const std::string& q) {
+    return std::find(rest.begin(), rest.end(), q) != rest.end();
+  };
+  auto own = [&](const Finding& f) {
+    if (f.pairs.empty() || f.scope == Scope::kPlant) return false;
+    for (const std::string& q : f.pairs)
+      if (!in_rest(q)) return false;
+    return true;
+  };
+  std::vector<Finding> base;
+  for (size_t x = 0; x + 1 < with.size(); ++x)
+    if (!own(with[x])) base.push_back(with[x]);
+  base.push_back(with.back());
+  const CauseKind cause = base.back().cause;
+  std::vector<std::string> found_it;
+  for (const std::string& q : base.back().pairs)
+    if (!in_rest(q)) found_it.push_back(q);
+  std::vector<size_t> sized{base.size() - 1};
+  for (size_t x = 0; x + 1 < base.size(); ++x)
+    for (const std::string& q : base[x].pairs)
+      if (std::find(found_it.begin(), found_it.end(), q) != found_it.end()) {
+        sized.push_back(x);
+        break;
+      }
+  refine(r, base, sized, fitted_pairs(r, found_it), 1);
+  const Model ext = extended_by(r, base, base.size());
+  std::vector<Finding> out = base;
+  for (const std::string& q : rest) {
+    std::vector<MeasuredPair> one;
+    for (const MeasuredPair& mp : r.data)
+      if (mp.pair == q) one.push_back(mp);
+    const Diagnosis dq = diagnose(ext, one, r.opt);
+    for (const Finding& f : dq.findings)
+      if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
+        if (f.cause == cause) return std::nullopt;
+        out.push_back(f);
+      }
+  }
+  return out;
 }
 
 }  // namespace
@@ -193,55 +263,24 @@ bool regroup(DiagnosisRun& r) {
       // tell say. A pair the group's cause fits worse keeps the findings per path.
       if (!rest.empty()) {
         for (const std::string& q : rest) joined.back().pairs.push_back(q);
-        // A rest pair that holds other findings of its own (fitted beside its own value of the
-        // cause, which may have taken part of them: a lag fitted as a resonance beside a pole
-        // moved too little) has its causes fitted again, alone, against the simulation extended
-        // by every other finding, the group's included (the whole diagnosis on that pair).
-        if (!clear) {
+        // Joined as they stand when the rest held only their own fits of the cause and the
+        // group's value is as good there. Otherwise (a rest pair that holds other findings of its
+        // own, fitted beside its own value of the cause, which may have taken part of them: a lag
+        // fitted as a resonance beside a pole moved too little; or one whose own fit of the cause
+        // took another effect in, as an output's gain) the rest pairs are diagnosed again.
+        bool ok = clear && quiet_over(r, fs, joined, rest);
+        if (!ok) {
           // Once per scope and cause in a pass: every finding of the group is a candidate that
           // forms the same group, and the pairs' diagnoses would only be run again.
           if (!refitted.insert(scope_key + to_string(g.cause)).second) continue;
-          // The rest's own findings: those on its pairs alone (a path's, or an output's when the
-          // rest is that output's paths).
-          auto own = [&](const Finding& f) {
-            if (f.pairs.empty() || f.scope == Scope::kPlant) return false;
-            for (const std::string& q : f.pairs)
-              if (std::find(rest.begin(), rest.end(), q) == rest.end()) return false;
-            return true;
-          };
-          std::vector<Finding> base;
-          for (const Finding& f : joined)
-            if (!own(f)) base.push_back(f);
-          const Model ext = extended_by(r, base, base.size());
-          std::vector<Finding> refit = base;
-          bool again = false;  // a rest pair that still wants the cause of its own
-          for (const std::string& q : rest) {
-            std::vector<MeasuredPair> one;
-            for (const MeasuredPair& mp : r.data)
-              if (mp.pair == q) one.push_back(mp);
-            const Diagnosis dq = diagnose(ext, one, r.opt);
-            for (const Finding& f : dq.findings)
-              if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
-                again |= f.cause == g.cause;
-                refit.push_back(f);
-              }
-          }
-          // Such a pair is not the group's (and the merge would leave a path finding of the
-          // cause to be grouped again).
-          if (again) continue;
-          joined = std::move(refit);
+          std::optional<std::vector<Finding>> again = rediagnose_rest(r, joined, rest);
+          // A pair that wants the cause again is not the group's (and the merge would leave a
+          // path finding of the cause to be grouped again).
+          if (!again) continue;
+          joined = std::move(*again);
+          ok = quiet_over(r, fs, joined, rest);
         }
-        const Model before = extended_by(r, fs, fs.size()),
-                    after = extended_by(r, joined, joined.size());
-        bool quiet = true;
-        for (const std::string& q : rest) {
-          const auto qp = fitted_pairs(r, {q});
-          size_t n = 0;
-          for (const PairFit* p : qp) n += p->w.size();
-          const double rise = chi2_of(r, after, qp) - chi2_of(r, before, qp);
-          quiet &= rise <= std::log(2.0 * double(std::max<size_t>(n, 1)));
-        }
-        if (!quiet || (one_of_two && joined.size() >= fs.size())) continue;
+        if (!ok || (one_of_two && joined.size() >= fs.size())) continue;
       }
       fs = std::move(joined);
       merged = true;
@@ -253,6 +292,55 @@ bool regroup(DiagnosisRun& r) {
     merge([&](const PairFit& p) { return p.output == o.name; }, Scope::kOutput, "", o.name, 2);
   for (const auto& i : r.sim.inputs)
     merge([&](const PairFit& p) { return p.input == i.name; }, Scope::kInput, i.name, "", 2);
+  // A scope's finding whose pairs hold path findings beside it, on fewer than half its pairs: on
+  // such a pair the scope's cause took its value from a fit that also split an overlap there
+  // (the slow mode moved in every path and one path's lag, that path's pole found 8 % off and
+  // its lag as a resonance). Those pairs are diagnosed again against the scope's finding sized on
+  // its other pairs; kept when that explains the scope's pairs with a lower BIC,
+  // chi2 + k ln 2N with k the path findings on those pairs.
+  std::set<std::string> members_tried;
+  for (size_t gi = 0; gi < r.findings.size(); ++gi) {
+    std::vector<Finding>& fs = r.findings;
+    const Finding& g = fs[gi];
+    if (g.scope == Scope::kPath || g.tf || !g.text_parameters.empty() || g.pairs.size() < 2)
+      continue;
+    std::vector<std::string> extra;
+    size_t k_before = 0;
+    for (const std::string& q : g.pairs) {
+      size_t here = 0;
+      for (size_t x = 0; x < fs.size(); ++x)
+        here +=
+            x != gi && fs[x].scope == Scope::kPath && fs[x].pairs == std::vector<std::string>{q};
+      if (here) extra.push_back(q);
+      k_before += here;
+    }
+    if (extra.empty() || 2 * extra.size() > g.pairs.size()) continue;
+    const std::string key =
+        std::string(to_string(g.scope)) + ":" + g.input + ":" + g.output + ":" + to_string(g.cause);
+    if (!members_tried.insert(key).second) continue;
+    std::vector<Finding> with;
+    for (size_t x = 0; x < fs.size(); ++x)
+      if (x != gi) with.push_back(fs[x]);
+    with.push_back(g);
+    std::optional<std::vector<Finding>> again = rediagnose_rest(r, with, extra);
+    if (!again) continue;
+    size_t k_after = 0;
+    for (const Finding& f : *again)
+      for (const std::string& q : extra)
+        k_after += f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q};
+    const auto gp = fitted_pairs(r, g.pairs);
+    size_t n = 0;
+    for (const PairFit* p : gp) n += p->w.size();
+    const double pen = std::log(2.0 * double(std::max<size_t>(n, 1)));
+    const double bic_before =
+        chi2_of(r, extended_by(r, fs, fs.size()), gp) + double(k_before) * pen;
+    const double bic_after =
+        chi2_of(r, extended_by(r, *again, again->size()), gp) + double(k_after) * pen;
+    if (!(bic_after < bic_before - pen)) continue;
+    fs = std::move(*again);
+    merged = true;
+    gi = size_t(-1);  // the list changed: look again from its start
+  }
   return merged;
 }
 

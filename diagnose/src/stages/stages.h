@@ -105,9 +105,19 @@ void scope(DiagnosisRun& r);
 /// 5b. Findings that share pairs get their primary parameters refined together, every finding in
 /// place (joint.cc).
 void joint(DiagnosisRun& r);
+/// The parameters of the findings fs[group] (each primary one, and those besides it the data
+/// resolve) refined together by Levenberg-Marquardt on chi2 over `pairs`, every other finding of
+/// fs in place; left as they were when that does not lower chi2 or there are fewer than
+/// min_params (joint.cc).
+void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
+            const std::vector<const PairFit*>& pairs, size_t min_params);
 /// 5c. After 5b, path findings of one cause now consistent over every pair of a scope (the plant,
 /// an output, an input) become one finding there; true when any did (scope.cc).
 bool regroup(DiagnosisRun& r);
+/// 5d. A gain or a delay at an input and another at an output add up on the path between them:
+/// the findings of each additive cause are explained by the fewest inputs' and outputs' values
+/// (and paths' residuals) when that is fewer findings; true when any were (calibration.cc).
+bool decompose(DiagnosisRun& r);
 /// 6. Each finding's primary parameter gets its 1-sigma interval; the unresolved are dropped.
 void resolve(DiagnosisRun& r);
 /// 7. On the validation measurement, the findings that do not lower its error are dropped.

@@ -12,9 +12,12 @@
 //   h2_rel, h3_rel: E2's 2nd and 3rd harmonic amplitudes over its fundamental.
 // Multisine windows ("multisine": whole periods of period_samples) give one point per excited line
 // of the pair's input (the input named by E1 or E2; every line for two outputs): each period is
-// transformed (FFTW), R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma and coherence from the spread
-// over periods (as over blocks above), and nl_rel = the mean level of E2 on the nearest lines no
-// input excites, relative to |X2(k)| (the best linear approximation's nonlinear-distortion sign).
+// transformed (FFTW), R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma from the spread over periods
+// of z_p = X2_p - R X1_p (as over blocks above) pooled over line k and the nearest line no input
+// excites each side (z about its mean there: noise only, three times the degrees of freedom of a
+// few periods), coherence from line k's spread, and nl_rel = the mean level of E2 on those
+// nearest non-excited lines, relative to |X2(k)| (the best linear approximation's
+// nonlinear-distortion sign).
 // Orthogonal multisines (a line listed for several inputs: every excited input on every line, n_u
 // experiments with step = r n_u + e, acquire/campaign.h): each experiment's window is transformed
 // per period as above, together with the commands of the n_u inputs (tape channels u_<input>, the

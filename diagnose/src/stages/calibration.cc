@@ -1,0 +1,187 @@
+// Stage 5d, additive causes across scopes (docs/method/diagnosis.md, "The stages"): a gain or a
+// delay at an input and another at an output add up on the path between them (dB and seconds),
+// so that path's own fit holds their sum and vetoes both groups. For each additive cause
+// (gain_mismatch in gain_db, time_delay in delay_s), the total the findings give each X:O pair,
+// T(i, o), is explained by carriers, a value a_i per chosen input and b_o per chosen output:
+// every choice of carriers among the inputs and outputs that touch a nonzero total (at most
+// kMaxCarriers) is fitted by least squares, T(i, o) ~ sum of the carriers on (i, o), over the pairs
+// a carrier covers; a pair whose residual is beyond the cause's consistency tolerance keeps a path
+// finding of that residual. The choice with the fewest findings (then the smallest residual)
+// replaces the findings when it has fewer than they, and when no pair's chi2 rises by more than
+// one parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0, carriers and
+// residuals alike.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "stages.h"
+
+namespace fralab::diag {
+namespace {
+
+constexpr size_t kMaxCarriers = 12;  // 2^12 choices at most
+
+struct Additive {
+  CauseKind cause;
+  const char* key;
+};
+
+struct Choice {
+  std::vector<std::string> inputs, outputs;  // the carriers
+  std::vector<double> a, b;                  // their values
+  std::map<std::string, double> residual;    // pair -> residual kept as a path finding
+  size_t count = 0;
+  double ss = 0;
+};
+
+}  // namespace
+
+bool decompose(DiagnosisRun& r) {
+  // The X:O pairs measured, by input and output.
+  std::vector<std::string> pairs;
+  std::map<std::string, std::pair<std::string, std::string>> ends;
+  for (const PairFit& p : r.pairs)
+    if (!p.output.empty()) {
+      pairs.push_back(p.pair);
+      ends[p.pair] = {p.input, p.output};
+    }
+  bool changed = false;
+  for (const Additive& ad : {Additive{CauseKind::kGainMismatch, "gain_db"},
+                             Additive{CauseKind::kTimeDelay, "delay_s"}}) {
+    const bool delay = ad.cause == CauseKind::kTimeDelay;
+    const double tol = delay ? r.opt.consistent_delay_s : r.opt.consistent_gain_db;
+    std::vector<Finding>& fs = r.findings;
+    // The cause's findings on X:O pairs at a path, an input or an output; a plant's leaves it be.
+    std::vector<size_t> mine;
+    bool plant = false;
+    for (size_t x = 0; x < fs.size(); ++x) {
+      const Finding& f = fs[x];
+      if (f.cause != ad.cause || f.tf || !f.text_parameters.empty() || !f.parameters.count(ad.key))
+        continue;
+      plant |= f.scope == Scope::kPlant;
+      bool on_paths = !f.pairs.empty();
+      for (const std::string& q : f.pairs) on_paths &= ends.count(q) > 0;
+      if (on_paths && f.scope != Scope::kPlant) mine.push_back(x);
+    }
+    if (plant || mine.size() < 2) continue;
+    std::map<std::string, double> total;
+    for (const std::string& q : pairs) total[q] = 0;
+    for (size_t x : mine)
+      for (const std::string& q : fs[x].pairs) total[q] += fs[x].parameters.at(ad.key);
+    std::vector<std::string> cand_in, cand_out;
+    for (const auto& [q, t] : total) {
+      if (std::abs(t) <= tol) continue;
+      const auto& [i, o] = ends[q];
+      if (std::find(cand_in.begin(), cand_in.end(), i) == cand_in.end()) cand_in.push_back(i);
+      if (std::find(cand_out.begin(), cand_out.end(), o) == cand_out.end()) cand_out.push_back(o);
+    }
+    const size_t nc = cand_in.size() + cand_out.size();
+    if (nc == 0 || nc > kMaxCarriers) continue;
+    std::set<std::string> all_in, all_out;
+    for (const auto& [q, e] : ends) all_in.insert(e.first), all_out.insert(e.second);
+    std::optional<Choice> best;
+    for (uint32_t mask = 1; mask < (1u << nc); ++mask) {
+      Choice c;
+      for (size_t k = 0; k < nc; ++k)
+        if (mask & (1u << k))
+          (k < cand_in.size() ? c.inputs : c.outputs)
+              .push_back(k < cand_in.size() ? cand_in[k] : cand_out[k - cand_in.size()]);
+      // Every input and every output a carrier: one value could move from the ones to the others.
+      if (c.inputs.size() == all_in.size() && c.outputs.size() == all_out.size()) continue;
+      const size_t n = c.inputs.size() + c.outputs.size();
+      std::vector<std::string> covered;
+      for (const std::string& q : pairs) {
+        const auto& [i, o] = ends[q];
+        if (std::count(c.inputs.begin(), c.inputs.end(), i) ||
+            std::count(c.outputs.begin(), c.outputs.end(), o))
+          covered.push_back(q);
+      }
+      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(Eigen::Index(covered.size()), Eigen::Index(n));
+      Eigen::VectorXd t(Eigen::Index(covered.size()));
+      for (size_t row = 0; row < covered.size(); ++row) {
+        const auto& [i, o] = ends[covered[row]];
+        for (size_t k = 0; k < c.inputs.size(); ++k)
+          if (c.inputs[k] == i) A(Eigen::Index(row), Eigen::Index(k)) = 1;
+        for (size_t k = 0; k < c.outputs.size(); ++k)
+          if (c.outputs[k] == o) A(Eigen::Index(row), Eigen::Index(c.inputs.size() + k)) = 1;
+        t(Eigen::Index(row)) = total[covered[row]];
+      }
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+      if (qr.rank() < Eigen::Index(n)) continue;  // carriers the pairs cannot tell apart
+      const Eigen::VectorXd v = qr.solve(t);
+      bool ok = true;
+      for (Eigen::Index k = 0; k < v.size(); ++k)
+        ok &= std::abs(v(k)) > tol && (!delay || v(k) > 0);  // a carrier of nothing is not one
+      if (!ok) continue;
+      c.a.assign(v.data(), v.data() + c.inputs.size());
+      c.b.assign(v.data() + c.inputs.size(), v.data() + n);
+      c.count = n;
+      for (const std::string& q : pairs) {
+        const auto& [i, o] = ends[q];
+        double carried = 0;
+        for (size_t k = 0; k < c.inputs.size(); ++k)
+          if (c.inputs[k] == i) carried += c.a[k];
+        for (size_t k = 0; k < c.outputs.size(); ++k)
+          if (c.outputs[k] == o) carried += c.b[k];
+        const double res = total[q] - carried;
+        c.ss += res * res;
+        if (std::abs(res) <= tol) continue;
+        if (delay && res < 0) ok = false;  // a negative delay is no path's
+        c.residual[q] = res;
+        ++c.count;
+      }
+      if (!ok) continue;
+      if (!best || c.count < best->count || (c.count == best->count && c.ss < best->ss))
+        best = std::move(c);
+    }
+    if (!best || best->count >= mine.size()) continue;
+    // The new findings in place of the cause's.
+    std::vector<Finding> joined;
+    for (size_t x = 0; x < fs.size(); ++x)
+      if (std::find(mine.begin(), mine.end(), x) == mine.end()) joined.push_back(fs[x]);
+    auto carrier = [&](Scope scope, const std::string& in, const std::string& out, double value) {
+      Finding f;
+      f.cause = ad.cause;
+      f.scope = scope;
+      f.input = in;
+      f.output = out;
+      f.parameters[ad.key] = value;
+      for (const std::string& q : pairs)
+        if ((!in.empty() && ends[q].first == in) || (!out.empty() && ends[q].second == out))
+          f.pairs.push_back(q);
+      joined.push_back(f);
+    };
+    for (size_t k = 0; k < best->inputs.size(); ++k)
+      carrier(Scope::kInput, best->inputs[k], "", best->a[k]);
+    for (size_t k = 0; k < best->outputs.size(); ++k)
+      carrier(Scope::kOutput, "", best->outputs[k], best->b[k]);
+    for (const auto& [q, res] : best->residual) {
+      Finding f;
+      f.cause = ad.cause;
+      f.scope = Scope::kPath;
+      f.input = ends[q].first;
+      f.output = ends[q].second;
+      f.parameters[ad.key] = res;
+      f.pairs = {q};
+      joined.push_back(f);
+    }
+    const Model before = extended_by(r, fs, fs.size()),
+                after = extended_by(r, joined, joined.size());
+    bool quiet = true;
+    for (const std::string& q : pairs) {
+      const auto qp = fitted_pairs(r, {q});
+      size_t n = 0;
+      for (const PairFit* p : qp) n += p->w.size();
+      quiet &= chi2_of(r, after, qp) - chi2_of(r, before, qp) <=
+               std::log(2.0 * double(std::max<size_t>(n, 1)));
+    }
+    if (!quiet) continue;
+    fs = std::move(joined);
+    changed = true;
+  }
+  return changed;
+}
+
+}  // namespace fralab::diag
