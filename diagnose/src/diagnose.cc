@@ -151,6 +151,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   joint(r);
   bool moved = regroup(r);
   moved |= decompose(r);
+  moved |= simpler_alternatives(r);
   if (moved) joint(r);
   resolve(r);
   earn_place(r);

@@ -597,6 +597,37 @@ TEST(Diagnose, ALagAndALeadThatCancelAreDroppedTogether) {
   EXPECT_NEAR(f.parameters.at("corner_rad_s") / c.hidden[0].value, 1.0, kCornerTol) << json;
 }
 
+// The machine-shaped self-check's case 13 of seed 4 as the lab measured it (tests/data/lab/
+// machine_s4_c13): an 8.6 ms delay in Y2's sensor, beside the slow mode moved in every path and
+// Y3's -1.55 dB. The band ends at 82 rad/s, where the delay is 41 degrees of phase; each path
+// into Y2 fitted it as a resonance at 104 rad/s, zeta 0.38, whose gain the band barely sees.
+// Over the output's pairs a delay fits as well with one parameter fewer: the output's delay,
+// within 0.5 ms, and no resonance.
+TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
+  constexpr double kDelayTolS = 0.5e-3;
+  const testing::RandomCase c = testing::random_machine_case(4, 13);
+  const testing::HiddenEffect* delay = nullptr;
+  for (const auto& h : c.hidden)
+    if (h.cause == CauseKind::kTimeDelay) delay = &h;
+  ASSERT_NE(delay, nullptr);
+  ASSERT_EQ(delay->scope, Scope::kOutput);
+  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s4_c13");
+  const std::string json = diagnosis_to_json(d).dump(1);
+  const Finding* found = nullptr;
+  for (const Finding& f : d.findings) {
+    EXPECT_NE(f.cause, CauseKind::kMissingResonance) << json;
+    if (f.cause == CauseKind::kTimeDelay) found = &f;
+  }
+  ASSERT_NE(found, nullptr) << json;
+  EXPECT_EQ(found->scope, Scope::kOutput) << json;
+  EXPECT_EQ(found->output, delay->output) << json;
+  EXPECT_NEAR(found->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+  int true_findings = 0;
+  for (const Finding& f : d.findings)
+    for (const auto& h : c.hidden) true_findings += h.matches(f);
+  EXPECT_EQ(true_findings, int(d.findings.size())) << json;
+}
+
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});

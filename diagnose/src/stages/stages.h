@@ -1,7 +1,7 @@
 // Internal to the diagnosis: the state diagnose() passes from stage to stage, and the stages, one
 // file each in this folder, in the order docs/method/diagnosis.md ("The stages") describes them:
-// prepare the pairs, fit the causes, scope, resolve, earn their place, summarise. Frequencies
-// rad/s, s = jw.
+// prepare the pairs, fit the causes, scope, size together, regroup, the additive causes, the
+// simpler alternatives, resolve, earn their place, level, summarise. Frequencies rad/s, s = jw.
 #pragma once
 
 #include <array>
@@ -118,6 +118,9 @@ bool regroup(DiagnosisRun& r);
 /// the findings of each additive cause are explained by the fewest inputs' and outputs' values
 /// (and paths' residuals) when that is fewer findings; true when any were (calibration.cc).
 bool decompose(DiagnosisRun& r);
+/// 5e. A missing resonance that a delay, a lag, or a lag and a delay together fit over its pairs
+/// with a lower BIC is replaced by that; true when any was (alternatives.cc).
+bool simpler_alternatives(DiagnosisRun& r);
 /// 6. Each finding's primary parameter gets its 1-sigma interval; the unresolved are dropped.
 void resolve(DiagnosisRun& r);
 /// 7. On the validation measurement, the findings that do not lower its error are dropped.
