@@ -91,8 +91,13 @@ bool simpler_alternatives(DiagnosisRun& r) {
     for (const Alt& a : alts) {
       // A delay stays >= 0 and a lag's corner inside what its search saw.
       bool ok = true;
-      for (const Finding& e : a.extra)
+      for (const Finding& e : a.extra) {
         if (e.cause == CauseKind::kTimeDelay) ok &= e.parameters.at("delay_s") >= 0;
+        if (e.cause == CauseKind::kMissingLag) {
+          const double c = e.parameters.at("corner_rad_s");
+          ok &= c >= w_lo / 10 && c <= w_hi * 30;
+        }
+      }
       if (!ok) continue;
       const double bic = chi2_with(a.extra) + a.k * pen;
       if (bic < best) best = bic, chosen = &a;
