@@ -628,6 +628,25 @@ TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
   EXPECT_EQ(true_findings, int(d.findings.size())) << json;
 }
 
+// A damping_error read from a file for a pair the model does not hold, without the from_zeta its
+// factor needs, is an error naming the cause and the frequency, not a crash.
+TEST(Diagnose, ADampingErrorWithoutItsPairOrFromZetaIsAnError) {
+  Finding f;
+  f.cause = CauseKind::kDampingError;
+  f.scope = Scope::kPath;
+  f.input = "u";
+  f.output = "y";
+  f.pairs = {"u:y"};
+  f.parameters = {{"wn_rad_s", 77.0}, {"to_zeta", 0.2}};
+  EXPECT_THAT([&] { extend_model(simulation(), {f}); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("damping_error at 77 rad/s")));
+  f.parameters["from_zeta"] = 0.5;  // with it, the factor D_sim / D is added
+  const Model ext = extend_model(simulation(), {f});
+  const Complex ratio = *model_pair_response(ext, "u:y", 77.0, 0.02) /
+                        *model_pair_response(simulation(), "u:y", 77.0, 0.02);
+  EXPECT_NEAR(std::abs(ratio), 0.5 / 0.2, 1e-9);  // at wn: |D_sim / D| = zeta_sim / zeta
+}
+
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});

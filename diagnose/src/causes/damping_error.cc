@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "cause.h"
+#include "fralab/core/error.h"
 
 namespace fralab::diag {
 namespace {
@@ -75,7 +76,11 @@ class DampingError final : public LinearCause {
         r.zeta = to_zeta;
         return;
       }
-    t.zeros.push_back(Root::Pair(wn, f.parameters.at("from_zeta")));
+    const auto from_zeta = f.parameters.find("from_zeta");
+    if (from_zeta == f.parameters.end())
+      throw InputError("damping_error at " + fmt(wn) +
+                       " rad/s: no pole pair there, and no from_zeta to add its factor with");
+    t.zeros.push_back(Root::Pair(wn, from_zeta->second));
     t.poles.push_back(Root::Pair(wn, to_zeta));
   }
   std::string explain(const Finding& f) const override {
