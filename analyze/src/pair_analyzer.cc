@@ -91,6 +91,18 @@ static std::vector<int> unexcited_neighbours(const std::vector<bool>& excited, i
   return out;
 }
 
+// sum_p |z_p - mean_p z|^2 over the M periods: the spread of a line's period values about their
+// mean (a periodic part, distortion or the response itself, cancels in it).
+template <class Z>
+static double period_spread(int M, const Z& z) {
+  std::complex<double> zm = 0;
+  for (int p = 0; p < M; ++p) zm += z(p);
+  zm /= double(M);
+  double s = 0;
+  for (int p = 0; p < M; ++p) s += std::norm(z(p) - zm);
+  return s;
+}
+
 // A point's sigma, > 0 as the contract needs: noise-free periods repeat exactly and spread by 0.
 static double positive_sigma(double sigma, double mag) {
   return sigma > 0 ? sigma : 1e-300 + 1e-15 * mag;
@@ -484,12 +496,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     // The spread over periods of z = X2 - r X1, pooled over the line (where z's mean is 0) and
     // its neighbours (about their own mean: a periodic distortion there cancels), as the
     // orthogonal design's: a few periods' spread on one line alone is too few degrees of freedom.
-    for (int kk : nb) {
-      std::complex<double> zm = 0;
-      for (int p = 0; p < M; ++p) zm += X2[p][kk] - r * X1[p][kk];
-      zm /= double(M);
-      for (int p = 0; p < M; ++p) se += std::norm(X2[p][kk] - r * X1[p][kk] - zm);
-    }
+    for (int kk : nb) se += period_spread(M, [&](int p) { return X2[p][kk] - r * X1[p][kk]; });
     se /= double(1 + nb.size());
     q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
     if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
@@ -615,11 +622,8 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
     for (size_t j = 0; j < L; ++j) {
       ex.pos[j][q] = pos_mean[q][lines[j]];
       double ss = 0;
-      for (const std::vector<Complex>& v : posp[q][j]) {
-        Complex m = 0;
-        for (const Complex& c : v) m += c / double(M);
-        for (const Complex& c : v) ss += std::norm(c - m);
-      }
+      for (const std::vector<Complex>& v : posp[q][j])
+        ss += period_spread(M, [&](int p) { return v[size_t(p)]; });
       ex.pos_var[j][q] = ss / (double(posp[q][j].size()) * double(M) * (M - 1));
       d[j] = distortion(pos_mean[q], j);
     }
@@ -734,12 +738,7 @@ std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment
         const int M = int(x.x1[j].size());
         // The spread over periods of z = X2 - R X1 at the line and its unexcited neighbours.
         auto spread = [&](const std::vector<Complex>& v1, const std::vector<Complex>& v2) {
-          Complex zm = 0;
-          for (int pp = 0; pp < M; ++pp) zm += v2[pp] - R * v1[pp];
-          zm /= double(M);
-          double sz = 0;
-          for (int pp = 0; pp < M; ++pp) sz += std::norm(v2[pp] - R * v1[pp] - zm);
-          return sz;
+          return period_spread(M, [&](int pp) { return v2[size_t(pp)] - R * v1[size_t(pp)]; });
         };
         double sz = spread(x.x1[j], x.x2[j]);
         for (size_t n = 0; n < x.nb1[j].size(); ++n) sz += spread(x.nb1[j][n], x.nb2[j][n]);

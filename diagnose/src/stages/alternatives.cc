@@ -29,14 +29,11 @@ bool simpler_alternatives(DiagnosisRun& r) {
         f.pairs.empty())
       continue;
     const std::vector<const PairFit*> pairs = fitted_pairs(r, f.pairs);
-    size_t n = 0;
+    if (points_of(pairs) == 0) continue;
     double w_lo = INFINITY, w_hi = 0;
-    for (const PairFit* p : pairs) {
-      n += p->w.size();
+    for (const PairFit* p : pairs)
       for (double w : p->w) w_lo = std::min(w_lo, w), w_hi = std::max(w_hi, w);
-    }
-    if (n == 0) continue;
-    const double pen = std::log(2.0 * double(n));
+    const double pen = bic_penalty(pairs);
     std::vector<Finding> others;
     for (size_t x = 0; x < r.findings.size(); ++x)
       if (x != i) others.push_back(r.findings[x]);
@@ -61,25 +58,20 @@ bool simpler_alternatives(DiagnosisRun& r) {
     };
     auto delay = [&](double t) { return at_scope(CauseKind::kTimeDelay, "delay_s", t); };
     auto lag = [&](double lc) { return at_scope(CauseKind::kMissingLag, "corner_rad_s", lc); };
-    const double t =
-        minimise_1d([&](double v) { return chi2_with({delay(v)}); }, 0.0, r.opt.delay_max_s,
-                    int(std::ceil(r.opt.delay_max_s / kDelayStepS)));
+    const int delay_grid = int(std::ceil(r.opt.delay_max_s / kDelayStepS));
+    const double t = minimise_1d([&](double v) { return chi2_with({delay(v)}); }, 0.0,
+                                 r.opt.delay_max_s, delay_grid);
     const double lc = std::exp(minimise_1d([&](double v) { return chi2_with({lag(std::exp(v))}); },
                                            std::log(w_lo / 10), std::log(w_hi * 30), kCornerGrid));
     // The lag with the delay: from the lag alone and the delay fitted on top of it, refined
     // together.
-    std::vector<Finding> both = with({lag(lc), delay(0)});
+    const double t_on_lag = minimise_1d(
+        [&](double v) {
+          return chi2_with({lag(lc), delay(v)});
+        },
+        0.0, r.opt.delay_max_s, delay_grid);
+    std::vector<Finding> both = with({lag(lc), delay(t_on_lag)});
     const size_t il = both.size() - 2, id = both.size() - 1;
-    {
-      const std::vector<Finding> only_lag = with({lag(lc)});
-      both[id].parameters["delay_s"] = minimise_1d(
-          [&](double v) {
-            std::vector<Finding> all = only_lag;
-            all.push_back(delay(v));
-            return chi2_of(r, extended_by(r, all, all.size()), pairs);
-          },
-          0.0, r.opt.delay_max_s, int(std::ceil(r.opt.delay_max_s / kDelayStepS)));
-    }
     refine(r, both, {il, id}, pairs, 2);
     struct Alt {
       std::vector<Finding> extra;

@@ -167,17 +167,7 @@ bool decompose(DiagnosisRun& r) {
       f.pairs = {q};
       joined.push_back(f);
     }
-    const Model before = extended_by(r, fs, fs.size()),
-                after = extended_by(r, joined, joined.size());
-    bool quiet = true;
-    for (const std::string& q : pairs) {
-      const auto qp = fitted_pairs(r, {q});
-      size_t n = 0;
-      for (const PairFit* p : qp) n += p->w.size();
-      quiet &= chi2_of(r, after, qp) - chi2_of(r, before, qp) <=
-               std::log(2.0 * double(std::max<size_t>(n, 1)));
-    }
-    if (!quiet) continue;
+    if (!quiet_over(r, fs, joined, pairs)) continue;
     fs = std::move(joined);
     changed = true;
   }

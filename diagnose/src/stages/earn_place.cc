@@ -58,9 +58,7 @@ void earn_place_by_validation(DiagnosisRun& r) {
 std::pair<double, size_t> chi2_over(const DiagnosisRun& r, const Model& m,
                                     const std::vector<std::string>& which) {
   const std::vector<const PairFit*> pairs = fitted_pairs(r, which);
-  size_t n = 0;
-  for (const PairFit* p : pairs) n += p->w.size();
-  return {chi2_of(r, m, pairs), n};
+  return {chi2_of(r, m, pairs), points_of(pairs)};
 }
 
 void earn_place_by_criterion(DiagnosisRun& r) {

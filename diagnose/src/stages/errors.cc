@@ -25,6 +25,26 @@ std::vector<const PairFit*> fitted_pairs(const DiagnosisRun& r,
   return out;
 }
 
+size_t points_of(const std::vector<const PairFit*>& pairs) {
+  size_t n = 0;
+  for (const PairFit* p : pairs) n += p->w.size();
+  return n;
+}
+
+double bic_penalty(const std::vector<const PairFit*>& pairs) {
+  return std::log(2.0 * double(std::max<size_t>(points_of(pairs), 1)));
+}
+
+bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
+                const std::vector<Finding>& after, const std::vector<std::string>& which) {
+  const Model mb = extended_by(r, before, before.size()), ma = extended_by(r, after, after.size());
+  for (const std::string& q : which) {
+    const auto qp = fitted_pairs(r, {q});
+    if (chi2_of(r, ma, qp) - chi2_of(r, mb, qp) > bic_penalty(qp)) return false;
+  }
+  return true;
+}
+
 double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const PairFit*>& pairs) {
   double c = 0;
   for (const PairFit* p : pairs)

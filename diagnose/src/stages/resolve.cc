@@ -64,8 +64,7 @@ static void drop_cancelling(DiagnosisRun& r) {
       const double a = lag.parameters.at("corner_rad_s"), b = lead.parameters.at("corner_rad_s");
       if (std::abs(a - b) > r.opt.consistent_rel * a) continue;
       const std::vector<const PairFit*> mine = fitted_pairs(r, lag.pairs);
-      size_t n = 0;
-      for (const PairFit* p : mine) n += p->w.size();
+      const size_t n = points_of(mine);
       std::vector<Finding> without;
       for (size_t x = 0; x < fs.size(); ++x)
         if (x != i && x != j) without.push_back(fs[x]);
@@ -93,8 +92,7 @@ void resolve(DiagnosisRun& r) {
     Finding& f = findings[i];
     // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
     const std::vector<const PairFit*> mine = fitted_pairs(r, f.pairs);
-    size_t n = 0;
-    for (const PairFit* p : mine) n += p->w.size();
+    const size_t n = points_of(mine);
     auto chi2_of_model = [&](const Model& m) { return chi2_of(r, m, mine); };
     const double c_min = chi2_of_model(extended_by(r, findings, findings.size()));
     const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));

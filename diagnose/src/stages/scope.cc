@@ -83,21 +83,6 @@ void group(DiagnosisRun& r, std::vector<bool>& used, const std::function<bool(co
   }
 }
 
-// No pair of `rest` has its chi2 raised by more than one parameter's BIC penalty, ln 2N over its
-// N points, going from the findings `before` to `after`.
-bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
-                const std::vector<Finding>& after, const std::vector<std::string>& rest) {
-  const Model mb = extended_by(r, before, before.size()), ma = extended_by(r, after, after.size());
-  for (const std::string& q : rest) {
-    const auto qp = fitted_pairs(r, {q});
-    size_t n = 0;
-    for (const PairFit* p : qp) n += p->w.size();
-    if (chi2_of(r, ma, qp) - chi2_of(r, mb, qp) > std::log(2.0 * double(std::max<size_t>(n, 1))))
-      return false;
-  }
-  return true;
-}
-
 // The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
 // with the rest's own findings dropped (those on its pairs alone: a path's, or an output's when
 // the rest is that output's paths), the scope's finding sized on the pairs that found it together
@@ -329,9 +314,7 @@ bool regroup(DiagnosisRun& r) {
       for (const std::string& q : extra)
         k_after += f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q};
     const auto gp = fitted_pairs(r, g.pairs);
-    size_t n = 0;
-    for (const PairFit* p : gp) n += p->w.size();
-    const double pen = std::log(2.0 * double(std::max<size_t>(n, 1)));
+    const double pen = bic_penalty(gp);
     const double bic_before =
         chi2_of(r, extended_by(r, fs, fs.size()), gp) + double(k_before) * pen;
     const double bic_after =

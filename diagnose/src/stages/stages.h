@@ -72,6 +72,15 @@ double error_over(const DiagnosisRun& r, const Model& m, const std::vector<std::
 std::vector<const PairFit*> fitted_pairs(const DiagnosisRun& r,
                                          const std::vector<std::string>& which);
 
+/// The points of `pairs`, N.
+size_t points_of(const std::vector<const PairFit*>& pairs);
+/// One parameter's BIC penalty over `pairs`: ln 2N (N at least 1).
+double bic_penalty(const std::vector<const PairFit*>& pairs);
+/// No pair of `which` has its chi2 raised by more than its own bic_penalty going from the findings
+/// `before` to `after`.
+bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
+                const std::vector<Finding>& after, const std::vector<std::string>& which);
+
 /// chi2 of model m over the points of `pairs`: the sum of |G_meas - G_m|^2 / sigma_eff^2, each
 /// point at its own amplitude or multisine, through the lab's chain.
 double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const PairFit*>& pairs);
