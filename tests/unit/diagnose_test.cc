@@ -647,6 +647,22 @@ TEST(Diagnose, ADampingErrorWithoutItsPairOrFromZetaIsAnError) {
   EXPECT_NEAR(std::abs(ratio), 0.5 / 0.2, 1e-9);  // at wn: |D_sim / D| = zeta_sim / zeta
 }
 
+// A curve whose points carry no sigma cannot be weighed: the diagnosis says which pair, instead of
+// leaving it out and reporting that everything agrees. Measured curves with their sigma are
+// diagnosed as before.
+TEST(Diagnose, ACurveWithoutSigmaIsAnErrorNamingItsPair) {
+  Model truth = simulation();
+  truth.paths[0].tf.gain *= 2;
+  std::vector<MeasuredPair> data = measure(truth);
+  ASSERT_NO_THROW(diagnose(simulation(), data));
+  for (MeasuredPair& mp : data)
+    if (mp.pair == "u:y")
+      for (FrdPoint& p : mp.frd.points) p.sigma = -1;  // unknown, as a file without it reads
+  EXPECT_THAT([&] { diagnose(simulation(), data); },
+              ::testing::ThrowsMessage<InputError>(
+                  ::testing::AllOf(HasSubstr("u:y"), HasSubstr("carries a sigma"))));
+}
+
 TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-35)});

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../causes/missing_path.h"
+#include "fralab/core/error.h"
 #include "stages.h"
 
 namespace fralab::diag {
@@ -71,6 +72,17 @@ void prepare(DiagnosisRun& r) {
     }
     if (sim.input_index(p.input) < 0 || (!p.output.empty() && sim.output_index(p.output) < 0))
       continue;
+    // Every point is weighed by 1/sigma^2: a curve whose valid points carry none would be left
+    // out whole, and the report would read as if it agreed.
+    size_t valid = 0, with_sigma = 0;
+    for (const FrdPoint& pt : mp.frd.points) {
+      valid += pt.valid && pt.mag > 0;
+      with_sigma += pt.valid && pt.mag > 0 && pt.sigma > 0;
+    }
+    if (valid > 0 && with_sigma == 0)
+      throw InputError(mp.pair + ": none of its " + std::to_string(valid) +
+                       " valid points carries a sigma, and the diagnosis weighs each point by "
+                       "1/sigma^2 (give each point's sigma, as fralab's analyser writes it)");
     if (!p.output.empty() && !sim.path(p.output, p.input)) {  // a path the simulation lacks
       r.absent.push_back(absent_pair_points(mp, opt));
       continue;
