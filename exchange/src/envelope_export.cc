@@ -75,6 +75,48 @@ MatValue states_of(const Json& states, const JsonWhere& w) {
   return all;
 }
 
+// The slow states (envelope.json `slow_states`; absent from a file written before them: empty).
+MatValue slow_states_of(const Json& j, const JsonWhere& w) {
+  MatValue all = MatValue::structure();
+  if (!j.contains("slow_states")) return all;
+  const Json& states = json_array_member(j, w, "slow_states");
+  for (size_t i = 0; i < states.size(); ++i) {
+    const Json& t = states[i];
+    const JsonWhere tw = w / "slow_states" / i;
+    MatValue s = MatValue::structure();
+    s.add("label", MatValue::str(json_string_member(t, tw, "label")));
+    std::vector<std::string> outputs;
+    const Json& os = json_array_member(t, tw, "outputs");
+    for (size_t k = 0; k < os.size(); ++k)
+      outputs.push_back(json_string(os[k], tw / "outputs" / k));
+    s.add("outputs", MatValue::str_list(outputs));
+    std::vector<double> x, tau, sem, lo, hi;
+    std::vector<std::string> point;
+    const Json& values = json_array_member(t, tw, "values");
+    for (size_t k = 0; k < values.size(); ++k) {
+      const Json& v = values[k];
+      const JsonWhere vw = tw / "values" / k;
+      x.push_back(json_number_member(v, vw, "x"));
+      point.push_back(json_string_member(v, vw, "point"));
+      tau.push_back(json_number_member(v, vw, "tau_s"));
+      sem.push_back(number_or_nan(v, vw, "sem"));
+      const Json& range = json_array_member(v, vw, "range");
+      lo.push_back(range.size() == 2 ? json_number(range[0], vw / "range" / 0) : kAbsent);
+      hi.push_back(range.size() == 2 ? json_number(range[1], vw / "range" / 1) : kAbsent);
+    }
+    s.add("x", MatValue::column(x));
+    s.add("point", MatValue::str_list(point));
+    s.add("tau_s", MatValue::column(tau));
+    s.add("sem", MatValue::column(sem));
+    std::vector<double> range = lo;
+    range.insert(range.end(), hi.begin(), hi.end());
+    s.add("range", MatValue::matrix(lo.size(), 2, range));
+    s.add("flags", MatValue::str(text_or_empty(t, tw, "flags")));
+    all.add(numbered("state", i), s);
+  }
+  return all;
+}
+
 MatValue findings_of(const Json& findings, const JsonWhere& w) {
   MatValue all = MatValue::structure();
   for (size_t i = 0; i < findings.size(); ++i) {
@@ -136,6 +178,7 @@ void export_envelope_mat(const std::string& dir, const std::string& out_file) {
   points.add("name", MatValue::str_list(names));
   points.add("x", MatValue::column(xs));
   const MatValue states = states_of(json_array_member(j, w, "states"), w / "states");
+  const MatValue slow_states = slow_states_of(j, w);
   const MatValue findings = findings_of(json_array_member(j, w, "findings"), w / "findings");
   MatValue loo = MatValue::structure();
   std::vector<std::string> point, refused;
@@ -161,6 +204,7 @@ void export_envelope_mat(const std::string& dir, const std::string& out_file) {
   write_mat_file(out_file, {{"schedule_by", MatValue::str(schedule_by)},
                             {"points", points},
                             {"states", states},
+                            {"slow_states", slow_states},
                             {"findings", findings},
                             {"leave_one_out", loo}});
 }

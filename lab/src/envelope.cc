@@ -205,11 +205,209 @@ std::string finding_text(const FindingLaw& f) {
   return t.str();
 }
 
+// A state's values across points: the flags for one absent at some points ("found at k of n
+// points (...)") and for steps of opposite signs, each larger than its two values' sigmas
+// together ("not monotone: a at x1 then b at x2").
+struct Step {
+  std::string point;
+  double x, value, sigma;
+};
+void flag_steps(const std::vector<Step>& v, size_t n_points, bool* every, bool* monotone,
+                std::string* flags) {
+  std::ostringstream fl;
+  *every = v.size() == n_points;
+  *monotone = true;
+  if (!*every) {
+    fl << "found at " << v.size() << " of " << n_points << " points (";
+    for (size_t i = 0; i < v.size(); ++i) fl << (i ? ", " : "") << v[i].point;
+    fl << ")";
+  }
+  int sign = 0;
+  for (size_t i = 1; i < v.size(); ++i) {
+    const Step &a = v[i - 1], &b = v[i];
+    const double step = b.value - a.value;
+    if (std::abs(step) <= a.sigma + b.sigma) continue;
+    const int sg = step > 0 ? 1 : -1;
+    if (sign != 0 && sg != sign) {
+      *monotone = false;
+      fl << (fl.tellp() > 0 ? "; " : "") << "not monotone: " << num(a.value) << " at " << num(a.x)
+         << " then " << num(b.value) << " at " << num(b.x);
+    }
+    sign = sg;
+  }
+  *flags = fl.str();
+}
+
+// Each path's slowest real pole (time constant, s) in its own fit, by output, at one point.
+std::map<std::string, std::vector<std::pair<std::string, double>>> slowest_by_output(
+    const EnvelopePoint& pt) {
+  std::map<std::string, std::vector<std::pair<std::string, double>>> out;
+  const Json& tm = pt.transfer_matrix;
+  if (!tm.is_object() || !tm.contains("paths") || !tm["paths"].is_array()) return out;
+  for (const Json& p : tm["paths"]) {
+    if (!p.is_object() || !p.contains("roots") || !p["roots"].is_object() ||
+        !p["roots"].contains("poles") || !p["roots"]["poles"].is_array())
+      continue;
+    const std::string in = p.value("input", ""), o = p.value("output", "");
+    if (in.empty() || o.empty()) continue;
+    double tau = 0;
+    for (const Json& q : p["roots"]["poles"]) {
+      if (!q.is_object() || q.value("imag", 0.0) != 0) continue;
+      const double re = q.value("real", 0.0);
+      if (re < 0) tau = std::max(tau, -1 / re);
+    }
+    if (tau > 0 && std::isfinite(tau)) out[o].push_back({in + ":" + o, tau});
+  }
+  return out;
+}
+
+double mean_tau(const std::vector<std::pair<std::string, double>>& v) {
+  double s = 0;
+  for (const auto& [k, t] : v) s += t;
+  return s / double(v.size());
+}
+
+SlowState::Value slow_value(const EnvelopePoint& pt,
+                            const std::vector<std::pair<std::string, double>>& members) {
+  SlowState::Value v;
+  v.point = pt.name, v.x = pt.x;
+  v.tau_s = mean_tau(members);
+  v.lo = INFINITY, v.hi = 0;
+  double ss = 0;
+  for (const auto& [k, t] : members) {
+    v.paths.push_back(k);
+    v.lo = std::min(v.lo, t), v.hi = std::max(v.hi, t);
+    ss += (t - v.tau_s) * (t - v.tau_s);
+  }
+  const double n = double(members.size());
+  v.sem = n > 1 ? std::sqrt(ss / (n - 1) / n) : 0;
+  return v;
+}
+
+// The slow states (see the header): the plant's over the outputs that agree, then one per other
+// output, as sensor or output.
+std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
+                                   const EnvelopeOptions& o) {
+  using Paths = std::vector<std::pair<std::string, double>>;
+  std::vector<std::map<std::string, Paths>> by(points.size());
+  std::vector<std::string> outputs;
+  std::map<std::string, size_t> count;
+  for (size_t i = 0; i < points.size(); ++i) {
+    by[i] = slowest_by_output(points[i]);
+    for (const auto& [out, v] : by[i]) {
+      if (!count.count(out)) outputs.push_back(out);
+      count[out] += v.size();
+    }
+  }
+  std::vector<SlowState> res;
+  if (outputs.size() < 2) return res;
+  // a and b agree: at every point holding both their means within slow_ratio, at one point at
+  // least.
+  auto agree = [&](const std::string& a, const std::string& b) {
+    int common = 0;
+    for (const auto& m : by) {
+      if (!m.count(a) || !m.count(b)) continue;
+      ++common;
+      if (!(std::abs(std::log(mean_tau(m.at(a)) / mean_tau(m.at(b)))) < std::log(o.slow_ratio)))
+        return false;
+    }
+    return common > 0;
+  };
+  auto distance = [&](const std::string& a, const std::string& b) {
+    double d = 0;
+    for (const auto& m : by)
+      if (m.count(a) && m.count(b)) d += std::abs(std::log(mean_tau(m.at(a)) / mean_tau(m.at(b))));
+    return d;
+  };
+  // The plant's group: from each output in turn, the outputs agreeing with every member so far
+  // (nearest first); the group holding the most paths.
+  auto group_from = [&](const std::string& seed) {
+    std::vector<std::string> g = {seed}, rest;
+    for (const auto& out : outputs)
+      if (out != seed) rest.push_back(out);
+    std::stable_sort(rest.begin(), rest.end(), [&](const std::string& a, const std::string& b) {
+      return distance(seed, a) < distance(seed, b);
+    });
+    for (const auto& out : rest) {
+      bool all = true;
+      for (const auto& m : g) all = all && agree(out, m);
+      if (all) g.push_back(out);
+    }
+    return g;
+  };
+  auto paths_in = [&](const std::vector<std::string>& g) {
+    size_t n = 0;
+    for (const auto& out : g) n += count[out];
+    return n;
+  };
+  std::vector<std::string> plant;
+  for (const auto& out : outputs) {
+    std::vector<std::string> g = group_from(out);
+    if (paths_in(g) > paths_in(plant)) plant = g;
+  }
+  std::vector<std::string> others;
+  for (const auto& out : outputs)
+    if (std::find(plant.begin(), plant.end(), out) == plant.end()) others.push_back(out);
+  if (plant.size() < 2) return res;
+  std::stable_sort(plant.begin(), plant.end(), [&](const std::string& a, const std::string& b) {
+    return std::find(outputs.begin(), outputs.end(), a) <
+           std::find(outputs.begin(), outputs.end(), b);
+  });
+  SlowState ps;
+  ps.label = "plant", ps.outputs = plant;
+  std::vector<double> plant_tau(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    Paths members;
+    for (const auto& out : plant)
+      if (by[i].count(out)) members.insert(members.end(), by[i][out].begin(), by[i][out].end());
+    if (members.empty()) continue;
+    ps.values.push_back(slow_value(points[i], members));
+    plant_tau[i] = ps.values.back().tau_s;
+  }
+  res.push_back(ps);
+  for (const auto& out : outputs) {
+    if (std::find(others.begin(), others.end(), out) == others.end()) continue;
+    bool slower = true;
+    for (size_t i = 0; i < points.size(); ++i)
+      if (by[i].count(out) && plant_tau[i] > 0)
+        slower = slower && mean_tau(by[i][out]) > plant_tau[i];
+    SlowState s;
+    s.label = (slower ? "sensor " : "output ") + out, s.outputs = {out};
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!by[i].count(out)) continue;
+      Paths members;
+      std::vector<std::string> without;
+      for (const auto& m : by[i][out]) {
+        if (slower && plant_tau[i] > 0 && !(m.second > plant_tau[i]))
+          without.push_back(m.first);
+        else
+          members.push_back(m);
+      }
+      if (members.empty()) continue;
+      s.values.push_back(slow_value(points[i], members));
+      s.values.back().without = without;
+    }
+    res.push_back(s);
+  }
+  for (SlowState& s : res) {
+    std::vector<Step> steps;
+    for (const auto& v : s.values) steps.push_back({v.point, v.x, v.tau_s, v.sem});
+    flag_steps(steps, points.size(), &s.at_every_point, &s.monotone, &s.flags);
+    for (const auto& v : s.values) {
+      if (v.without.empty()) continue;
+      s.flags += s.flags.empty() ? "not in" : "; not in";
+      for (const auto& w : v.without) s.flags += " " + w;
+      s.flags += " at " + num(v.x);
+    }
+  }
+  return res;
+}
 }  // namespace
 
 void EnvelopeOptions::validate() const {
   if (schedule_by.empty()) throw InputError("envelope: --schedule-by must name a key");
   if (!(track_ratio > 1)) throw InputError("envelope: track_ratio must be > 1");
+  if (!(slow_ratio > 1)) throw InputError("envelope: slow_ratio must be > 1");
 }
 
 EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOptions& o) {
@@ -264,30 +462,12 @@ EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOpti
     int best = -1;
     for (const auto& [l, n] : votes)
       if (n > best) best = n, t.label = l;
-    std::ostringstream fl;
-    t.at_every_point = t.values.size() == points.size();
-    if (!t.at_every_point) {
-      fl << "found at " << t.values.size() << " of " << points.size() << " points (";
-      for (size_t i = 0; i < t.values.size(); ++i) fl << (i ? ", " : "") << t.values[i].point;
-      fl << ")";
-    }
-    int sign = 0;
-    for (size_t i = 1; i < t.values.size(); ++i) {
-      const auto &a = t.values[i - 1], &b = t.values[i];
-      const double step = b.value - a.value;
-      const double sa = a.rel_sigma > 0 ? a.rel_sigma * a.value : 0;
-      const double sb = b.rel_sigma > 0 ? b.rel_sigma * b.value : 0;
-      if (std::abs(step) <= sa + sb) continue;
-      const int sg = step > 0 ? 1 : -1;
-      if (sign != 0 && sg != sign) {
-        t.monotone = false;
-        fl << (fl.tellp() > 0 ? "; " : "") << "not monotone: " << num(a.value) << " at " << num(a.x)
-           << " then " << num(b.value) << " at " << num(b.x);
-      }
-      sign = sg;
-    }
-    t.flags = fl.str();
+    std::vector<Step> steps;
+    for (const auto& v : t.values)
+      steps.push_back({v.point, v.x, v.value, v.rel_sigma > 0 ? v.rel_sigma * v.value : 0});
+    flag_steps(steps, points.size(), &t.at_every_point, &t.monotone, &t.flags);
   }
+  r.slow_states = slow_states(points, o);
   // Findings across points.
   std::map<std::string, FindingLaw> laws;
   for (const EnvelopePoint& pt : points) {
@@ -367,6 +547,20 @@ Json envelope_json(const EnvelopeReport& r) {
     }
     j["states"].push_back(tj);
   }
+  j["slow_states"] = Json::array();
+  for (const auto& t : r.slow_states) {
+    Json tj{{"label", t.label},       {"outputs", t.outputs}, {"at_every_point", t.at_every_point},
+            {"monotone", t.monotone}, {"flags", t.flags},     {"values", Json::array()}};
+    for (const auto& v : t.values)
+      tj["values"].push_back({{"point", v.point},
+                              {"x", v.x},
+                              {"tau_s", v.tau_s},
+                              {"range", {v.lo, v.hi}},
+                              {"sem", v.sem},
+                              {"paths", v.paths},
+                              {"without", v.without}});
+    j["slow_states"].push_back(tj);
+  }
   j["findings"] = Json::array();
   for (const auto& f : r.findings) {
     Json fj{{"cause", f.cause},
@@ -433,6 +627,32 @@ std::string envelope_markdown(const EnvelopeReport& r) {
       md << " |";
     }
     md << " " << t.flags << " |\n";
+  }
+  if (!r.slow_states.empty()) {
+    md << "\n### Slow states, as the report's Section III averages them\n\nEach path's slowest "
+          "real pole; the plant's over the outputs whose values agree, a sensor's where an "
+          "output's is slower at every point. Per point the time constant (s) averaged over the "
+          "paths, in brackets their range and count.\n\n| state | outputs |";
+    for (const auto& p : r.points) md << " " << num(p.x) << " |";
+    md << " flags |\n|---|---|";
+    for (size_t i = 0; i < r.points.size(); ++i) md << "---|";
+    md << "---|\n";
+    for (const auto& t : r.slow_states) {
+      md << "| " << t.label << " |";
+      for (size_t k = 0; k < t.outputs.size(); ++k) md << (k ? ", " : " ") << t.outputs[k];
+      md << " |";
+      for (const auto& p : r.points) {
+        const SlowState::Value* v = nullptr;
+        for (const auto& x : t.values)
+          if (x.point == p.name) v = &x;
+        if (!v)
+          md << " - |";
+        else
+          md << " " << num(v->tau_s) << " [" << num(v->lo) << "-" << num(v->hi) << ", "
+             << v->paths.size() << (v->paths.size() == 1 ? " path" : " paths") << "] |";
+      }
+      md << " " << t.flags << " |\n";
+    }
   }
   md << "\n## Findings across points\n\n";
   if (r.findings.empty()) md << "None.\n";

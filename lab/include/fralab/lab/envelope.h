@@ -23,6 +23,21 @@
 //   by weighted least squares and the criterion chi^2 + k ln(n) (k parameters, n points); the
 //   slope b with its sigma (the covariance scaled by chi^2/dof when above 1). A finding present at
 //   some points only says which.
+// - Slow states, as the report's Section III tables give them ("Spool Inertia Time Constants":
+//   the time constants averaged over the transfer functions, with their range). The states above
+//   follow one pole set; where the engine's paths hold one state at different roots (the J85's
+//   spool: 0.27-0.86 s over its paths at 85 %), they split it. Here each path's slowest real
+//   pole in its own fit is taken; per point an output's value is the mean of its paths'. The
+//   plant's state joins the outputs whose values agree within a factor `slow_ratio` at every
+//   point (pairwise, starting from the output with the most paths; at least two outputs). Every
+//   other output with paths is a state of its own: `sensor <output>` when its value is slower
+//   than the plant's at every point (a lag in series: the T5 thermocouple), else `output
+//   <output>` (its paths' slowest root is faster than the plant's: P5's, as the report also
+//   notes). Per point a state gives the mean time constant over its member paths, their range
+//   and count, and the standard error of the mean; a sensor's path whose slowest root is not
+//   slower than the plant's at that point does not show the sensor and is left out, said in
+//   `without` (the J85's Wf:T5 at 95 %, the report's "missing from the 95 percent model").
+//   Flags as for the states above, steps compared with the standard errors.
 //
 // Units: rad/s, seconds; x in the operating point's units (speed_pct: % N/Nmax).
 #pragma once
@@ -40,6 +55,10 @@ namespace fralab {
 struct EnvelopeOptions {
   std::string schedule_by = "speed_pct";  // a key of the models' operating_point
   double track_ratio = 2.5;               // a track's root moves by less than this between points
+  /// Outputs whose slowest roots agree within this factor at every point share the plant's slow
+  /// state. 1.8: on the J85 the outputs N, P3 and DPP3 agree within 1.7, P5 and T5 differ from N
+  /// by 2.1 or more at every point.
+  double slow_ratio = 1.8;
   /// Throws InputError naming the bad option.
   void validate() const;
 };
@@ -74,6 +93,24 @@ struct StateTrack {
   std::string flags;  // the figures behind a flag ("" when none)
 };
 
+struct SlowState {
+  std::string label;                 // "plant", "sensor <output>", "output <output>"
+  std::vector<std::string> outputs;  // the outputs whose paths hold it
+  struct Value {
+    std::string point;
+    double x = 0;
+    double tau_s = 0;                  // the mean of the member paths' time constants, s
+    double lo = 0, hi = 0;             // their range, s
+    double sem = 0;                    // the standard error of the mean (0 for one path), s
+    std::vector<std::string> paths;    // the member paths, "input:output"
+    std::vector<std::string> without;  // a sensor's paths left out (not slower than the plant)
+  };
+  std::vector<Value> values;  // in x order
+  bool at_every_point = true;
+  bool monotone = true;
+  std::string flags;  // "" when none
+};
+
 struct FindingLaw {
   std::string cause, scope, input, output, parameter;
   struct Value {
@@ -106,6 +143,7 @@ struct EnvelopeReport {
   std::string schedule_by;
   std::vector<EnvelopePoint> points;  // in x order
   std::vector<StateTrack> tracks;
+  std::vector<SlowState> slow_states;  // the plant's first, then by output
   std::vector<FindingLaw> findings;
   /// The scheduled extended model's file, relative to DIR (scheduled_model_at); "" when not
   /// written.
