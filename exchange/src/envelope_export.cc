@@ -90,7 +90,7 @@ MatValue slow_states_of(const Json& j, const JsonWhere& w) {
     for (size_t k = 0; k < os.size(); ++k)
       outputs.push_back(json_string(os[k], tw / "outputs" / k));
     s.add("outputs", MatValue::str_list(outputs));
-    std::vector<double> x, tau, sem, lo, hi;
+    std::vector<double> x, tau, sem, pole_tau, lo, hi;
     std::vector<std::string> point;
     const Json& values = json_array_member(t, tw, "values");
     for (size_t k = 0; k < values.size(); ++k) {
@@ -100,6 +100,7 @@ MatValue slow_states_of(const Json& j, const JsonWhere& w) {
       point.push_back(json_string_member(v, vw, "point"));
       tau.push_back(json_number_member(v, vw, "tau_s"));
       sem.push_back(number_or_nan(v, vw, "sem"));
+      pole_tau.push_back(number_or_nan(v, vw, "tau_of_mean_pole_s"));
       const Json& range = json_array_member(v, vw, "range");
       lo.push_back(range.size() == 2 ? json_number(range[0], vw / "range" / 0) : kAbsent);
       hi.push_back(range.size() == 2 ? json_number(range[1], vw / "range" / 1) : kAbsent);
@@ -108,6 +109,7 @@ MatValue slow_states_of(const Json& j, const JsonWhere& w) {
     s.add("point", MatValue::str_list(point));
     s.add("tau_s", MatValue::column(tau));
     s.add("sem", MatValue::column(sem));
+    s.add("tau_of_mean_pole_s", MatValue::column(pole_tau));
     std::vector<double> range = lo;
     range.insert(range.end(), hi.begin(), hi.end());
     s.add("range", MatValue::matrix(lo.size(), 2, range));

@@ -273,14 +273,16 @@ SlowState::Value slow_value(const EnvelopePoint& pt,
   v.point = pt.name, v.x = pt.x;
   v.tau_s = mean_tau(members);
   v.lo = INFINITY, v.hi = 0;
-  double ss = 0;
+  double ss = 0, poles = 0;
   for (const auto& [k, t] : members) {
     v.paths.push_back(k);
     v.lo = std::min(v.lo, t), v.hi = std::max(v.hi, t);
     ss += (t - v.tau_s) * (t - v.tau_s);
+    poles += 1 / t;
   }
   const double n = double(members.size());
   v.sem = n > 1 ? std::sqrt(ss / (n - 1) / n) : 0;
+  v.tau_of_mean_pole_s = n / poles;
   return v;
 }
 
@@ -557,6 +559,7 @@ Json envelope_json(const EnvelopeReport& r) {
                               {"tau_s", v.tau_s},
                               {"range", {v.lo, v.hi}},
                               {"sem", v.sem},
+                              {"tau_of_mean_pole_s", v.tau_of_mean_pole_s},
                               {"paths", v.paths},
                               {"without", v.without}});
     j["slow_states"].push_back(tj);
@@ -632,7 +635,8 @@ std::string envelope_markdown(const EnvelopeReport& r) {
     md << "\n### Slow states, as the report's Section III averages them\n\nEach path's slowest "
           "real pole; the plant's over the outputs whose values agree, a sensor's where an "
           "output's is slower at every point. Per point the time constant (s) averaged over the "
-          "paths, in brackets their range and count.\n\n| state | outputs |";
+          "paths, in brackets their range and count, and the inverse of their poles' mean (the "
+          "report's tables use either).\n\n| state | outputs |";
     for (const auto& p : r.points) md << " " << num(p.x) << " |";
     md << " flags |\n|---|---|";
     for (size_t i = 0; i < r.points.size(); ++i) md << "---|";
@@ -649,7 +653,8 @@ std::string envelope_markdown(const EnvelopeReport& r) {
           md << " - |";
         else
           md << " " << num(v->tau_s) << " [" << num(v->lo) << "-" << num(v->hi) << ", "
-             << v->paths.size() << (v->paths.size() == 1 ? " path" : " paths") << "] |";
+             << v->paths.size() << (v->paths.size() == 1 ? " path" : " paths") << "; 1/mean pole "
+             << num(v->tau_of_mean_pole_s) << "] |";
       }
       md << " " << t.flags << " |\n";
     }

@@ -9,7 +9,8 @@
 //                      pole), rel_sigma (NaN unknown), spread (rows x 2, the paths' own roots in
 //                      the value's units), at_every_point, monotone (1/0), flags (text)
 //   slow_states.state_NN  struct per slow state (the report's tables): label, outputs (cell
-//                      row), x, point, tau_s (the mean over its paths), sem, range (rows x 2),
+//                      row), x, point, tau_s (the mean over its paths), sem,
+//                      tau_of_mean_pole_s, range (rows x 2),
 //                      flags; empty for an envelope.json written before them
 //   findings.finding_NN  struct per finding: cause, scope, input, output, parameter, text, x,
 //                      value, sigma (NaN unknown), simulated (NaN none), law (form, a, b, b_sigma

@@ -34,10 +34,11 @@
 //   than the plant's at every point (a lag in series: the T5 thermocouple), else `output
 //   <output>` (its paths' slowest root is faster than the plant's: P5's, as the report also
 //   notes). Per point a state gives the mean time constant over its member paths, their range
-//   and count, and the standard error of the mean; a sensor's path whose slowest root is not
-//   slower than the plant's at that point does not show the sensor and is left out, said in
-//   `without` (the J85's Wf:T5 at 95 %, the report's "missing from the 95 percent model").
-//   Flags as for the states above, steps compared with the standard errors.
+//   and count, the standard error of the mean, and the inverse of the poles' mean (the report
+//   averages time constants for the spool, poles for the thermocouple at 85 %); a sensor's path
+//   whose slowest root is not slower than the plant's at that point does not show the sensor and is
+//   left out, said in `without` (the J85's Wf:T5 at 95 %, the report's "missing from the 95 percent
+//   model"). Flags as for the states above, steps compared with the standard errors.
 //
 // Units: rad/s, seconds; x in the operating point's units (speed_pct: % N/Nmax).
 #pragma once
@@ -102,6 +103,7 @@ struct SlowState {
     double tau_s = 0;                  // the mean of the member paths' time constants, s
     double lo = 0, hi = 0;             // their range, s
     double sem = 0;                    // the standard error of the mean (0 for one path), s
+    double tau_of_mean_pole_s = 0;     // 1 / (the mean of the paths' poles 1/tau), s
     std::vector<std::string> paths;    // the member paths, "input:output"
     std::vector<std::string> without;  // a sensor's paths left out (not slower than the plant)
   };
