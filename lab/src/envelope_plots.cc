@@ -1,5 +1,6 @@
 // The envelope's pictures (gnuplot): the root migration (each state's root against the scheduling
-// variable, with its sigma) and the findings across points with their laws.
+// variable, with its sigma; the slow states dashed, with their paths' range) and the findings
+// across points with their laws.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -63,6 +64,14 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
       }
       d << "\n\n";
     }
+    // The slow states: x, 1/mean tau, and their paths' range as 1/hi, 1/lo.
+    for (const SlowState& t : r.slow_states) {
+      d << "# slow state " << t.label << "\n";
+      for (const auto& v : t.values)
+        d << lossless(v.x) << " " << lossless(1 / v.tau_s) << " " << lossless(1 / v.hi) << " "
+          << lossless(1 / v.lo) << "\n";
+      d << "\n\n";
+    }
   }
   {
     std::ofstream d(pd + "/findings.dat");
@@ -92,7 +101,7 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
        << "'\nset logscale y\nset grid\nset xrange [" << lossless(xlo) << ":" << lossless(xhi)
        << "]\nset xlabel " << quoted(r.schedule_by) << "\nset ylabel '|root| (rad/s)'\n"
        << "set key outside right font ',8'\n";
-    if (tracks.empty()) {
+    if (tracks.empty() && r.slow_states.empty()) {
       gp << "set label 'no state at two points or more' at graph 0.3, 0.5\nplot 1/0 notitle\n";
     } else {
       gp << "plot ";
@@ -100,6 +109,10 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
         gp << (i ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index " << i
            << " using 1:2:3 with yerrorlines title "
            << quoted(tracks[i]->label + (tracks[i]->pair ? " (pair)" : ""));
+      for (size_t i = 0; i < r.slow_states.size(); ++i)
+        gp << (i + tracks.size() ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index "
+           << tracks.size() + i << " using 1:2:3:4 with yerrorlines lw 3 dt 2 title "
+           << quoted("slow state " + r.slow_states[i].label + " (mean, range over paths)");
       gp << "\n";
     }
     gp << "set output\nreset\nset terminal " << term(220 * std::max<size_t>(rows, 1))

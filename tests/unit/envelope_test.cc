@@ -312,8 +312,9 @@ const SlowState* slow(const EnvelopeReport& r, const std::string& label) {
 // time constant), a sensor S slower than it (a thermocouple's 3 s, then 1.5 s) on two paths, and
 // an output F whose paths' slowest roots are four times faster. The sensor's pole is not in b:S at
 // the second point (its slowest root there is faster than the plant's): left out and said.
-TEST(Envelope, TheSlowStatesAreTheMeansOverThePathsThatHoldThem) {
-  const double x[2] = {70, 95}, tau[2] = {1.0, 0.4};
+constexpr double kSlowTau[2] = {1.0, 0.4};
+std::vector<EnvelopePoint> slow_points() {
+  const double x[2] = {70, 95}, *tau = kSlowTau;
   std::vector<EnvelopePoint> pts;
   for (int i = 0; i < 2; ++i) {
     EnvelopePoint p;
@@ -330,7 +331,12 @@ TEST(Envelope, TheSlowStatesAreTheMeansOverThePathsThatHoldThem) {
                                   {"b:S", {i == 0 ? 2.8 : 0.3 * t}}});
     pts.push_back(p);
   }
-  const EnvelopeReport r = join_points(pts);
+  return pts;
+}
+
+TEST(Envelope, TheSlowStatesAreTheMeansOverThePathsThatHoldThem) {
+  const double* tau = kSlowTau;
+  const EnvelopeReport r = join_points(slow_points());
   const SlowState* plant = slow(r, "plant");
   ASSERT_NE(plant, nullptr);
   EXPECT_THAT(plant->outputs, ::testing::ElementsAre("N", "P"));
@@ -355,6 +361,31 @@ TEST(Envelope, TheSlowStatesAreTheMeansOverThePathsThatHoldThem) {
   ASSERT_NE(fast, nullptr);
   EXPECT_NEAR(fast->values[1].tau_s, 0.1, 1e-12);
   EXPECT_EQ(slow(r, "sensor F"), nullptr);
+}
+
+// The root migration draws each slow state: x, 1/mean tau and its paths' range as 1/hi, 1/lo.
+TEST(Envelope, TheRootMigrationDrawsTheSlowStatesWithTheirPathsRange) {
+  const std::string d = fralab::testing::tmpdir("plots", "fralab_env_");
+  render_envelope_plots(join_points(slow_points()), d);
+  std::ifstream in(d + "/plots/roots.dat");
+  std::vector<std::array<double, 4>> rows;
+  bool inside = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("# ", 0) == 0) {
+      inside = line == "# slow state plant";
+      continue;
+    }
+    std::istringstream ss(line);
+    std::array<double, 4> v{};
+    if (inside && ss >> v[0] >> v[1] >> v[2] >> v[3]) rows.push_back(v);
+  }
+  ASSERT_EQ(rows.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(rows[i][0], i == 0 ? 70 : 95);
+    EXPECT_NEAR(rows[i][1], 1 / (0.975 * kSlowTau[i]), 1e-12);
+    EXPECT_NEAR(rows[i][2], 1 / (1.2 * kSlowTau[i]), 1e-12);
+    EXPECT_NEAR(rows[i][3], 1 / (0.8 * kSlowTau[i]), 1e-12);
+  }
 }
 
 // The report's Section III from its own tables (the J85 models' paths, Tables 8-23): spool
