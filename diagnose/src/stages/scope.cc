@@ -12,7 +12,8 @@
 // every other finding (the group's included), and joins on what that finds. The plant's scope
 // also joins outputs' and inputs' findings (the plant's mode found output by output where one
 // output's own overlap kept the paths apart); a scope of two pairs joins one pair's finding when
-// the other, diagnosed again, leaves fewer findings than the paths' own. A scope's finding whose
+// the other, diagnosed again, leaves fewer findings than the paths' own, or as many that fit the
+// two pairs better by more than one parameter's penalty. A scope's finding whose
 // pairs hold path findings beside it on fewer than half of them has those pairs diagnosed again
 // the same way, kept on a lower BIC.
 #include <algorithm>
@@ -221,7 +222,7 @@ bool regroup(DiagnosisRun& r) {
       // A scope of two pairs, one holding the cause and the other other findings (a sensor lag
       // where the second path also carries an input's calibration, its own fit a resonance in
       // place of both): the group is tried, and kept only when it explains the scope by fewer
-      // findings than the paths' own.
+      // findings than the paths' own, or by as many that fit better.
       const bool one_of_two = covered == 1 && rest.size() == 1 && !clear;
       if (!rest.empty() && !one_of_two && (covered < 2 || covered < rest.size())) continue;
       Finding g;
@@ -265,7 +266,16 @@ bool regroup(DiagnosisRun& r) {
           joined = std::move(*again);
           ok = quiet_over(r, fs, joined, rest);
         }
-        if (!ok || (one_of_two && joined.size() >= fs.size())) continue;
+        if (!ok || (one_of_two && joined.size() > fs.size())) continue;
+        if (one_of_two && joined.size() == fs.size()) {
+          // As many findings either way (a moved mode and a gain on both paths, one path's own
+          // fit splitting them otherwise): the group's when it fits the scope's pairs better by
+          // more than one parameter's penalty; the next pass then joins what the refit found.
+          const auto sp = fitted_pairs(r, scope_pairs);
+          const double before = chi2_of(r, extended_by(r, fs, fs.size()), sp);
+          const double after = chi2_of(r, extended_by(r, joined, joined.size()), sp);
+          if (!(after < before - bic_penalty(sp))) continue;
+        }
       }
       fs = std::move(joined);
       merged = true;
