@@ -31,10 +31,10 @@ void add_measure_flags(CLI::App* c, MeasureOptions& m) {
   c->add_flag("!--no-progress", m.progress, "no progress line (it is shown on a terminal only)");
   c->add_option_function<std::string>(
        "--analysers", [&m](const std::string& w) { m.analysers = AnalyserGrouping::parse(w); },
-       "how the live analysers share the pairs (each decodes a block once for its pairs): pair "
-       "(each pair alone, an input's command pairs together), input (one per input) or N (N "
-       "pairs each)")
-      ->default_str("pair");
+       "how the live analysers share the pairs (each process decodes a block once for its "
+       "pairs): input (one process per input), pair (each pair alone, an input's command pairs "
+       "together) or N (N pairs each)")
+      ->default_str("input");
   c->add_option("--stall-timeout", m.stall_timeout_s,
                 "seconds a stream may stand still (retransmitted) before the run fails")
       ->capture_default_str();

@@ -28,7 +28,10 @@ std::string host_of(const MeasureOptions& o, const std::string& kind) {
 
 AnalyserGrouping AnalyserGrouping::parse(const std::string& word) {
   AnalyserGrouping g;
-  if (word == "pair") return g;
+  if (word == "pair") {
+    g.by = By::kPair;
+    return g;
+  }
   if (word == "input") {
     g.by = By::kInput;
     return g;

@@ -356,11 +356,12 @@ TEST(Faults, AnIdentifierThatCrashesAfterMeasuringLeavesAPartialRunThatIsDiagnos
 
 TEST(Faults, AStoppedAnalyserIsNamedAsSilent) {
   const std::string d = tmpdir("sigstop");
-  const auto c = sh("(" + kBin + "/fralab" + kRun + "--speed 50 --stall-timeout 4 --out " + d +
-                    " & lp=$!; sleep 1; pkill -STOP -f '[f]ralab-analyze.*Wf_P3.*" + d +
-                    "'; wait $lp; echo exit=$?; pkill -CONT -f '[f]ralab-analyze.*" + d + "')");
+  const auto c =
+      sh("(" + kBin + "/fralab" + kRun + "--speed 50 --stall-timeout 4 --out " + d +
+         " & lp=$!; sleep 1; pkill -STOP -f '[f]ralab-analyze.*--name analyze-Wf --out " + d +
+         "'; wait $lp; echo exit=$?; pkill -CONT -f '[f]ralab-analyze.*" + d + "')");
   EXPECT_THAT(c.output, HasSubstr("exit=1"));
-  EXPECT_THAT(c.output, HasSubstr("consumer \"analyze-Wf_P3\""));
+  EXPECT_THAT(c.output, HasSubstr("consumer \"analyze-Wf\""));
   EXPECT_THAT(c.output, HasSubstr("hung, stopped or dead?"));
   sh("sleep 0.5");
   EXPECT_EQ(processes_of(d), 0);

@@ -29,12 +29,14 @@ const std::string kDir = "/no/such/folder/run";
 
 std::string program(const std::string& name) { return "/bin/" + name; }
 
+// The plans below start one analyser process per pair (--analysers pair), whose names say which.
 MeasureOptions options(const std::string& inputs) {
   MeasureOptions o;
   o.engine = "j85_95";
   o.out = kDir;
   o.seed = 3;
   o.acquire.inputs = inputs;
+  o.analysers = AnalyserGrouping::parse("pair");
   return o;
 }
 
@@ -135,6 +137,11 @@ TEST(ProcessPlan, AnalysersGroupedByInputOrByCountAnalyseEveryPairOnce) {
 
   o.analysers = AnalyserGrouping::parse("pair");
   EXPECT_THAT(analysed_pairs(plan(o)), ElementsAreArray(all));
+
+  // By default: one per input.
+  o.analysers = MeasureOptions{}.analysers;
+  EXPECT_THAT(names(plan(o)),
+              ElementsAre("recorder", "plant", "analyze-Wf", "analyze-A8", "identify", "acquire"));
 }
 
 TEST(ProcessPlan, AnalyserGroupingWordsAreParsedAndOthersNamed) {
