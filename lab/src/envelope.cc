@@ -248,12 +248,17 @@ std::map<std::string, std::vector<std::pair<std::string, double>>> slowest_by_ou
     if (!p.is_object() || !p.contains("roots") || !p["roots"].is_object() ||
         !p["roots"].contains("poles") || !p["roots"]["poles"].is_array())
       continue;
-    const std::string in = p.value("input", ""), o = p.value("output", "");
+    if (!p.contains("input") || !p["input"].is_string() || !p.contains("output") ||
+        !p["output"].is_string())
+      continue;
+    const std::string in = p["input"].get<std::string>(), o = p["output"].get<std::string>();
     if (in.empty() || o.empty()) continue;
     double tau = 0;
     for (const Json& q : p["roots"]["poles"]) {
-      if (!q.is_object() || q.value("imag", 0.0) != 0) continue;
-      const double re = q.value("real", 0.0);
+      // A real pole: "real" a number, "imag" absent or 0 (anything else is not one).
+      if (!q.is_object() || !q.contains("real") || !q["real"].is_number()) continue;
+      if (q.contains("imag") && !(q["imag"].is_number() && q["imag"].get<double>() == 0)) continue;
+      const double re = q["real"].get<double>();
       if (re < 0) tau = std::max(tau, -1 / re);
     }
     if (tau > 0 && std::isfinite(tau)) out[o].push_back({in + ":" + o, tau});

@@ -357,6 +357,13 @@ TEST(Envelope, TheSlowStatesAreTheMeansOverThePathsThatHoldThem) {
   EXPECT_NEAR(sensor->values[0].tau_of_mean_pole_s, 2 / (1 / 3.0 + 1 / 2.8), 1e-12);
   EXPECT_THAT(sensor->values[1].without, ::testing::ElementsAre("b:S"));
   EXPECT_EQ(sensor->flags, "not in b:S at 95");
+  // A malformed path in transfer_matrix.json (its real pole a string, no input) is left out.
+  std::vector<EnvelopePoint> bad = slow_points();
+  bad[0].transfer_matrix["paths"].push_back(
+      {{"output", "N"}, {"roots", {{"poles", {{{"real", "x"}, {"imag", nullptr}}}}}}});
+  bad[0].transfer_matrix["paths"].push_back(
+      {{"input", "c"}, {"output", 3}, {"roots", {{"poles", {{{"real", -9.0}}}}}}});
+  EXPECT_EQ(slow(join_points(bad), "plant")->values[0].paths.size(), 4u);
   const SlowState* fast = slow(r, "output F");
   ASSERT_NE(fast, nullptr);
   EXPECT_NEAR(fast->values[1].tau_s, 0.1, 1e-12);
