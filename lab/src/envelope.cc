@@ -394,7 +394,7 @@ std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
       s.values.push_back(slow_value(points[i], members));
       s.values.back().without = without;
     }
-    res.push_back(s);
+    if (!s.values.empty()) res.push_back(s);
   }
   for (SlowState& s : res) {
     std::vector<Step> steps;
