@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 
 #include "fralab/core/json_util.h"
@@ -29,6 +30,38 @@ std::string numbered(const std::string& stem, size_t i) {
   return stem + "_" + (n.size() < 2 ? "0" + n : n);
 }
 
+// The [lo, hi] array `key` of `v` appended to lo and hi (NaN both when it is not two numbers).
+void add_interval(const Json& v, const JsonWhere& vw, const std::string& key,
+                  std::vector<double>* lo, std::vector<double>* hi) {
+  const Json& a = json_array_member(v, vw, key);
+  lo->push_back(a.size() == 2 ? json_number(a[0], vw / key / 0) : kAbsent);
+  hi->push_back(a.size() == 2 ? json_number(a[1], vw / key / 1) : kAbsent);
+}
+
+// A state's `values` (tw the state's place): each one's x and point appended, then `each` called
+// with it; their columns added to s as "x" and "point".
+void per_value(const Json& t, const JsonWhere& tw, MatValue& s,
+               const std::function<void(const Json&, const JsonWhere&)>& each) {
+  std::vector<double> x;
+  std::vector<std::string> point;
+  const Json& values = json_array_member(t, tw, "values");
+  for (size_t k = 0; k < values.size(); ++k) {
+    const JsonWhere vw = tw / "values" / k;
+    x.push_back(json_number_member(values[k], vw, "x"));
+    point.push_back(json_string_member(values[k], vw, "point"));
+    each(values[k], vw);
+  }
+  s.add("x", MatValue::column(x));
+  s.add("point", MatValue::str_list(point));
+}
+
+// Rows x 2: lo, hi.
+MatValue two_columns(const std::vector<double>& lo, const std::vector<double>& hi) {
+  std::vector<double> both = lo;
+  both.insert(both.end(), hi.begin(), hi.end());
+  return MatValue::matrix(lo.size(), 2, both);
+}
+
 MatValue states_of(const Json& states, const JsonWhere& w) {
   MatValue all = MatValue::structure();
   for (size_t i = 0; i < states.size(); ++i) {
@@ -38,34 +71,22 @@ MatValue states_of(const Json& states, const JsonWhere& w) {
     s.add("label", MatValue::str(json_string_member(t, tw, "label")));
     const std::string kind = json_string_member(t, tw, "kind");
     s.add("kind", MatValue::str(kind));
-    std::vector<double> x, root, tau, wn, zeta, sig, spread_lo, spread_hi;
-    std::vector<std::string> point;
-    const Json& values = json_array_member(t, tw, "values");
-    for (size_t k = 0; k < values.size(); ++k) {
-      const Json& v = values[k];
-      const JsonWhere vw = tw / "values" / k;
-      x.push_back(json_number_member(v, vw, "x"));
-      point.push_back(json_string_member(v, vw, "point"));
+    std::vector<double> root, tau, wn, zeta, sig, spread_lo, spread_hi;
+    per_value(t, tw, s, [&](const Json& v, const JsonWhere& vw) {
       const double t_s = number_or_nan(v, vw, "tau_s"), w_n = number_or_nan(v, vw, "wn_rad_s");
       tau.push_back(t_s);
       wn.push_back(w_n);
       zeta.push_back(number_or_nan(v, vw, "zeta"));
       root.push_back(kind == "pair" ? w_n : 1 / t_s);
       sig.push_back(number_or_nan(v, vw, "rel_sigma"));
-      const Json& sp = json_array_member(v, vw, "spread");
-      spread_lo.push_back(sp.size() == 2 ? json_number(sp[0], vw / "spread" / 0) : kAbsent);
-      spread_hi.push_back(sp.size() == 2 ? json_number(sp[1], vw / "spread" / 1) : kAbsent);
-    }
-    s.add("x", MatValue::column(x));
-    s.add("point", MatValue::str_list(point));
+      add_interval(v, vw, "spread", &spread_lo, &spread_hi);
+    });
     s.add("root_rad_s", MatValue::column(root));
     s.add("tau_s", MatValue::column(tau));
     s.add("wn_rad_s", MatValue::column(wn));
     s.add("zeta", MatValue::column(zeta));
     s.add("rel_sigma", MatValue::column(sig));
-    std::vector<double> spread = spread_lo;
-    spread.insert(spread.end(), spread_hi.begin(), spread_hi.end());
-    s.add("spread", MatValue::matrix(spread_lo.size(), 2, spread));
+    s.add("spread", two_columns(spread_lo, spread_hi));
     s.add("at_every_point",
           MatValue::scalar(json_bool(json_member(t, tw, "at_every_point"), tw / "at_every_point")));
     s.add("monotone", MatValue::scalar(json_bool(json_member(t, tw, "monotone"), tw / "monotone")));
@@ -90,29 +111,17 @@ MatValue slow_states_of(const Json& j, const JsonWhere& w) {
     for (size_t k = 0; k < os.size(); ++k)
       outputs.push_back(json_string(os[k], tw / "outputs" / k));
     s.add("outputs", MatValue::str_list(outputs));
-    std::vector<double> x, tau, sem, pole_tau, lo, hi;
-    std::vector<std::string> point;
-    const Json& values = json_array_member(t, tw, "values");
-    for (size_t k = 0; k < values.size(); ++k) {
-      const Json& v = values[k];
-      const JsonWhere vw = tw / "values" / k;
-      x.push_back(json_number_member(v, vw, "x"));
-      point.push_back(json_string_member(v, vw, "point"));
+    std::vector<double> tau, sem, pole_tau, lo, hi;
+    per_value(t, tw, s, [&](const Json& v, const JsonWhere& vw) {
       tau.push_back(json_number_member(v, vw, "tau_s"));
       sem.push_back(number_or_nan(v, vw, "sem"));
       pole_tau.push_back(number_or_nan(v, vw, "tau_of_mean_pole_s"));
-      const Json& range = json_array_member(v, vw, "range");
-      lo.push_back(range.size() == 2 ? json_number(range[0], vw / "range" / 0) : kAbsent);
-      hi.push_back(range.size() == 2 ? json_number(range[1], vw / "range" / 1) : kAbsent);
-    }
-    s.add("x", MatValue::column(x));
-    s.add("point", MatValue::str_list(point));
+      add_interval(v, vw, "range", &lo, &hi);
+    });
     s.add("tau_s", MatValue::column(tau));
     s.add("sem", MatValue::column(sem));
     s.add("tau_of_mean_pole_s", MatValue::column(pole_tau));
-    std::vector<double> range = lo;
-    range.insert(range.end(), hi.begin(), hi.end());
-    s.add("range", MatValue::matrix(lo.size(), 2, range));
+    s.add("range", two_columns(lo, hi));
     s.add("flags", MatValue::str(text_or_empty(t, tw, "flags")));
     all.add(numbered("state", i), s);
   }

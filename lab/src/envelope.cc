@@ -606,6 +606,16 @@ Json envelope_json(const EnvelopeReport& r) {
   return j;
 }
 
+namespace {
+// A state table's header after its two first columns: a column per point, then the flags.
+void point_columns(std::ostringstream& md, const std::vector<EnvelopePoint>& points) {
+  for (const auto& p : points) md << " " << num(p.x) << " |";
+  md << " flags |\n|---|---|";
+  for (size_t i = 0; i < points.size(); ++i) md << "---|";
+  md << "---|\n";
+}
+}  // namespace
+
 std::string envelope_markdown(const EnvelopeReport& r) {
   std::ostringstream md;
   md << "# Envelope\n\nOperating points by " << r.schedule_by << ":";
@@ -613,10 +623,7 @@ std::string envelope_markdown(const EnvelopeReport& r) {
   md << ".\n\n## States across paths and points\n\nEach state's root per point: a real pole as "
         "its time constant (s), a pair as wn (rad/s) and zeta; in brackets the spread over its "
         "paths' own fits; sigma the paths' median relative sigma.\n\n| state | kind |";
-  for (const auto& p : r.points) md << " " << num(p.x) << " |";
-  md << " flags |\n|---|---|";
-  for (size_t i = 0; i < r.points.size(); ++i) md << "---|";
-  md << "---|\n";
+  point_columns(md, r.points);
   for (const auto& t : r.tracks) {
     md << "| " << t.label << " | " << (t.pair ? "pair" : "real") << " |";
     for (const auto& p : r.points) {
@@ -642,10 +649,7 @@ std::string envelope_markdown(const EnvelopeReport& r) {
           "output's is slower at every point. Per point the time constant (s) averaged over the "
           "paths, in brackets their range and count, and the inverse of their poles' mean (the "
           "report's tables use either).\n\n| state | outputs |";
-    for (const auto& p : r.points) md << " " << num(p.x) << " |";
-    md << " flags |\n|---|---|";
-    for (size_t i = 0; i < r.points.size(); ++i) md << "---|";
-    md << "---|\n";
+    point_columns(md, r.points);
     for (const auto& t : r.slow_states) {
       md << "| " << t.label << " |";
       for (size_t k = 0; k < t.outputs.size(); ++k) md << (k ? ", " : " ") << t.outputs[k];
