@@ -648,6 +648,45 @@ TEST(Diagnose, AOneInputsCalibrationAndModeAreTheInputsBesideOnePathsLag) {
   }
 }
 
+// The machine-shaped self-check's case 0 of seed 5, measured offline: one input, four outputs;
+// the input's calibration +1.81 dB (every path: the plant's) and Y1's +1.80 dB (its one path:
+// the path's), so U0:Y1 holds their sum. The additive stage explains the totals by an input
+// carrier and an output carrier, each named by the pairs it covers: the plant's and the path's.
+TEST(Diagnose, AnAdditiveCarrierIsNamedByThePairsItCovers) {
+  const testing::RandomCase c = testing::random_machine_case(5, 0);
+  const Diagnosis d = diagnose(c.simulation, measure_machine_case(c, 0.0));
+  const std::string json = diagnosis_to_json(d).dump(1);
+  int gains = 0;
+  for (const auto& h : c.hidden) {
+    if (h.cause != CauseKind::kGainMismatch) continue;
+    ++gains;
+    int matched = 0;
+    for (const Finding& f : d.findings) matched += h.matches(f);
+    EXPECT_EQ(matched, 1) << to_string(h.scope) << " " << h.output << "\n" << json;
+  }
+  EXPECT_EQ(gains, 2) << json;
+}
+
+// The self-check's generator: an output's delay and its one path's delay on a one-input plant
+// (seed 6, case 46) are one delay on that path, their sum, as the engine holds it (the sensor's
+// delay and the path's add on the one pair); no measurement tells the two apart.
+TEST(Diagnose, TheGeneratorsTwoDelaysAtOnePlaceAreOneEffect) {
+  const testing::RandomCase c = testing::random_machine_case(6, 46);
+  ASSERT_EQ(c.engine.inputs.size(), 1u);
+  std::vector<const testing::HiddenEffect*> delays;
+  for (const auto& h : c.hidden)
+    if (h.cause == CauseKind::kTimeDelay) delays.push_back(&h);
+  ASSERT_EQ(delays.size(), 1u);
+  const testing::HiddenEffect& d = *delays[0];
+  EXPECT_EQ(d.scope, Scope::kPath);
+  const ModelOutput& o = c.engine.outputs[size_t(c.engine.output_index(d.output))];
+  const double engine_delay = c.engine.path(d.output, d.input)->tf.delay_s +
+                              (o.sensor ? o.sensor->delay_s : 0.0) -
+                              c.simulation.path(d.output, d.input)->tf.delay_s;
+  EXPECT_NEAR(d.value, engine_delay, 1e-12);
+  EXPECT_GT(d.value, 0.025);  // 5.4 + 20.5 ms
+}
+
 // A damping_error read from a file for a pair the model does not hold, without the from_zeta its
 // factor needs, is an error naming the cause and the frequency, not a crash.
 TEST(Diagnose, ADampingErrorWithoutItsPairOrFromZetaIsAnError) {

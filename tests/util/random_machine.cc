@@ -205,6 +205,19 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
     else if (covered.size() == 1)
       e.scope = Scope::kPath, e.input = covered[0]->input, e.output = covered[0]->output;
   }
+  // Two gains or two delays at one place (an output's delay and its one path's on a one-input
+  // plant) are one effect there, their sum: no measurement tells them apart.
+  for (size_t h = 0; h < c.hidden.size(); ++h)
+    for (size_t k = h + 1; k < c.hidden.size(); ++k) {
+      HiddenEffect &a = c.hidden[h], &b = c.hidden[k];
+      if ((a.cause != CauseKind::kGainMismatch && a.cause != CauseKind::kTimeDelay) ||
+          a.cause != b.cause || a.scope != b.scope || a.input != b.input || a.output != b.output)
+        continue;
+      a.value += b.value;
+      a.tol_abs = std::max(a.tol_abs, b.tol_abs), a.tol_rel = std::max(a.tol_rel, b.tol_rel);
+      c.hidden.erase(c.hidden.begin() + long(k));
+      --k;
+    }
   // An effect on one path the simulation lacks is inside that missing path's fit: not a finding
   // of its own.
   std::vector<HiddenEffect> kept;

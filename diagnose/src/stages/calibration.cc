@@ -9,7 +9,7 @@
 // finding of that residual. The choice with the fewest findings (then the smallest residual)
 // replaces the findings when it has fewer than they, and when no pair's chi2 rises by more than
 // one parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0, carriers and
-// residuals alike.
+// residuals alike. A carrier is named by the pairs it covers, as the scope stage names a group.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -151,6 +151,15 @@ bool decompose(DiagnosisRun& r) {
       for (const std::string& q : pairs)
         if ((!in.empty() && ends[q].first == in) || (!out.empty() && ends[q].second == out))
           f.pairs.push_back(q);
+      // Named by the pairs it covers, as the scope stage names a group: every pair, three or
+      // more, the plant's (one input's carrier on a one-input plant); one pair alone, its path
+      // (one output's carrier on a one-input plant).
+      if (f.pairs.size() >= 3 && f.pairs.size() == pairs.size()) {
+        f.scope = Scope::kPlant, f.input = "", f.output = "";
+      } else if (f.pairs.size() == 1) {
+        f.scope = Scope::kPath, f.input = ends[f.pairs[0]].first,
+        f.output = ends[f.pairs[0]].second;
+      }
       joined.push_back(f);
     };
     for (size_t k = 0; k < best->inputs.size(); ++k)
