@@ -49,6 +49,12 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
   return out;
 }
 
+// The chi2 step that counts over n points whose minimum is c_min: s = max(1, c_min / n), the
+// minimum's chi2 per point where the model leaves more than the noise.
+static double chi2_scale(double c_min, size_t n) {
+  return std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+}
+
 // A lag and a lead at one place (the same scope, input and output) whose corners are within
 // consistent_rel of each other cancel: each alone is resolved (removing one leaves the other),
 // but the two together are 1 to within the tolerance. Both are dropped, said why, when removing
@@ -64,12 +70,11 @@ static void drop_cancelling(DiagnosisRun& r) {
       const double a = lag.parameters.at("corner_rad_s"), b = lead.parameters.at("corner_rad_s");
       if (std::abs(a - b) > r.opt.consistent_rel * a) continue;
       const std::vector<const PairFit*> mine = fitted_pairs(r, lag.pairs);
-      const size_t n = points_of(mine);
       std::vector<Finding> without;
       for (size_t x = 0; x < fs.size(); ++x)
         if (x != i && x != j) without.push_back(fs[x]);
       const double c_min = chi2_of(r, extended_by(r, fs, fs.size()), mine);
-      const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+      const double s = chi2_scale(c_min, points_of(mine));
       const double c_without = chi2_of(r, extended_by(r, without, without.size()), mine);
       if (c_without - c_min > 2 * s) continue;
       const std::string why = " beside it (corners " + fmt(a) + " and " + fmt(b) +
@@ -92,10 +97,9 @@ void resolve(DiagnosisRun& r) {
     Finding& f = findings[i];
     // The finding's pairs (the fitting data, sigma_eff as fitted), and chi2 of a model there.
     const std::vector<const PairFit*> mine = fitted_pairs(r, f.pairs);
-    const size_t n = points_of(mine);
     auto chi2_of_model = [&](const Model& m) { return chi2_of(r, m, mine); };
     const double c_min = chi2_of_model(extended_by(r, findings, findings.size()));
-    const double s = std::max(1.0, c_min / std::max<double>(1.0, double(n)));
+    const double s = chi2_scale(c_min, points_of(mine));
     const CauseUnit& unit = *cause_unit(f.cause);
     const auto [key, sim_value] = unit.primary_parameter(f);
     double c_sim = 0;

@@ -136,6 +136,21 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
   return out;
 }
 
+// "scope:input:output:cause", a scope and cause tried once in a pass.
+std::string scope_cause_key(Scope scope, const std::string& in, const std::string& out,
+                            CauseKind cause) {
+  return std::string(to_string(scope)) + ":" + in + ":" + out + ":" + to_string(cause);
+}
+
+// The path findings of `fs` on pair q alone, fs[skip] not counted.
+size_t path_findings_on(const std::vector<Finding>& fs, const std::string& q,
+                        size_t skip = size_t(-1)) {
+  size_t n = 0;
+  for (size_t x = 0; x < fs.size(); ++x)
+    n += x != skip && fs[x].scope == Scope::kPath && fs[x].pairs == std::vector<std::string>{q};
+  return n;
+}
+
 }  // namespace
 
 void scope(DiagnosisRun& r) {
@@ -167,7 +182,6 @@ bool regroup(DiagnosisRun& r) {
   std::set<std::string> refitted;  // scope and cause whose rest pairs were tried again
   auto merge = [&](const std::function<bool(const PairFit&)>& sel, Scope scope,
                    const std::string& in, const std::string& out, size_t min_pairs) {
-    const std::string scope_key = std::string(to_string(scope)) + ":" + in + ":" + out + ":";
     std::vector<std::string> scope_pairs;
     for (const PairFit& p : r.pairs)
       if (!p.output.empty() && sel(p)) scope_pairs.push_back(p.pair);
@@ -258,7 +272,7 @@ bool regroup(DiagnosisRun& r) {
         if (!ok) {
           // Once per scope and cause in a pass: every finding of the group is a candidate that
           // forms the same group, and the pairs' diagnoses would only be run again.
-          if (!refitted.insert(scope_key + to_string(g.cause)).second) continue;
+          if (!refitted.insert(scope_cause_key(scope, in, out, g.cause)).second) continue;
           std::optional<std::vector<Finding>> again = rediagnose_rest(r, joined, rest);
           // A pair that wants the cause again is not the group's (and the merge would leave a
           // path finding of the cause to be grouped again).
@@ -302,17 +316,13 @@ bool regroup(DiagnosisRun& r) {
     std::vector<std::string> extra;
     size_t k_before = 0;
     for (const std::string& q : g.pairs) {
-      size_t here = 0;
-      for (size_t x = 0; x < fs.size(); ++x)
-        here +=
-            x != gi && fs[x].scope == Scope::kPath && fs[x].pairs == std::vector<std::string>{q};
+      const size_t here = path_findings_on(fs, q, gi);
       if (here) extra.push_back(q);
       k_before += here;
     }
     if (extra.empty() || 2 * extra.size() > g.pairs.size()) continue;
-    const std::string key =
-        std::string(to_string(g.scope)) + ":" + g.input + ":" + g.output + ":" + to_string(g.cause);
-    if (!members_tried.insert(key).second) continue;
+    if (!members_tried.insert(scope_cause_key(g.scope, g.input, g.output, g.cause)).second)
+      continue;
     std::vector<Finding> with;
     for (size_t x = 0; x < fs.size(); ++x)
       if (x != gi) with.push_back(fs[x]);
@@ -320,9 +330,7 @@ bool regroup(DiagnosisRun& r) {
     std::optional<std::vector<Finding>> again = rediagnose_rest(r, with, extra);
     if (!again) continue;
     size_t k_after = 0;
-    for (const Finding& f : *again)
-      for (const std::string& q : extra)
-        k_after += f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q};
+    for (const std::string& q : extra) k_after += path_findings_on(*again, q);
     const auto gp = fitted_pairs(r, g.pairs);
     const double pen = bic_penalty(gp);
     const double bic_before =
