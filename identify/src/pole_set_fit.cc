@@ -271,6 +271,75 @@ int cheapest_pole(const Problem& P, const Model& m) {
   return best;
 }
 
+// The curves as the fit sees them (checked, scaled, square-root weights); "" or what is wrong.
+// lo, hi: the band over every curve (rad/s); smallest: the fewest points of a curve.
+std::string make_problem(const std::vector<std::vector<double>>& w,
+                         const std::vector<std::vector<C>>& g,
+                         const std::vector<std::vector<double>>& W, Problem* P, double* lo,
+                         double* hi, int* smallest) {
+  if (g.empty() || g.size() != W.size() || g.size() != w.size())
+    return "no curve, or curves, grids and weights of different counts";
+  *lo = INFINITY, *hi = 0;
+  int total = 0;
+  *smallest = std::numeric_limits<int>::max();
+  for (size_t c = 0; c < g.size(); ++c) {
+    const auto& wc = w[c];
+    if (g[c].size() != wc.size() || W[c].size() != wc.size())
+      return "curve " + std::to_string(c) + ": values, weights and grid of different sizes";
+    if (wc.size() < 4) return "curve " + std::to_string(c) + ": fewer than 4 points";
+    for (size_t i = 0; i < wc.size(); ++i) {
+      if (!(wc[i] > 0) || (i > 0 && !(wc[i] > wc[i - 1])))
+        return "curve " + std::to_string(c) + ": frequencies must be > 0 and increasing";
+    }
+    *lo = std::min(*lo, wc.front()), *hi = std::max(*hi, wc.back());
+    total += int(wc.size());
+    *smallest = std::min(*smallest, int(wc.size()));
+  }
+  P->nc = int(g.size());
+  P->total = total;
+  P->g = &g;
+  P->ws = std::sqrt(*lo * *hi);
+  P->kappa = std::log(2.0 * total);
+  for (size_t c = 0; c < g.size(); ++c) {
+    const auto& wc = w[c];
+    const int M = int(wc.size());
+    std::vector<C> sc;
+    std::vector<double> spc, sw;
+    for (int i = 0; i < M; ++i) {
+      sc.push_back(C(0, wc[size_t(i)] / P->ws));
+      const double a = i > 0 ? wc[size_t(i)] - wc[size_t(i - 1)] : wc[1] - wc[0];
+      const double b = i < M - 1 ? wc[size_t(i + 1)] - wc[size_t(i)] : a;
+      spc.push_back(0.5 * (a + b) / P->ws);
+      sw.push_back(std::sqrt(std::max(W[c][size_t(i)], 0.0)));
+    }
+    P->s.push_back(sc);
+    P->spacing.push_back(spc);
+    P->sw.push_back(sw);
+  }
+  return "";
+}
+
+// Step 1's start: `pairs` pairs spread linearly over [lo, hi] (scaled units), real part -1 %.
+std::vector<C> start_poles(const Problem& P, double lo, double hi, int pairs) {
+  std::vector<C> poles;
+  for (int k = 0; k < pairs; ++k) {
+    const double f = (k + 0.5) / pairs;
+    const double b = (lo + f * (hi - lo)) / P.ws;
+    poles.push_back(C(-b / 100, b));
+  }
+  return poles;
+}
+
+// `times` relocations of p (fewer when one fails: the last that succeeded).
+std::vector<C> relocate_times(const Problem& P, std::vector<C> p, int times) {
+  for (int r = 0; r < times; ++r) {
+    std::vector<C> q = p;
+    if (!relocate(P, q)) break;
+    p = q;
+  }
+  return p;
+}
+
 }  // namespace
 
 void PoleSetFitOptions::validate() const {
@@ -372,73 +441,17 @@ PoleSetFit fit_pole_set(const std::vector<std::vector<double>>& w,
                         const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o) {
   o.validate();
   PoleSetFit out;
-  if (g.empty() || g.size() != W.size() || g.size() != w.size()) {
-    out.message = "no curve, or curves, grids and weights of different counts";
-    return out;
-  }
-  double lo = INFINITY, hi = 0;
-  int total = 0, smallest = std::numeric_limits<int>::max();
-  for (size_t c = 0; c < g.size(); ++c) {
-    const auto& wc = w[c];
-    if (g[c].size() != wc.size() || W[c].size() != wc.size()) {
-      out.message = "curve " + std::to_string(c) + ": values, weights and grid of different sizes";
-      return out;
-    }
-    if (wc.size() < 4) {
-      out.message = "curve " + std::to_string(c) + ": fewer than 4 points";
-      return out;
-    }
-    for (size_t i = 0; i < wc.size(); ++i) {
-      if (!(wc[i] > 0) || (i > 0 && !(wc[i] > wc[i - 1]))) {
-        out.message = "curve " + std::to_string(c) + ": frequencies must be > 0 and increasing";
-        return out;
-      }
-    }
-    lo = std::min(lo, wc.front()), hi = std::max(hi, wc.back());
-    total += int(wc.size());
-    smallest = std::min(smallest, int(wc.size()));
-  }
   Problem P;
-  P.nc = int(g.size());
-  P.total = total;
-  P.g = &g;
-  P.ws = std::sqrt(lo * hi);
-  P.kappa = std::log(2.0 * total);
-  for (size_t c = 0; c < g.size(); ++c) {
-    const auto& wc = w[c];
-    const int M = int(wc.size());
-    std::vector<C> sc;
-    std::vector<double> spc, sw;
-    for (int i = 0; i < M; ++i) {
-      sc.push_back(C(0, wc[size_t(i)] / P.ws));
-      const double a = i > 0 ? wc[size_t(i)] - wc[size_t(i - 1)] : wc[1] - wc[0];
-      const double b = i < M - 1 ? wc[size_t(i + 1)] - wc[size_t(i)] : a;
-      spc.push_back(0.5 * (a + b) / P.ws);
-      sw.push_back(std::sqrt(std::max(W[c][size_t(i)], 0.0)));
-    }
-    P.s.push_back(sc);
-    P.spacing.push_back(spc);
-    P.sw.push_back(sw);
-  }
-  const double w_lo = lo, w_hi = hi;
+  double lo = 0, hi = 0;
+  int smallest = 0;
+  out.message = make_problem(w, g, W, &P, &lo, &hi, &smallest);
+  if (!out.message.empty()) return out;
   const int max_poles = std::min(o.max_poles, smallest - 2);
   // 1. Start pairs spread linearly over the band.
-  std::vector<C> poles;
-  const int pairs = std::max(1, std::min(o.start_pairs, max_poles / 2));
-  for (int k = 0; k < pairs; ++k) {
-    const double f = (k + 0.5) / pairs;
-    const double b = (w_lo + f * (w_hi - w_lo)) / P.ws;
-    poles.push_back(C(-b / 100, b));
-  }
+  std::vector<C> poles =
+      start_poles(P, lo, hi, std::max(1, std::min(o.start_pairs, max_poles / 2)));
   if (max_poles < 2) poles = {C(-1, 0)};
-  auto relocated = [&](std::vector<C> p) {
-    for (int r = 0; r < o.relocations; ++r) {
-      std::vector<C> q = p;
-      if (!relocate(P, q)) break;
-      p = q;
-    }
-    return p;
-  };
+  auto relocated = [&](std::vector<C> p) { return relocate_times(P, std::move(p), o.relocations); };
   Model cur = evaluate(P, relocated(poles)), best = cur;
   int stall = 0;
   for (int round = 0; round < o.max_rounds && !cur.adequate; ++round) {
@@ -503,6 +516,21 @@ PoleSetFit fit_pole_set(const std::vector<std::vector<double>>& w,
                 best.adequate ? "adequate" : "not adequate", out.order, P.nc, out.chi2_per_dof,
                 out.rounds, out.added, out.skimmed);
   out.message = buf;
+  return out;
+}
+
+std::vector<C> relocated_poles(const std::vector<double>& w, const std::vector<std::vector<C>>& g,
+                               const std::vector<std::vector<double>>& W, int pairs,
+                               int relocations) {
+  Problem P;
+  double lo = 0, hi = 0;
+  int smallest = 0;
+  const std::vector<std::vector<double>> ws(g.size(), w);
+  if (pairs < 1 || !make_problem(ws, g, W, &P, &lo, &hi, &smallest).empty() ||
+      2 * pairs > smallest - 2)
+    return {};
+  std::vector<C> out;
+  for (C p : relocate_times(P, start_poles(P, lo, hi, pairs), relocations)) out.push_back(p * P.ws);
   return out;
 }
 

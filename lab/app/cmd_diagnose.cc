@@ -21,6 +21,9 @@ void add_diagnose_command(CLI::App& app) {
   c->add_option("--engine", dc->engine,
                 "measure this engine model first (every flag of measure applies)");
   c->add_option("--measured", dc->measured, "or: a measure output folder");
+  c->add_option("--baseline", dc->baseline,
+                "a measure folder the simulation was fitted to or last agreed with: what differed "
+                "there is the simulation's own misfit; the findings are what changed since");
   c->add_option("--out", dc->out)->required();
   c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
   c->add_flag("!--no-validation", dc->validation,

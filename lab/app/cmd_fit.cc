@@ -5,9 +5,11 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/diagnose/fitted_simulation.h"
 #include "fralab/identify/common_poles.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
+#include "fralab/identify/stabilisation.h"
 
 namespace fralab {
 
@@ -22,23 +24,79 @@ struct FitCommand {
   double tolerance = -1;   // < 0: estimated without sigma
   int min_num_order = -1;  // < 0: any relative degree
   bool no_noise_estimate = false;
-  bool common_poles = false, unweighted = false;
-  int max_poles = -1;  // < 0: the default (FitOptions, PoleSetFitOptions)
+  bool common_poles = false, unweighted = false, no_relative_floor = false;
+  int max_poles = -1;              // < 0: the default (FitOptions, CommonPoleOptions)
+  std::vector<std::string> pairs;  // --pair, one per --frd (--common-poles)
+  std::string model_out;           // --model-out (--common-poles)
 };
+
+// The pair of each curve: --pair in order, else the file's own when it names one (a CSV names
+// none: "E1:E2").
+std::vector<std::string> curve_pairs(const FitCommand& c, const std::vector<Frd>& curves) {
+  if (!c.pairs.empty() && c.pairs.size() != curves.size())
+    throw InputError("fit: " + std::to_string(c.pairs.size()) + " --pair for " +
+                     std::to_string(curves.size()) + " --frd: one each, in the same order");
+  std::vector<std::string> out;
+  for (size_t i = 0; i < curves.size(); ++i) {
+    const std::string p = c.pairs.empty() ? curves[i].pair : c.pairs[i];
+    const auto [in, o] = split_pair(p);
+    if (in.empty() || o.empty() || p == "E1:E2")
+      throw InputError("fit: " + c.ins[i] + " names no pair (" + p +
+                       "): give each curve's INPUT:OUTPUT with --pair, in the order of --frd");
+    out.push_back(p);
+  }
+  return out;
+}
 
 // --common-poles: every --frd with one pole set (docs/formats.md §25).
 void run_common(const FitCommand& c) {
   std::vector<Frd> curves;
   for (const std::string& f : c.ins) curves.push_back(read_fit_input(f).frd);
-  PoleSetFitOptions o;
-  if (c.max_poles > 0) o.max_poles = c.max_poles;
-  const CommonPoleResult r = fit_common_poles(curves, c.ins, o, c.unweighted);
+  if (!c.pairs.empty() || !c.model_out.empty()) {
+    const std::vector<std::string> pairs = curve_pairs(c, curves);
+    for (size_t i = 0; i < curves.size(); ++i) curves[i].pair = pairs[i];
+  }
+  CommonPoleOptions o;
+  if (c.max_poles > 0) o.fit.max_poles = c.max_poles;
+  o.unweighted = c.unweighted;
+  o.relative_floor = !c.no_relative_floor;
+  const CommonPoleResult r = fit_common_poles(curves, c.ins, o);
   json_save_file(c.out, common_poles_to_json(r));
-  std::printf("fralab: %zu curves -> %s: %s; rms error over all %.4g\n", c.ins.size(),
-              c.out.c_str(), r.fit.message.c_str(), r.rms_total);
+  int physical = 0;
+  for (bool p : r.physical) physical += p ? 1 : 0;
+  std::printf("fralab: %zu curves -> %s: %s; rms error over all %.4g, rms |ln ratio| %.4g\n",
+              c.ins.size(), c.out.c_str(), r.fit.message.c_str(), r.rms_total, r.rms_log_total);
+  if (r.floor_taken)
+    std::printf("  fitted again with each curve's relative floor (against sigma: %s)\n",
+                r.fit_against_sigma.c_str());
   for (const CommonPoleCurve& k : r.curves)
-    std::printf("  %s: rms error %.4g (%.3g of its rms)\n", k.source.c_str(), k.rms_error,
-                k.rms_error / std::max(k.rms_value, 1e-300));
+    std::printf("  %s: rms error %.4g (%.3g of its rms), rms |ln ratio| %.4g\n", k.source.c_str(),
+                k.rms_error, k.rms_error / std::max(k.rms_value, 1e-300), k.rms_log_error);
+  if (r.diagram)
+    std::printf("  %d physical modes (stabilisation diagram over %zu orders)\n", physical,
+                r.diagram->rows.size());
+  if (!c.model_out.empty()) {
+    save_model(c.model_out, fitted_simulation(r, c.model_out));
+    std::printf("  model %s (fralab-model/1, a path per curve)\n", c.model_out.c_str());
+  }
+  if (c.plot.empty()) return;
+  if (std::filesystem::path(c.plot).extension() != ".png")
+    throw InputError("--plot " + c.plot + ": the stabilisation diagram is a PNG: name it *.png");
+  if (!r.diagram) return;
+  std::vector<std::complex<double>> phys;
+  for (size_t k = 0; k < r.fit.poles.size(); ++k)
+    if (r.physical[k]) phys.push_back(r.fit.poles[k]);
+  std::vector<double> w;
+  std::vector<std::vector<std::complex<double>>> g(curves.size());
+  for (const FrdPoint& p : curves[0].points)
+    if (p.valid) w.push_back(p.w);
+  for (size_t i = 0; i < curves.size(); ++i)
+    for (const FrdPoint& p : curves[i].points)
+      if (p.valid) g[i].push_back(p.value());
+  if (!render_stabilisation_diagram(*r.diagram, phys, w, g, c.plot))
+    throw InputError("--plot " + c.plot +
+                     ": gnuplot is not installed or failed (data and script written beside it)");
+  std::printf("  stabilisation diagram %s\n", c.plot.c_str());
 }
 
 void run(FitCommand c) {
@@ -93,9 +151,18 @@ void add_fit_command(CLI::App& app) {
   c->add_flag("--unweighted", fc->unweighted,
               "with --common-poles: every point of every curve weighted alike (scikit-rf's vector "
               "fitting), instead of each curve by its sigma or its estimated noise");
+  c->add_flag("--no-relative-floor", fc->no_relative_floor,
+              "with --common-poles: keep the fit against sigma even when it is not adequate (no "
+              "second fit on each curve's relative floor)");
+  c->add_option("--pair", fc->pairs,
+                "with --common-poles: each curve's INPUT:OUTPUT, one per --frd in order (a CSV "
+                "names none)");
+  c->add_option("--model-out", fc->model_out,
+                "with --common-poles: write the fit as a simulation (fralab-model/1), a path per "
+                "curve named by its pair, every path with the common poles");
   c->add_option("--max-poles", fc->max_poles,
-                "most poles of a pole set: with --common-poles, and when the order search reaches "
-                "--max-order without an adequate fit (default 40; 0: no pole set)")
+                "most poles of a pole set: with --common-poles (default 100), and when the order "
+                "search reaches --max-order without an adequate fit (default 40; 0: no pole set)")
       ->check(CLI::Range(0, 400));
   c->add_option("--delay", fc->delay, "auto, none or SECONDS (subtracted)")->capture_default_str();
   c->add_option("--out", fc->out, "tf JSON (docs/formats.md §1) plus fit figures, roots, Pade sets")
@@ -117,7 +184,8 @@ void add_fit_command(CLI::App& app) {
   c->add_option("--delete", fc->deletions, "root deletion, e.g. P03,Z02 (TFNS P/Z cards)")
       ->delimiter(',');
   c->add_option("--plot", fc->plot,
-                "Bode cross-plot PNG: the data against the fit (and the fit after deletion)");
+                "Bode cross-plot PNG: the data against the fit (and the fit after deletion); with "
+                "--common-poles the stabilisation diagram");
   c->callback([fc] { run(*fc); });
 }
 

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "fralab/core/measure_dir.h"
+#include "fralab/diagnose/baseline.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
@@ -84,11 +85,26 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     }
   }
   const MeasuredFolder folder = read_measured_folder(data_dir);
-  const auto& data = folder.data;
   DiagnoseOptions opt;
   opt.chain = folder.chain;
+  std::vector<MeasuredPair> data = folder.data;
+  Json baseline_json;
+  if (!c.baseline.empty()) {
+    BaselineSummary s;
+    data = relative_to_baseline(sim, data, read_measured_folder(c.baseline).data, opt, &s);
+    baseline_json = {{"folder", c.baseline},
+                     {"pairs", s.pairs},
+                     {"points", s.points},
+                     {"left_out", s.left_out},
+                     {"pairs_without", s.without}};
+    data_name += ", relative to the baseline " + c.baseline +
+                 " (the simulation's misfit there is "
+                 "its own, not a finding)";
+  }
   Diagnosis d = diagnose(sim, data, opt);
-  json_save_file(c.out + "/diagnosis.json", diagnosis_to_json(d));
+  Json dj = diagnosis_to_json(d);
+  if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
+  json_save_file(c.out + "/diagnosis.json", dj);
   Model ext = d.extended;
   ext.name = sim.name + " + diagnosis";
   ext.warnings.clear();

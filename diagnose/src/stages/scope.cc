@@ -157,6 +157,7 @@ void scope(DiagnosisRun& r) {
   std::vector<bool> used(r.raw.size(), false);
   r.findings = r.coupling_findings;
   r.findings.insert(r.findings.end(), r.path_findings.begin(), r.path_findings.end());
+  r.findings.insert(r.findings.end(), r.mode_findings.begin(), r.mode_findings.end());
   group(
       r, used, [](const PairFit&) { return true; }, Scope::kPlant, "", "", 3);
   for (const auto& o : r.sim.outputs)

@@ -77,4 +77,12 @@ PoleSetFit fit_pole_set(const std::vector<double>& w,
                         const std::vector<std::vector<std::complex<double>>>& g,
                         const std::vector<std::vector<double>>& W, const PoleSetFitOptions& o = {});
 
+/// Vector fitting at one fixed order, no adding or skimming: `pairs` pairs spread linearly over the
+/// band (step 1), relocated `relocations` times against every curve on the shared grid w (rad/s).
+/// The poles in rad/s, stable, pairs by their upper member (a pair may split into two real
+/// poles); empty for a bad grid or more poles than the points allow (2 pairs + 2 > points).
+std::vector<std::complex<double>> relocated_poles(
+    const std::vector<double>& w, const std::vector<std::vector<std::complex<double>>>& g,
+    const std::vector<std::vector<double>>& W, int pairs, int relocations);
+
 }  // namespace fralab

@@ -16,6 +16,9 @@ struct DiagnoseCommand {
   std::string simulation;
   std::string engine;  // measure this first (and once more, other seed, 1.5x amplitude: validation)
   std::string measured;  // or read this measure folder (its validation/ subfolder when present)
+  /// A measure folder the simulation was fitted to or last agreed with: the measurement is
+  /// diagnosed relative to it (diagnose/baseline.h); "" none.
+  std::string baseline;
   std::string out;
   MeasureOptions measure;  // flags of `measure`
   bool plots = true;
