@@ -8,6 +8,9 @@
 // many of those found have their true value inside the finding's 2-sigma interval.
 // `--excitation auto` measures with the auto campaign; the summary counts the runs that completed,
 // ended partial (exit status 3: measured, a later step failed) or failed.
+// --plants modal (tests/util/random_modal.h: structures, light modes common to every path) is
+// measured in-process: each path's exact response on a grid dense enough for its lightest mode,
+// with noise of known sigma, and a validation measurement; the diagnosis runs in this process.
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
 #include <sys/wait.h>
 
@@ -17,6 +20,7 @@
 #include <filesystem>
 
 #include "random_machine.h"
+#include "random_modal.h"
 #include "random_plant.h"
 
 using namespace fralab;
@@ -31,6 +35,26 @@ std::vector<Finding> read_findings(const std::string& file) {
   for (size_t k = 0; k < fs.size(); ++k)
     v.push_back(finding_from_json(fs[k], JsonWhere{file, "/findings/" + std::to_string(k)}));
   return v;
+}
+
+// Scores one case, adds it to the totals and prints its line (and what failed).
+void report(const RandomCase& c, const std::vector<Finding>& findings, Score& total, int& failing) {
+  const Score s = score(c, findings);
+  total.findings += s.findings;
+  total.true_findings += s.true_findings;
+  total.hidden += s.hidden;
+  total.found += s.found;
+  total.with_interval += s.with_interval;
+  total.in_two_sigma += s.in_two_sigma;
+  const bool ok = s.false_findings.empty() && s.missed.empty();
+  failing += !ok;
+  std::printf("%s: %zu inputs x %zu outputs, %d hidden, %d findings, %s\n", c.name.c_str(),
+              c.simulation.inputs.size(), c.simulation.outputs.size(), s.hidden, s.findings,
+              ok ? "ok" : "FAILING");
+  for (const auto& f : s.false_findings) std::printf("    false: %s\n", f.c_str());
+  for (const auto& m : s.missed) std::printf("    missed: %s\n", m.c_str());
+  for (const auto& m : s.outside_two_sigma) std::printf("    outside 2 sigma: %s\n", m.c_str());
+  std::fflush(stdout);
 }
 
 }  // namespace
@@ -55,8 +79,9 @@ int main(int argc, char** argv) {
   std::string plants = "random";
   app.add_option("--plants", plants,
                  "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
-                 "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap)")
-      ->check(CLI::IsMember({"random", "machine"}))
+                 "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
+                 "modal (random_modal.h: structures, measured in-process)")
+      ->check(CLI::IsMember({"random", "machine", "modal"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const std::string bin =
@@ -64,11 +89,20 @@ int main(int argc, char** argv) {
   Score total;
   int failing = 0, complete = 0, partial = 0, failed = 0;
   for (int i = first; i < first + cases; ++i) {
-    const RandomCase c = plants == "machine" ? random_machine_case(seed, i) : random_case(seed, i);
+    const RandomCase c = plants == "machine" ? random_machine_case(seed, i)
+                         : plants == "modal" ? random_modal_case(seed, i)
+                                             : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);
     save_model(dir + "/engine.json", c.engine);
+    if (plants == "modal") {
+      const Diagnosis d = diagnose(c.simulation, modal_measurement(c, seed + uint64_t(i)));
+      json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
+      ++complete;
+      report(c, d.findings, total, failing);
+      continue;
+    }
     const std::string cmd = bin + " diagnose --simulation " + dir + "/simulation.json --engine " +
                             dir + "/engine.json --out " + dir + "/diagnosis --no-plots --band " +
                             band + " --points-per-decade " + std::to_string(ppd) +
@@ -87,22 +121,7 @@ int main(int argc, char** argv) {
       total.findings += 1;  // a failed run counts against precision too
       continue;
     }
-    const Score s = score(c, read_findings(dir + "/diagnosis/diagnosis.json"));
-    total.findings += s.findings;
-    total.true_findings += s.true_findings;
-    total.hidden += s.hidden;
-    total.found += s.found;
-    total.with_interval += s.with_interval;
-    total.in_two_sigma += s.in_two_sigma;
-    const bool ok = s.false_findings.empty() && s.missed.empty();
-    failing += !ok;
-    std::printf("%s: %zu inputs x %zu outputs, %d hidden, %d findings, %s\n", c.name.c_str(),
-                c.simulation.inputs.size(), c.simulation.outputs.size(), s.hidden, s.findings,
-                ok ? "ok" : "FAILING");
-    for (const auto& f : s.false_findings) std::printf("    false: %s\n", f.c_str());
-    for (const auto& m : s.missed) std::printf("    missed: %s\n", m.c_str());
-    for (const auto& m : s.outside_two_sigma) std::printf("    outside 2 sigma: %s\n", m.c_str());
-    std::fflush(stdout);
+    report(c, read_findings(dir + "/diagnosis/diagnosis.json"), total, failing);
   }
   const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
   const double recall = total.hidden ? double(total.found) / total.hidden : 1.0;

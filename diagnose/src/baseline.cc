@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "fralab/core/error.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 
@@ -23,10 +24,9 @@ std::map<std::string, MultisineExcitation> multisines(const std::vector<Measured
   std::map<std::string, MultisineExcitation> out;
   for (bool actuator : {true, false}) {
     for (const MeasuredPair& mp : data) {
-      const auto [e1, e2] = split_pair(mp.pair);
-      const bool is_actuator = e1.rfind("u_", 0) == 0;
-      if (is_actuator != actuator) continue;
-      const std::string in = is_actuator ? e2 : e1;
+      const PairId id = PairId::parse(mp.pair);
+      if (id.actuator() != actuator) continue;
+      const std::string& in = id.input;
       if (out.count(in)) continue;
       if (auto ms = multisine_excitation(validation ? mp.validation : mp.frd))
         out.emplace(in, std::move(*ms));
@@ -35,18 +35,13 @@ std::map<std::string, MultisineExcitation> multisines(const std::vector<Measured
   return out;
 }
 
-std::string input_of(const std::string& pair) {
-  const auto [e1, e2] = split_pair(pair);
-  return e1.rfind("u_", 0) == 0 ? e2 : e1;
-}
-
 // The simulation's response at a point of `pair` as the diagnosis compares it.
 std::optional<C> sim_at(const Model& sim, const std::string& pair, const FrdPoint& pt,
                         const std::map<std::string, MultisineExcitation>& ms,
                         const DiagnoseOptions& opt) {
   const MultisineExcitation* m = nullptr;
   if (pt.line_amplitude > 0)
-    if (auto it = ms.find(input_of(pair)); it != ms.end()) m = &it->second;
+    if (auto it = ms.find(PairId::parse(pair).input); it != ms.end()) m = &it->second;
   return model_pair_response(sim, pair, pt.w, pt.amplitude, opt.chain, m);
 }
 

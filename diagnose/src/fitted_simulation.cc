@@ -1,6 +1,7 @@
 #include "fralab/diagnose/fitted_simulation.h"
 
 #include "fralab/core/error.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 
@@ -10,10 +11,16 @@ Model fitted_simulation(const CommonPoleResult& r, const std::string& name) {
   m.source = name;
   for (size_t c = 0; c < r.curves.size(); ++c) {
     const CommonPoleCurve& k = r.curves[c];
-    const auto [in, out] = split_pair(k.pair);
-    if (in.empty() || out.empty() || in.rfind("u_", 0) == 0)
+    PairId id;
+    try {
+      id = PairId::parse(k.pair);
+    } catch (const InputError& e) {
+      throw InputError(k.source + ": " + e.what());
+    }
+    if (!id.path())
       throw InputError(k.source + ": pair '" + k.pair +
                        "' is not INPUT:OUTPUT (a position-to-output pair names the path)");
+    const std::string &in = id.input, &out = id.output;
     if (m.path(out, in))
       throw InputError(k.source + ": pair " + k.pair + " is named by two curves");
     if (m.input_index(in) < 0) {

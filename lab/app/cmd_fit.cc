@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/diagnose/fitted_simulation.h"
 #include "fralab/identify/common_poles.h"
 #include "fralab/identify/fit_io.h"
@@ -39,8 +40,7 @@ std::vector<std::string> curve_pairs(const FitCommand& c, const std::vector<Frd>
   std::vector<std::string> out;
   for (size_t i = 0; i < curves.size(); ++i) {
     const std::string p = c.pairs.empty() ? curves[i].pair : c.pairs[i];
-    const auto [in, o] = split_pair(p);
-    if (in.empty() || o.empty() || p == "E1:E2")
+    if (p == "E1:E2" || !PairId::parse(p).path())
       throw InputError("fit: " + c.ins[i] + " names no pair (" + p +
                        "): give each curve's INPUT:OUTPUT with --pair, in the order of --frd");
     out.push_back(p);

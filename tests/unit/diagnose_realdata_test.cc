@@ -180,7 +180,10 @@ TEST(DiagnoseRealData, SilverboxAtTwoLevelsIsNamedLevelDependent) {
 // level 1 as the baseline (`fralab diagnose --baseline`): the wing-torsion mode and the
 // wing-bending mode are each one finding over the three accelerometers (the plant's), at the
 // frequencies PROVENANCE.md's local single-mode fits of level 3 give (7.263 and 5.145 Hz) within
-// 0.3 %, the torsion's damping raised (0.0052 -> 0.0060 there), and the error falls.
+// 0.3 %, the bending's damping raised (0.0085 -> 0.0116 there), and the error at most half what it
+// was. (The torsion's damping, 0.0052 -> 0.0060 there, is taken by the fit's pole beside it at
+// 7.29 Hz, which the stabilisation diagram does not call physical: the fit holds the torsion's
+// peak with two poles.)
 std::vector<MeasuredPair> f16_level(int level) {
   std::vector<MeasuredPair> out;
   for (int j = 1; j <= 3; ++j) {
@@ -231,8 +234,8 @@ TEST(DiagnoseRealData, F16TorsionAndBendingSoftenAtLevel3EachOneFindingOverEvery
               kModeRel);
   EXPECT_NEAR(bending->parameters.at("to_rad_s") / (2 * std::numbers::pi) / kBendingL3Hz, 1,
               kModeRel);
-  EXPECT_GT(torsion->parameters.at("to_zeta"), torsion->parameters.at("from_zeta"));
-  EXPECT_LT(d.error_after, d.error_before);
+  EXPECT_GT(bending->parameters.at("to_zeta"), bending->parameters.at("from_zeta"));
+  EXPECT_LE(d.error_after, 0.5 * d.error_before) << d.error_before << " -> " << d.error_after;
 }
 
 }  // namespace

@@ -103,7 +103,9 @@ TEST(Stabilisation, TheDiagramIsDrawn) {
   std::filesystem::remove_all(dir);
   const bool drawn = render_stabilisation_diagram(d, {}, s.w, s.g, dir + "/diagram.png");
   EXPECT_TRUE(std::filesystem::exists(dir + "/diagram_poles.dat"));
-  if (drawn) EXPECT_GT(std::filesystem::file_size(dir + "/diagram.png"), 1000u);
+  if (drawn) {
+    EXPECT_GT(std::filesystem::file_size(dir + "/diagram.png"), 1000u);
+  }
 }
 
 }  // namespace

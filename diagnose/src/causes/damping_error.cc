@@ -7,6 +7,7 @@
 
 #include "cause.h"
 #include "fralab/core/error.h"
+#include "mode_residues.h"
 
 namespace fralab::diag {
 namespace {
@@ -71,8 +72,16 @@ class DampingError final : public LinearCause {
   // zero pair and a pole pair.
   void extend(Tf& t, const Finding& f) const override {
     const double wn = f.parameters.at("wn_rad_s"), to_zeta = f.parameters.at("to_zeta");
+    const bool shape_kept =
+        f.text_parameters.count("form") && f.text_parameters.at("form") == "residue";
     for (Root& r : t.poles)
       if (r.pair && std::abs(r.wn - wn) <= kSamePair * wn) {
+        // A structure's mode re-damped with its shape kept (modes stage): the zeros move too.
+        if (shape_kept)
+          if (auto moved = moved_keeping_residue(t, r, Root::Pair(r.wn, to_zeta))) {
+            t = *moved;
+            return;
+          }
         r.zeta = to_zeta;
         return;
       }

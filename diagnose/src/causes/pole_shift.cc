@@ -11,6 +11,7 @@
 
 #include "cause.h"
 #include "fralab/core/numerics.h"
+#include "mode_residues.h"
 
 namespace fralab::diag {
 namespace {
@@ -128,6 +129,17 @@ class PoleShift final : public LinearCause {
     const double from = f.parameters.at("from_rad_s"), to = f.parameters.at("to_rad_s");
     const auto from_zeta = f.parameters.find("from_zeta"), to_zeta = f.parameters.find("to_zeta");
     const bool pair = from_zeta != f.parameters.end();  // a pair when the finding says so
+    // A structure's mode moved with its residue kept (modes stage): the path's zeros move too.
+    if (pair && to_zeta != f.parameters.end() && f.text_parameters.count("form") &&
+        f.text_parameters.at("form") == "residue") {
+      for (const Root& r : t.poles) {
+        if (!r.pair || std::abs(r.wn - from) > kSameRoot * from) continue;
+        if (auto moved = moved_keeping_residue(t, r, Root::Pair(to, to_zeta->second))) {
+          t = *moved;
+          return;
+        }
+      }
+    }
     for (Root& r : t.poles) {
       if (std::abs((r.pair ? r.wn : -r.real) - from) > kSameRoot * from) continue;
       if (r.pair) {

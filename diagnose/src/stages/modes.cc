@@ -1,27 +1,24 @@
-// Stage 3b, modes (docs/method/diagnosis.md, "The stages"): a lightly damped pair of the
+// Stage 3b, modes (docs/method/diagnosis.md, "The stages", 3b): a lightly damped pair of the
 // simulation that every path of a scope holds (a structure's mode, seen by every sensor; a mode of
-// one output's or one input's paths) is moved once, over all those pairs together, before any pair
-// is diagnosed alone. Each pair's own fit would split it (a path's residual holds its share of the
-// mode and of everything else), or miss it where several modes moved and none alone removes a
-// quarter of the pair's chi2.
+// one output's or one input's paths) is moved once, over all those pairs together, before any
+// pair is diagnosed alone. Each pair's own fit would split it, or miss it where several modes
+// moved and none alone removes a quarter of the pair's chi2.
 //
-// Candidates: pairs (wn, zeta <= kLightZeta) of the paths' and sensors' poles, inside the band of
-// the pairs that hold them, held (wn within kSameRoot) by every X:O pair of the plant, of one
-// output, or of one input (at least two pairs). A mode's move is F = D_from(s) / D_to(s) on each
-// of its pairs, on top of what the modes before it found: ln wn by a grid over +-kSearchRel of the
-// simulated frequency (steps of a quarter of the damping, so the grid falls inside the mode's
-// half-power band), then the damping over [zeta / kZetaSpan, zeta * kZetaSpan] and the two
-// alternately by Brent's method (as a pole_shift's pair moves). The damping is kept at the
-// simulation's unless it lowers chi2 by one penalty more. Greedily, the mode that lowers chi2 most
-// is taken while it lowers chi2 by more than k ln 2N in units of its pairs' misfit level
-// s = max(1, chi2 / N) (stage 6's scale: a structure measured far better than any model fits it
-// otherwise passes every move) and lowers its pairs' error; its factor then stays on its pairs for
-// what follows. The findings are pole shifts at the scope, sized again with the rest in 5b.
+// Candidates: pairs (zeta <= kLightZeta) of the paths' poles inside the band of the pairs that
+// hold them, held (wn within kSameRoot) by every X:O pair of the plant, of one output, or of one
+// input (at least two pairs). A move is the factor D_from / D_to on each pair (ln wn by a grid
+// over +-kSearchRel in steps of a third of the damping, then the damping, then the two
+// alternately by Brent's method), or, when its chi2 is lower, the same move with each path's mode
+// shape kept (mode_residues.h). Greedy, while a move lowers chi2 by more than k ln 2N in units of
+// its pairs' misfit level s = max(1, chi2 / N) and lowers their error; then each mode fitted
+// again with the others in place, and the least useful dropped while it does not earn its place.
+// A frequency move below kBandShare of the half-power band is a damping_error.
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <optional>
 
+#include "../causes/mode_residues.h"
 #include "fralab/core/numerics.h"
 #include "stages.h"
 
@@ -30,17 +27,48 @@ namespace {
 
 constexpr double kLightZeta = 0.2;  // a mode is lighter than this
 constexpr double kSameRoot = 1e-3;  // a path holds the mode: a pole within this (relative)
-constexpr double kSearchRel = 0.2;  // ln wn searched within +-this of the simulated
+constexpr double kSearchRel = 0.1;  // ln wn searched within +-this of the simulated
 constexpr double kZetaSpan = 10;    // the damping within a factor of this of the simulated
 constexpr int kMaxModes = 12;       // modes moved at most
 constexpr int kRounds = 8;          // frequency / damping alternations at most
+constexpr int kBackfitRounds = 2;   // each mode fitted again with the others in place
+constexpr double kBandShare = 0.1;  // a frequency move below this share of the band is none
+constexpr int kMaxGrid = 400;       // the frequency grid's points at most (steps >= 0.05 %)
+constexpr int kBrentBits = 20;      // Brent's method's precision (bits)
 
 struct SharedMode {
   Root root;
   Scope scope = Scope::kPlant;
   std::string input, output;
   std::vector<size_t> pairs;  // into r.pairs
+  // Per pair, for the move with the shape kept: the path's residue at the mode and its rational
+  // part at the pair's points (empty when a path does not hold the mode as a simple pole).
+  std::vector<C> residue;
+  std::vector<std::vector<C>> rational;
+  std::vector<std::vector<C>> from_factor;  // per pair, D_from at its points
 };
+
+// The residues and rational parts of m's paths (SharedMode), once per mode.
+void prepare_residues(const DiagnosisRun& r, SharedMode& m) {
+  for (size_t k : m.pairs)
+    m.from_factor.push_back(factor_of(r.pairs[k].w, [&](C s) { return m.root.factor(s); }));
+  for (size_t k : m.pairs) {
+    const PairFit& p = r.pairs[k];
+    const ModelPath* mp = r.sim.path(p.output, p.input);
+    const auto res = mp ? pair_residue(mp->tf, m.root) : std::nullopt;
+    if (!res) {
+      m.residue.clear(), m.rational.clear();
+      return;
+    }
+    m.residue.push_back(*res);
+    m.rational.push_back(factor_of(p.w, [&](C s) { return mp->tf.rational(s); }));
+  }
+}
+
+// Two pairs are one mode when their frequencies agree within kSameRoot.
+bool same_root(const Root& a, const Root& b) {
+  return a.pair && b.pair && std::abs(a.wn - b.wn) <= kSameRoot * b.wn;
+}
 
 bool holds(const Model& m, const PairFit& p, const Root& root) {
   std::vector<Root> v;
@@ -49,9 +77,7 @@ bool holds(const Model& m, const PairFit& p, const Root& root) {
   if (o >= 0 && m.outputs[size_t(o)].sensor)
     v.insert(v.end(), m.outputs[size_t(o)].sensor->poles.begin(),
              m.outputs[size_t(o)].sensor->poles.end());
-  return std::any_of(v.begin(), v.end(), [&](const Root& q) {
-    return q.pair && std::abs(q.wn - root.wn) <= kSameRoot * root.wn;
-  });
+  return std::any_of(v.begin(), v.end(), [&](const Root& q) { return same_root(q, root); });
 }
 
 // The scope whose X:O pairs are exactly `holders` (at least two), or nullopt.
@@ -87,9 +113,7 @@ std::vector<SharedMode> shared_modes(const DiagnosisRun& r) {
     if (const ModelPath* mp = r.sim.path(p.output, p.input)) roots = mp->tf.poles;
     for (const Root& root : roots) {
       if (!root.pair || !(root.zeta > 0 && root.zeta <= kLightZeta)) continue;
-      if (std::any_of(seen.begin(), seen.end(), [&](const Root& q) {
-            return std::abs(q.wn - root.wn) <= kSameRoot * root.wn;
-          }))
+      if (std::any_of(seen.begin(), seen.end(), [&](const Root& q) { return same_root(q, root); }))
         continue;
       seen.push_back(root);
       std::vector<size_t> holders;
@@ -103,6 +127,7 @@ std::vector<SharedMode> shared_modes(const DiagnosisRun& r) {
       if (!(root.wn >= lo && root.wn <= hi)) continue;
       if (auto m = scope_of(r, holders)) {
         m->root = root;
+        prepare_residues(r, *m);
         out.push_back(*m);
       }
     }
@@ -115,26 +140,96 @@ struct MovedMode {
   double wn = 0, zeta = 0, chi2 = INFINITY;
   int k = 1;
   std::vector<std::vector<C>> F;
+  bool residues_kept = false;  // the move keeps each path's mode shape (mode_residues.h)
 };
+
+// D_from / D_to of mode m moved to `to`, on each of its pairs.
+std::vector<std::vector<C>> factors_to(const DiagnosisRun& r, const SharedMode& m, const Root& to) {
+  std::vector<std::vector<C>> F;
+  for (size_t k : m.pairs)
+    F.push_back(factor_of(r.pairs[k].w, [&](C s) { return m.root.factor(s) / to.factor(s); }));
+  return F;
+}
+
+// The move with each path's mode shape kept (mode_residues.h), on each of the mode's pairs; empty
+// when a pair's path does not hold the mode as a simple pole (its sensor does, or it repeats).
+std::vector<std::vector<C>> residue_factors_to(const DiagnosisRun& r, const SharedMode& m,
+                                               const Root& to) {
+  if (m.residue.empty()) return {};
+  std::vector<std::vector<C>> F;
+  for (size_t j = 0; j < m.pairs.size(); ++j) {
+    const PairFit& p = r.pairs[m.pairs[j]];
+    std::vector<C> f(p.w.size());
+    for (size_t q = 0; q < p.w.size(); ++q)
+      f[q] = residue_move_factor(m.rational[j][q], m.root, to, m.residue[j], C(0, p.w[q]));
+    F.push_back(std::move(f));
+  }
+  return F;
+}
+
+// chi2 over the mode's pairs with F on top of their factors.
+double chi2_with(const DiagnosisRun& r, const SharedMode& m, const std::vector<std::vector<C>>& F) {
+  double c = 0;
+  for (size_t j = 0; j < m.pairs.size(); ++j) c += chi2(r.pairs[m.pairs[j]], F[j]);
+  return c;
+}
+
+// chi2 over the mode's pairs with the mode moved to `to` (the factor, or the shape kept), as
+// chi2_with of factors_to or residue_factors_to, without building the factors: the searches'
+// inner loop.
+double chi2_moved(const DiagnosisRun& r, const SharedMode& m, const Root& to, bool shape_kept) {
+  double c = 0;
+  for (size_t j = 0; j < m.pairs.size(); ++j) {
+    const PairFit& p = r.pairs[m.pairs[j]];
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const C s(0, p.w[q]);
+      const C F = shape_kept ? residue_move_factor(m.rational[j][q], m.root, to, m.residue[j], s)
+                             : m.from_factor[j][q] / to.factor(s);
+      c += std::norm((p.meas[q] - p.sim[q] * p.factor[q] * F) / p.sig[q]);
+    }
+  }
+  return c;
+}
+
+// The same move with each path's mode shape kept, from the factor's optimum (frequency and damping
+// alternately, as the factor's): it replaces `factor` when it has the lower chi2 (a structure's
+// mode moves with its shape, and its antiresonances with it).
+MovedMode with_residues_kept(const DiagnosisRun& r, const SharedMode& m, const MovedMode& factor,
+                             size_t n) {
+  auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
+  if (residue_factors_to(r, m, m.root).empty()) return factor;
+  auto total = [&](double lwn, double lz) { return chi2_moved(r, m, to(lwn, lz), true); };
+  double lwn = std::log(factor.wn), lz = std::log(m.root.zeta);
+  const double step = std::max(1e-4, m.root.zeta);
+  lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
+                              kBrentBits);
+  MovedMode best{std::exp(lwn), m.root.zeta, total(lwn, lz), 1, {}, true};
+  lz = std::log(factor.zeta);
+  for (int round = 0; round < kRounds; ++round) {
+    const double lwn_was = lwn, lz_was = lz;
+    const double st = std::max(1e-4, std::exp(lz));
+    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - st, lwn + st,
+                                kBrentBits);
+    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
+                               kBrentBits);
+    if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
+  }
+  const double c2 = total(lwn, lz);
+  const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
+  if ((best.chi2 - c2) / s > std::log(2.0 * double(n)))
+    best = {std::exp(lwn), std::exp(lz), c2, 2, {}, true};
+  if (!(best.chi2 < factor.chi2)) return factor;
+  best.F = residue_factors_to(r, m, Root::Pair(best.wn, best.zeta));
+  return best;
+}
 
 MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
   const Root& from = m.root;
-  auto factors = [&](double lwn, double lz) {
-    Root to = from;
-    to.wn = std::exp(lwn), to.zeta = std::exp(lz);
-    std::vector<std::vector<C>> F;
-    for (size_t k : m.pairs)
-      F.push_back(factor_of(r.pairs[k].w, [&](C s) { return from.factor(s) / to.factor(s); }));
-    return F;
-  };
-  auto total = [&](double lwn, double lz) {
-    const auto F = factors(lwn, lz);
-    double c = 0;
-    for (size_t j = 0; j < m.pairs.size(); ++j) c += chi2(r.pairs[m.pairs[j]], F[j]);
-    return c;
-  };
+  auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
+  auto total = [&](double lwn, double lz) { return chi2_moved(r, m, to(lwn, lz), false); };
   const double lz0 = std::log(from.zeta), lw0 = std::log(from.wn);
-  const int grid = int(std::ceil(2 * kSearchRel / std::min(0.01, from.zeta / 4)));
+  const int grid =
+      std::min(kMaxGrid, int(std::ceil(2 * kSearchRel / std::min(0.01, from.zeta / 3))));
   double lwn = minimise_1d([&](double x) { return total(x, lz0); }, lw0 - kSearchRel,
                            lw0 + kSearchRel, grid);
   MovedMode best{std::exp(lwn), from.zeta, total(lwn, lz0), 1, {}};
@@ -143,8 +238,10 @@ MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
   for (int round = 0; round < kRounds; ++round) {
     const double lwn_was = lwn, lz_was = lz;
     const double step = std::max(1e-4, std::exp(lz));
-    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step, 24);
-    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5, 24);
+    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
+                                kBrentBits);
+    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
+                               kBrentBits);
     if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
   }
   size_t n = 0;
@@ -153,8 +250,8 @@ MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
   const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
   if ((best.chi2 - c2) / s > std::log(2.0 * double(n)))
     best = {std::exp(lwn), std::exp(lz), c2, 2, {}};
-  best.F = factors(std::log(best.wn), std::log(best.zeta));
-  return best;
+  best.F = factors_to(r, m, Root::Pair(best.wn, best.zeta));
+  return with_residues_kept(r, m, best, n);
 }
 
 // The error metric over the mode's pairs, their current factors times F (empty: none).
@@ -175,13 +272,71 @@ double error_with(const DiagnosisRun& r, const SharedMode& m,
 
 }  // namespace
 
+namespace {
+
+// F on (or, inverse, off) each of the mode's pairs' factors.
+void apply_factor(DiagnosisRun& r, const SharedMode& m, const std::vector<std::vector<C>>& F,
+                  bool inverse) {
+  for (size_t j = 0; j < m.pairs.size(); ++j) {
+    PairFit& p = r.pairs[m.pairs[j]];
+    for (size_t q = 0; q < p.w.size(); ++q) p.factor[q] *= inverse ? 1.0 / F[j][q] : F[j][q];
+  }
+}
+
+// A damping change alone: the frequency moved by less than a tenth of the mode's half-power
+// band (zeta, relative), or its move does not lower chi2 by one penalty in units of the misfit
+// level. The finding is then the pair's damping_error, whose parameter is the damping.
+bool damping_only(const DiagnosisRun& r, const SharedMode& m, const MovedMode& f) {
+  if (f.k < 2) return false;
+  if (std::abs(f.wn / m.root.wn - 1) < kBandShare * m.root.zeta) return true;
+  const Root at_from = Root::Pair(m.root.wn, f.zeta);
+  const double c_from = chi2_with(
+      r, m, f.residues_kept ? residue_factors_to(r, m, at_from) : factors_to(r, m, at_from));
+  size_t n = 0;
+  for (size_t k : m.pairs) n += r.pairs[k].w.size();
+  const double s = std::max(1.0, f.chi2 / double(std::max<size_t>(n, 1)));
+  return (c_from - f.chi2) / s <= std::log(2.0 * double(n));
+}
+
+Finding finding_of(const DiagnosisRun& r, const SharedMode& m, const MovedMode& fit) {
+  Finding f;
+  f.scope = m.scope;
+  f.input = m.input;
+  f.output = m.output;
+  if (damping_only(r, m, fit)) {
+    f.cause = CauseKind::kDampingError;
+    f.parameters = {{"wn_rad_s", m.root.wn}, {"from_zeta", m.root.zeta}, {"to_zeta", fit.zeta}};
+    if (fit.residues_kept) f.text_parameters["form"] = "residue";
+  } else {
+    f.cause = CauseKind::kPoleShift;
+    f.parameters = {{"from_rad_s", m.root.wn},
+                    {"to_rad_s", fit.wn},
+                    {"from_zeta", m.root.zeta},
+                    {"to_zeta", fit.zeta},
+                    {"zeta", fit.zeta}};
+    if (fit.residues_kept) f.text_parameters["form"] = "residue";
+  }
+  for (size_t k : m.pairs) f.pairs.push_back(r.pairs[k].pair);
+  return f;
+}
+
+}  // namespace
+
 void modes(DiagnosisRun& r) {
-  std::vector<SharedMode> left = shared_modes(r);
-  for (int taken = 0; taken < kMaxModes && !left.empty(); ++taken) {
+  std::vector<SharedMode> left = shared_modes(r), taken;
+  std::vector<MovedMode> fits;
+  // A candidate whose move did not earn its place in a round is skipped in the next ones (each
+  // round refits every candidate it tries); when none of the others earns its place, every
+  // candidate is tried again once before the stage stops (a neighbour's move can make one worth
+  // it).
+  std::vector<bool> worth(left.size(), true);
+  bool full = true;
+  while (int(taken.size()) < kMaxModes && !left.empty()) {
     size_t best = left.size();
     MovedMode best_fit;
     double best_gain = 0;
     for (size_t c = 0; c < left.size(); ++c) {
+      if (!worth[c]) continue;
       const SharedMode& m = left[c];
       double c0 = 0;
       size_t n = 0;
@@ -192,28 +347,66 @@ void modes(DiagnosisRun& r) {
       MovedMode f = fit_mode(r, m);
       const double s = std::max(1.0, f.chi2 / double(std::max<size_t>(n, 1)));
       const double gain = (c0 - f.chi2) / s - f.k * std::log(2.0 * double(n));
-      if (gain > best_gain && error_with(r, m, f.F) < error_with(r, m, {}))
-        best = c, best_fit = std::move(f), best_gain = gain;
+      worth[c] = gain > 0 && error_with(r, m, f.F) < error_with(r, m, {});
+      if (worth[c] && gain > best_gain) best = c, best_fit = std::move(f), best_gain = gain;
     }
-    if (best == left.size()) break;
-    const SharedMode& m = left[best];
-    Finding f;
-    f.cause = CauseKind::kPoleShift;
-    f.scope = m.scope;
-    f.input = m.input;
-    f.output = m.output;
-    f.parameters = {{"from_rad_s", m.root.wn},
-                    {"to_rad_s", best_fit.wn},
-                    {"from_zeta", m.root.zeta},
-                    {"to_zeta", best_fit.zeta},
-                    {"zeta", best_fit.zeta}};
-    for (size_t j = 0; j < m.pairs.size(); ++j) {
-      PairFit& p = r.pairs[m.pairs[j]];
-      f.pairs.push_back(p.pair);
-      for (size_t q = 0; q < p.w.size(); ++q) p.factor[q] *= best_fit.F[j][q];
+    if (best == left.size()) {
+      if (full) break;
+      full = true;
+      worth.assign(left.size(), true);
+      continue;
     }
-    r.mode_findings.push_back(std::move(f));
+    full = false;
+    apply_factor(r, left[best], best_fit.F, false);
+    taken.push_back(left[best]);
+    fits.push_back(std::move(best_fit));
     left.erase(left.begin() + long(best));
+    worth.erase(worth.begin() + long(best));
+  }
+  // Backfitting: each mode fitted again with every other one in place (modes moved towards each
+  // other share their band, and the first one taken held part of the next), kBackfitRounds times.
+  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round) {
+    for (size_t j = 0; j < taken.size(); ++j) {
+      apply_factor(r, taken[j], fits[j].F, true);
+      fits[j] = fit_mode(r, taken[j]);
+      apply_factor(r, taken[j], fits[j].F, false);
+    }
+  }
+  // Each must still earn its place with the others in place, as it did when taken: the least
+  // useful is dropped while its removal raises chi2 by no more than its penalty in units of the
+  // misfit level (a small move that made up for a neighbour taken before it was refitted), and
+  // the rest fitted again.
+  while (!taken.empty()) {
+    size_t worst = taken.size();
+    double worst_gain = 0;
+    for (size_t j = 0; j < taken.size(); ++j) {
+      apply_factor(r, taken[j], fits[j].F, true);
+      size_t n = 0;
+      double c0 = 0;
+      for (size_t k : taken[j].pairs) {
+        c0 += chi2(r.pairs[k], std::vector<C>(r.pairs[k].w.size(), 1.0));
+        n += r.pairs[k].w.size();
+      }
+      apply_factor(r, taken[j], fits[j].F, false);
+      const double s = std::max(1.0, fits[j].chi2 / double(std::max<size_t>(n, 1)));
+      const double gain = (c0 - fits[j].chi2) / s - fits[j].k * std::log(2.0 * double(n));
+      if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
+    }
+    if (worst_gain > 0) break;
+    apply_factor(r, taken[worst], fits[worst].F, true);
+    taken.erase(taken.begin() + long(worst));
+    fits.erase(fits.begin() + long(worst));
+    for (size_t j = 0; j < taken.size(); ++j) {
+      apply_factor(r, taken[j], fits[j].F, true);
+      fits[j] = fit_mode(r, taken[j]);
+      apply_factor(r, taken[j], fits[j].F, false);
+    }
+  }
+  // Each finding judged without its own factor on its pairs (the others in place).
+  for (size_t j = 0; j < taken.size(); ++j) {
+    apply_factor(r, taken[j], fits[j].F, true);
+    r.mode_findings.push_back(finding_of(r, taken[j], fits[j]));
+    apply_factor(r, taken[j], fits[j].F, false);
   }
 }
 

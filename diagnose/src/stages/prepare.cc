@@ -6,6 +6,7 @@
 
 #include "../causes/missing_path.h"
 #include "fralab/core/error.h"
+#include "fralab/core/pair_id.h"
 #include "stages.h"
 
 namespace fralab::diag {
@@ -14,10 +15,7 @@ namespace {
 bool is_actuator_pair(const std::string& e1, const std::string& e2) { return e1 == "u_" + e2; }
 
 // The input a pair's excitation drives: X of u_X:X, u_X:O or X:O.
-std::string input_of(const std::string& pair) {
-  const std::string e1 = split_pair(pair).first;
-  return e1.rfind("u_", 0) == 0 ? e1.substr(2) : e1;
-}
+std::string input_of(const std::string& pair) { return PairId::parse(pair).input; }
 
 }  // namespace
 

@@ -38,6 +38,26 @@ bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) {
 }
 
 // The finding of cause c at a scope, its parameters the mean of its members' (indices into raw).
+// Whether pc moves or re-damps a simulated pair that a mode finding (stage 3b) moved over pc's
+// pair.
+bool moved_as_mode(const DiagnosisRun& r, const PairCause& pc) {
+  const Cause& c = pc.c;
+  const char* key = c.cause == CauseKind::kPoleShift      ? "from_rad_s"
+                    : c.cause == CauseKind::kDampingError ? "wn_rad_s"
+                                                          : nullptr;
+  if (!key || !c.params.count(key)) return false;
+  const double wn = c.params.at(key);
+  const std::string& pair = r.pairs[pc.pair].pair;
+  for (const Finding& f : r.mode_findings) {
+    const double fw = f.parameters.count("from_rad_s") ? f.parameters.at("from_rad_s")
+                                                       : f.parameters.at("wn_rad_s");
+    if (std::abs(fw - wn) <= 1e-3 * fw &&
+        std::find(f.pairs.begin(), f.pairs.end(), pair) != f.pairs.end())
+      return true;
+  }
+  return false;
+}
+
 Finding make_finding(const DiagnosisRun& r, const Cause& c, Scope scope, const std::string& in,
                      const std::string& out, const std::vector<size_t>& members) {
   Finding f;
@@ -154,6 +174,8 @@ size_t path_findings_on(const std::vector<Finding>& fs, const std::string& q,
 }  // namespace
 
 void scope(DiagnosisRun& r) {
+  // A pair's own move of a root that the modes stage moved over the pair is that mode again.
+  std::erase_if(r.raw, [&](const PairCause& pc) { return moved_as_mode(r, pc); });
   std::vector<bool> used(r.raw.size(), false);
   r.findings = r.coupling_findings;
   r.findings.insert(r.findings.end(), r.path_findings.begin(), r.path_findings.end());
