@@ -17,10 +17,9 @@ using C = std::complex<double>;
 
 constexpr double kSameFrequency = 1e-6;  // relative
 
-// Per input, its multisine on `data` (the actuator curve's, else another curve of the input's),
-// as prepare finds it.
-std::map<std::string, MultisineExcitation> multisines(const std::vector<MeasuredPair>& data,
-                                                      bool validation) {
+// Per input, its multisine on the fitting curves of `data` (the actuator curve's, else another
+// curve of the input's), as prepare finds it.
+std::map<std::string, MultisineExcitation> multisines(const std::vector<MeasuredPair>& data) {
   std::map<std::string, MultisineExcitation> out;
   for (bool actuator : {true, false}) {
     for (const MeasuredPair& mp : data) {
@@ -28,8 +27,7 @@ std::map<std::string, MultisineExcitation> multisines(const std::vector<Measured
       if (id.actuator() != actuator) continue;
       const std::string& in = id.input;
       if (out.count(in)) continue;
-      if (auto ms = multisine_excitation(validation ? mp.validation : mp.frd))
-        out.emplace(in, std::move(*ms));
+      if (auto ms = multisine_excitation(mp.frd)) out.emplace(in, std::move(*ms));
     }
   }
   return out;
@@ -86,7 +84,7 @@ std::vector<MeasuredPair> relative_to_baseline(const Model& sim,
                                                const DiagnoseOptions& opt,
                                                BaselineSummary* summary) {
   BaselineSummary s;
-  const auto ms_base = multisines(baseline, false);
+  const auto ms_base = multisines(baseline);
   std::vector<MeasuredPair> out = data;
   for (MeasuredPair& mp : out) {
     const auto b = std::find_if(baseline.begin(), baseline.end(),

@@ -55,10 +55,6 @@ double relative_floor(const PoleSetFit& f, size_t c, const std::vector<double>& 
   return std::sqrt(r[r.size() / 2]);
 }
 
-}  // namespace
-
-namespace {
-
 // The curves' valid points on their one grid w, with their weights (1 / sigma^2, or the
 // estimated noise's; one level for all when unweighted), into r.curves. InputError naming the
 // source of a curve that is too short, off the first curve's grid, or without sigma or noise.
@@ -154,7 +150,8 @@ void figures(const CurveData& d, CommonPoleResult& r) {
       const C f = r.fit.at(c, d.w[i]);
       e += std::norm(f - d.g[c][i]);
       v += std::norm(d.g[c][i]);
-      l += std::norm(std::log(f / d.g[c][i]));
+      // A zero on either side has no finite log ratio; such a point counts as a ratio of e.
+      l += std::abs(f) > 0 && std::abs(d.g[c][i]) > 0 ? std::norm(std::log(f / d.g[c][i])) : 1.0;
     }
     r.curves[c].rms_error = std::sqrt(e / M);
     r.curves[c].rms_value = std::sqrt(v / M);

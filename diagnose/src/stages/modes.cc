@@ -380,16 +380,21 @@ void modes(DiagnosisRun& r) {
     size_t worst = taken.size();
     double worst_gain = 0;
     for (size_t j = 0; j < taken.size(); ++j) {
-      apply_factor(r, taken[j], fits[j].F, true);
+      // chi2 over its pairs with and without it, the others as they now are.
+      auto current = [&] {
+        double c = 0;
+        for (size_t k : taken[j].pairs)
+          c += chi2(r.pairs[k], std::vector<C>(r.pairs[k].w.size(), 1.0));
+        return c;
+      };
       size_t n = 0;
-      double c0 = 0;
-      for (size_t k : taken[j].pairs) {
-        c0 += chi2(r.pairs[k], std::vector<C>(r.pairs[k].w.size(), 1.0));
-        n += r.pairs[k].w.size();
-      }
+      for (size_t k : taken[j].pairs) n += r.pairs[k].w.size();
+      const double c_with = current();
+      apply_factor(r, taken[j], fits[j].F, true);
+      const double c0 = current();
       apply_factor(r, taken[j], fits[j].F, false);
-      const double s = std::max(1.0, fits[j].chi2 / double(std::max<size_t>(n, 1)));
-      const double gain = (c0 - fits[j].chi2) / s - fits[j].k * std::log(2.0 * double(n));
+      const double s = std::max(1.0, c_with / double(std::max<size_t>(n, 1)));
+      const double gain = (c0 - c_with) / s - fits[j].k * std::log(2.0 * double(n));
       if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
     }
     if (worst_gain > 0) break;
