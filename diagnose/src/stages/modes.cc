@@ -191,6 +191,28 @@ double chi2_moved(const DiagnosisRun& r, const SharedMode& m, const Root& to, bo
   return c;
 }
 
+// From (lwn, lz): the frequency and the damping alternately by Brent's method (the frequency
+// within the damping's share either side, the damping within a factor e^0.5), at most kRounds,
+// until both settle. Then the move at the simulated damping (`kept`, chi2 at lz0) is replaced by
+// the free one when the damping lowers chi2 by one penalty in units of the misfit level.
+MovedMode settle(const std::function<double(double, double)>& total, double lwn, double lz,
+                 const MovedMode& kept, size_t n, bool shape_kept) {
+  for (int round = 0; round < kRounds; ++round) {
+    const double lwn_was = lwn, lz_was = lz;
+    const double step = std::max(1e-4, std::exp(lz));
+    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
+                                kBrentBits);
+    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
+                               kBrentBits);
+    if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
+  }
+  const double c2 = total(lwn, lz);
+  const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
+  if ((kept.chi2 - c2) / s > std::log(2.0 * double(n)))
+    return {std::exp(lwn), std::exp(lz), c2, 2, {}, shape_kept};
+  return kept;
+}
+
 // The same move with each path's mode shape kept, from the factor's optimum (frequency and damping
 // alternately, as the factor's): it replaces `factor` when it has the lower chi2 (a structure's
 // mode moves with its shape, and its antiresonances with it).
@@ -204,20 +226,7 @@ MovedMode with_residues_kept(const DiagnosisRun& r, const SharedMode& m, const M
   lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
                               kBrentBits);
   MovedMode best{std::exp(lwn), m.root.zeta, total(lwn, lz), 1, {}, true};
-  lz = std::log(factor.zeta);
-  for (int round = 0; round < kRounds; ++round) {
-    const double lwn_was = lwn, lz_was = lz;
-    const double st = std::max(1e-4, std::exp(lz));
-    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - st, lwn + st,
-                                kBrentBits);
-    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
-                               kBrentBits);
-    if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
-  }
-  const double c2 = total(lwn, lz);
-  const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
-  if ((best.chi2 - c2) / s > std::log(2.0 * double(n)))
-    best = {std::exp(lwn), std::exp(lz), c2, 2, {}, true};
+  best = settle(total, lwn, std::log(factor.zeta), best, n, true);
   if (!(best.chi2 < factor.chi2)) return factor;
   best.F = residue_factors_to(r, m, Root::Pair(best.wn, best.zeta));
   return best;
@@ -233,23 +242,11 @@ MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
   double lwn = minimise_1d([&](double x) { return total(x, lz0); }, lw0 - kSearchRel,
                            lw0 + kSearchRel, grid);
   MovedMode best{std::exp(lwn), from.zeta, total(lwn, lz0), 1, {}};
-  double lz = minimise_1d([&](double x) { return total(lwn, x); }, lz0 - std::log(kZetaSpan),
-                          lz0 + std::log(kZetaSpan), 40);
-  for (int round = 0; round < kRounds; ++round) {
-    const double lwn_was = lwn, lz_was = lz;
-    const double step = std::max(1e-4, std::exp(lz));
-    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
-                                kBrentBits);
-    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
-                               kBrentBits);
-    if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
-  }
+  const double lz = minimise_1d([&](double x) { return total(lwn, x); }, lz0 - std::log(kZetaSpan),
+                                lz0 + std::log(kZetaSpan), 40);
   size_t n = 0;
   for (size_t k : m.pairs) n += r.pairs[k].w.size();
-  const double c2 = total(lwn, lz);
-  const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
-  if ((best.chi2 - c2) / s > std::log(2.0 * double(n)))
-    best = {std::exp(lwn), std::exp(lz), c2, 2, {}};
+  best = settle(total, lwn, lz, best, n, false);
   best.F = factors_to(r, m, Root::Pair(best.wn, best.zeta));
   return with_residues_kept(r, m, best, n);
 }
