@@ -188,7 +188,17 @@ CommonPoleResult fit_common_poles(const std::vector<Frd>& curves,
     }
   }
   figures(d, r);
+  r.w = std::move(d.w);
+  r.g = std::move(d.g);
   return r;
+}
+
+bool render_common_poles_diagram(const CommonPoleResult& r, const std::string& png) {
+  if (!r.diagram) return false;
+  std::vector<C> physical;
+  for (size_t k = 0; k < r.fit.poles.size(); ++k)
+    if (r.physical[k]) physical.push_back(r.fit.poles[k]);
+  return render_stabilisation_diagram(*r.diagram, physical, r.w, r.g, png);
 }
 
 Json common_poles_to_json(const CommonPoleResult& r) {

@@ -1,5 +1,6 @@
 // `fralab fit`: identification alone, a transfer function from frequency-response data (frd JSON,
 // CSV, TFNS card deck), with TFNS's root deletion and cross-plot.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -10,7 +11,6 @@
 #include "fralab/identify/common_poles.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/identify/readers.h"
-#include "fralab/identify/stabilisation.h"
 
 namespace fralab {
 
@@ -62,8 +62,7 @@ void run_common(const FitCommand& c) {
   o.relative_floor = !c.no_relative_floor;
   const CommonPoleResult r = fit_common_poles(curves, c.ins, o);
   json_save_file(c.out, common_poles_to_json(r));
-  int physical = 0;
-  for (bool p : r.physical) physical += p ? 1 : 0;
+  const auto physical = std::count(r.physical.begin(), r.physical.end(), true);
   std::printf("fralab: %zu curves -> %s: %s; rms error over all %.4g, rms |ln ratio| %.4g\n",
               c.ins.size(), c.out.c_str(), r.fit.message.c_str(), r.rms_total, r.rms_log_total);
   if (r.floor_taken)
@@ -73,7 +72,7 @@ void run_common(const FitCommand& c) {
     std::printf("  %s: rms error %.4g (%.3g of its rms), rms |ln ratio| %.4g\n", k.source.c_str(),
                 k.rms_error, k.rms_error / std::max(k.rms_value, 1e-300), k.rms_log_error);
   if (r.diagram)
-    std::printf("  %d physical modes (stabilisation diagram over %zu orders)\n", physical,
+    std::printf("  %td physical modes (stabilisation diagram over %zu orders)\n", physical,
                 r.diagram->rows.size());
   if (!c.model_out.empty()) {
     save_model(c.model_out, fitted_simulation(r, c.model_out));
@@ -83,17 +82,7 @@ void run_common(const FitCommand& c) {
   if (std::filesystem::path(c.plot).extension() != ".png")
     throw InputError("--plot " + c.plot + ": the stabilisation diagram is a PNG: name it *.png");
   if (!r.diagram) return;
-  std::vector<std::complex<double>> phys;
-  for (size_t k = 0; k < r.fit.poles.size(); ++k)
-    if (r.physical[k]) phys.push_back(r.fit.poles[k]);
-  std::vector<double> w;
-  std::vector<std::vector<std::complex<double>>> g(curves.size());
-  for (const FrdPoint& p : curves[0].points)
-    if (p.valid) w.push_back(p.w);
-  for (size_t i = 0; i < curves.size(); ++i)
-    for (const FrdPoint& p : curves[i].points)
-      if (p.valid) g[i].push_back(p.value());
-  if (!render_stabilisation_diagram(*r.diagram, phys, w, g, c.plot))
+  if (!render_common_poles_diagram(r, c.plot))
     throw InputError("--plot " + c.plot +
                      ": gnuplot is not installed or failed (data and script written beside it)");
   std::printf("  stabilisation diagram %s\n", c.plot.c_str());

@@ -143,52 +143,64 @@ struct MovedMode {
   bool residues_kept = false;  // the move keeps each path's mode shape (mode_residues.h)
 };
 
-// D_from / D_to of mode m moved to `to`, on each of its pairs.
-std::vector<std::vector<C>> factors_to(const DiagnosisRun& r, const SharedMode& m, const Root& to) {
-  std::vector<std::vector<C>> F;
-  for (size_t k : m.pairs)
-    F.push_back(factor_of(r.pairs[k].w, [&](C s) { return m.root.factor(s) / to.factor(s); }));
-  return F;
+// The mode's move to `to` at point q of its j-th pair: the factor D_from / D_to, or with the
+// path's mode shape kept (mode_residues.h; m.residue not empty).
+C move_factor(const SharedMode& m, size_t j, size_t q, double w, const Root& to, bool shape_kept) {
+  const C s(0, w);
+  return shape_kept ? residue_move_factor(m.rational[j][q], m.root, to, m.residue[j], s)
+                    : m.from_factor[j][q] / to.factor(s);
 }
 
-// The move with each path's mode shape kept (mode_residues.h), on each of the mode's pairs; empty
-// when a pair's path does not hold the mode as a simple pole (its sensor does, or it repeats).
-std::vector<std::vector<C>> residue_factors_to(const DiagnosisRun& r, const SharedMode& m,
-                                               const Root& to) {
-  if (m.residue.empty()) return {};
+// The move to `to` on each of the mode's pairs.
+std::vector<std::vector<C>> move_factors(const DiagnosisRun& r, const SharedMode& m, const Root& to,
+                                         bool shape_kept) {
   std::vector<std::vector<C>> F;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
     const PairFit& p = r.pairs[m.pairs[j]];
     std::vector<C> f(p.w.size());
-    for (size_t q = 0; q < p.w.size(); ++q)
-      f[q] = residue_move_factor(m.rational[j][q], m.root, to, m.residue[j], C(0, p.w[q]));
+    for (size_t q = 0; q < p.w.size(); ++q) f[q] = move_factor(m, j, q, p.w[q], to, shape_kept);
     F.push_back(std::move(f));
   }
   return F;
 }
 
-// chi2 over the mode's pairs with F on top of their factors.
-double chi2_with(const DiagnosisRun& r, const SharedMode& m, const std::vector<std::vector<C>>& F) {
+// chi2 over the mode's pairs with F on top of their factors (none: their factors as they are).
+double chi2_with(const DiagnosisRun& r, const SharedMode& m,
+                 const std::vector<std::vector<C>>& F = {}) {
   double c = 0;
-  for (size_t j = 0; j < m.pairs.size(); ++j) c += chi2(r.pairs[m.pairs[j]], F[j]);
+  for (size_t j = 0; j < m.pairs.size(); ++j) {
+    const PairFit& p = r.pairs[m.pairs[j]];
+    c += chi2(p, F.empty() ? std::vector<C>(p.w.size(), 1.0) : F[j]);
+  }
   return c;
 }
 
-// chi2 over the mode's pairs with the mode moved to `to` (the factor, or the shape kept), as
-// chi2_with of factors_to or residue_factors_to, without building the factors: the searches'
-// inner loop.
+// chi2 over the mode's pairs with the mode moved to `to`, as chi2_with of move_factors without
+// building them: the searches' inner loop.
 double chi2_moved(const DiagnosisRun& r, const SharedMode& m, const Root& to, bool shape_kept) {
   double c = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
     const PairFit& p = r.pairs[m.pairs[j]];
     for (size_t q = 0; q < p.w.size(); ++q) {
-      const C s(0, p.w[q]);
-      const C F = shape_kept ? residue_move_factor(m.rational[j][q], m.root, to, m.residue[j], s)
-                             : m.from_factor[j][q] / to.factor(s);
+      const C F = move_factor(m, j, q, p.w[q], to, shape_kept);
       c += std::norm((p.meas[q] - p.sim[q] * p.factor[q] * F) / p.sig[q]);
     }
   }
   return c;
+}
+
+// The points over the mode's pairs.
+size_t points_over(const DiagnosisRun& r, const SharedMode& m) {
+  size_t n = 0;
+  for (size_t k : m.pairs) n += r.pairs[k].w.size();
+  return n;
+}
+
+// The stage's criterion: by how much the drop of chi2 from c0 to c, over n points, exceeds k
+// penalties ln 2n, in units of the misfit level s = max(1, c / n) (> 0: the move earns its place).
+double earned(double c0, double c, size_t n, int k) {
+  const double s = std::max(1.0, c / double(std::max<size_t>(n, 1)));
+  return (c0 - c) / s - k * std::log(2.0 * double(n));
 }
 
 // From (lwn, lz): the frequency and the damping alternately by Brent's method (the frequency
@@ -207,9 +219,7 @@ MovedMode settle(const std::function<double(double, double)>& total, double lwn,
     if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
   }
   const double c2 = total(lwn, lz);
-  const double s = std::max(1.0, c2 / double(std::max<size_t>(n, 1)));
-  if ((kept.chi2 - c2) / s > std::log(2.0 * double(n)))
-    return {std::exp(lwn), std::exp(lz), c2, 2, {}, shape_kept};
+  if (earned(kept.chi2, c2, n, 1) > 0) return {std::exp(lwn), std::exp(lz), c2, 2, {}, shape_kept};
   return kept;
 }
 
@@ -219,7 +229,7 @@ MovedMode settle(const std::function<double(double, double)>& total, double lwn,
 MovedMode with_residues_kept(const DiagnosisRun& r, const SharedMode& m, const MovedMode& factor,
                              size_t n) {
   auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
-  if (residue_factors_to(r, m, m.root).empty()) return factor;
+  if (m.residue.empty()) return factor;
   auto total = [&](double lwn, double lz) { return chi2_moved(r, m, to(lwn, lz), true); };
   double lwn = std::log(factor.wn), lz = std::log(m.root.zeta);
   const double step = std::max(1e-4, m.root.zeta);
@@ -228,7 +238,7 @@ MovedMode with_residues_kept(const DiagnosisRun& r, const SharedMode& m, const M
   MovedMode best{std::exp(lwn), m.root.zeta, total(lwn, lz), 1, {}, true};
   best = settle(total, lwn, std::log(factor.zeta), best, n, true);
   if (!(best.chi2 < factor.chi2)) return factor;
-  best.F = residue_factors_to(r, m, Root::Pair(best.wn, best.zeta));
+  best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), true);
   return best;
 }
 
@@ -244,10 +254,9 @@ MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
   MovedMode best{std::exp(lwn), from.zeta, total(lwn, lz0), 1, {}};
   const double lz = minimise_1d([&](double x) { return total(lwn, x); }, lz0 - std::log(kZetaSpan),
                                 lz0 + std::log(kZetaSpan), 40);
-  size_t n = 0;
-  for (size_t k : m.pairs) n += r.pairs[k].w.size();
+  const size_t n = points_over(r, m);
   best = settle(total, lwn, lz, best, n, false);
-  best.F = factors_to(r, m, Root::Pair(best.wn, best.zeta));
+  best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), false);
   return with_residues_kept(r, m, best, n);
 }
 
@@ -267,10 +276,6 @@ double error_with(const DiagnosisRun& r, const SharedMode& m,
   return n ? std::sqrt(s / double(n)) : 0.0;
 }
 
-}  // namespace
-
-namespace {
-
 // F on (or, inverse, off) each of the mode's pairs' factors.
 void apply_factor(DiagnosisRun& r, const SharedMode& m, const std::vector<std::vector<C>>& F,
                   bool inverse) {
@@ -286,13 +291,9 @@ void apply_factor(DiagnosisRun& r, const SharedMode& m, const std::vector<std::v
 bool damping_only(const DiagnosisRun& r, const SharedMode& m, const MovedMode& f) {
   if (f.k < 2) return false;
   if (std::abs(f.wn / m.root.wn - 1) < kBandShare * m.root.zeta) return true;
-  const Root at_from = Root::Pair(m.root.wn, f.zeta);
-  const double c_from = chi2_with(
-      r, m, f.residues_kept ? residue_factors_to(r, m, at_from) : factors_to(r, m, at_from));
-  size_t n = 0;
-  for (size_t k : m.pairs) n += r.pairs[k].w.size();
-  const double s = std::max(1.0, f.chi2 / double(std::max<size_t>(n, 1)));
-  return (c_from - f.chi2) / s <= std::log(2.0 * double(n));
+  const double c_from =
+      chi2_with(r, m, move_factors(r, m, Root::Pair(m.root.wn, f.zeta), f.residues_kept));
+  return earned(c_from, f.chi2, points_over(r, m), 1) <= 0;
 }
 
 Finding finding_of(const DiagnosisRun& r, const SharedMode& m, const MovedMode& fit) {
@@ -335,15 +336,9 @@ void modes(DiagnosisRun& r) {
     for (size_t c = 0; c < left.size(); ++c) {
       if (!worth[c]) continue;
       const SharedMode& m = left[c];
-      double c0 = 0;
-      size_t n = 0;
-      for (size_t k : m.pairs) {
-        c0 += chi2(r.pairs[k], std::vector<C>(r.pairs[k].w.size(), 1.0));
-        n += r.pairs[k].w.size();
-      }
+      const double c0 = chi2_with(r, m);
       MovedMode f = fit_mode(r, m);
-      const double s = std::max(1.0, f.chi2 / double(std::max<size_t>(n, 1)));
-      const double gain = (c0 - f.chi2) / s - f.k * std::log(2.0 * double(n));
+      const double gain = earned(c0, f.chi2, points_over(r, m), f.k);
       worth[c] = gain > 0 && error_with(r, m, f.F) < error_with(r, m, {});
       if (worth[c] && gain > best_gain) best = c, best_fit = std::move(f), best_gain = gain;
     }
@@ -378,20 +373,11 @@ void modes(DiagnosisRun& r) {
     double worst_gain = 0;
     for (size_t j = 0; j < taken.size(); ++j) {
       // chi2 over its pairs with and without it, the others as they now are.
-      auto current = [&] {
-        double c = 0;
-        for (size_t k : taken[j].pairs)
-          c += chi2(r.pairs[k], std::vector<C>(r.pairs[k].w.size(), 1.0));
-        return c;
-      };
-      size_t n = 0;
-      for (size_t k : taken[j].pairs) n += r.pairs[k].w.size();
-      const double c_with = current();
+      const double c_with = chi2_with(r, taken[j]);
       apply_factor(r, taken[j], fits[j].F, true);
-      const double c0 = current();
+      const double c0 = chi2_with(r, taken[j]);
       apply_factor(r, taken[j], fits[j].F, false);
-      const double s = std::max(1.0, c_with / double(std::max<size_t>(n, 1)));
-      const double gain = (c0 - c_with) / s - fits[j].k * std::log(2.0 * double(n));
+      const double gain = earned(c0, c_with, points_over(r, taken[j]), fits[j].k);
       if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
     }
     if (worst_gain > 0) break;

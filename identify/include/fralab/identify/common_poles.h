@@ -69,6 +69,8 @@ struct CommonPoleResult {
   bool floor_taken = false;  // the pole set was fitted again with the relative floor
   std::string fit_against_sigma;  // that first fit's message, when it was
   std::optional<StabilisationDiagram> diagram;
+  std::vector<double> w;  // the grid fitted (the curves' valid points), rad/s
+  std::vector<std::vector<std::complex<double>>> g;  // [curve][point] the values fitted
   std::vector<bool> physical;    // per pole of fit.poles (empty without a diagram)
   std::vector<int> stable_rows;  // per pole: the diagram's rows that hold it
 };
@@ -86,5 +88,10 @@ CommonPoleResult fit_common_poles(const std::vector<Frd>& curves,
 
 /// docs/formats.md §25.
 Json common_poles_to_json(const CommonPoleResult& r);
+
+/// r's stabilisation diagram as a PNG (stabilisation.h's render_stabilisation_diagram: the
+/// physical poles as lines, the curves fitted beneath). false without a diagram, or when gnuplot
+/// is missing or fails.
+bool render_common_poles_diagram(const CommonPoleResult& r, const std::string& png);
 
 }  // namespace fralab
