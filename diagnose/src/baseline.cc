@@ -100,6 +100,8 @@ std::vector<MeasuredPair> relative_to_baseline(const Model& sim,
     mp.frd = relative(sim, mp.pair, mp.frd, b->frd, ms_base, opt, s);
     if (!mp.validation.points.empty())
       mp.validation = relative(sim, mp.pair, mp.validation, b->frd, ms_base, opt, s);
+    for (LevelCurve& lc : mp.levels)
+      if (!lc.frd.points.empty()) lc.frd = relative(sim, mp.pair, lc.frd, b->frd, ms_base, opt, s);
     ++s.pairs;
   }
   if (summary) *summary = s;

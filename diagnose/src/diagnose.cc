@@ -162,6 +162,22 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
 }
 
 namespace {
+// A parameter per level (diagnosis.json's level_dependence; formats.md).
+Json level_json(const LevelDependence& l) {
+  Json iv = Json::array();
+  for (const auto& x : l.intervals)
+    iv.push_back({std::isfinite(x[0]) ? Json(x[0]) : Json(nullptr),
+                  std::isfinite(x[1]) ? Json(x[1]) : Json(nullptr)});
+  Json j = {{"parameter", l.parameter},
+            {"levels", l.levels},
+            {"values", l.values},
+            {"intervals", iv},
+            {"slope", std::isfinite(l.slope) ? Json(l.slope) : Json(nullptr)},
+            {"apart", l.apart}};
+  if (std::isfinite(l.slope_sigma)) j["slope_sigma"] = l.slope_sigma;
+  return j;
+}
+
 // {"delay_s": [lo, hi]}, null for an unbounded side.
 Json intervals_json(const Finding& f) {
   Json j = Json::object();
@@ -240,16 +256,8 @@ Json diagnosis_to_json(const Diagnosis& d) {
                              {"intervals", intervals_json(f)}});
     if (f.tf) j["findings"].back()["tf"] = tf_to_json(*f.tf);
     if (f.level) {
-      Json iv = Json::array();
-      for (const auto& x : f.level->intervals)
-        iv.push_back({std::isfinite(x[0]) ? Json(x[0]) : Json(nullptr),
-                      std::isfinite(x[1]) ? Json(x[1]) : Json(nullptr)});
-      j["findings"].back()["level_dependence"] = {
-          {"parameter", f.level->parameter},
-          {"levels", f.level->levels},
-          {"values", f.level->values},
-          {"intervals", iv},
-          {"slope", std::isfinite(f.level->slope) ? Json(f.level->slope) : Json(nullptr)}};
+      Json& lj = j["findings"].back()["level_dependence"] = level_json(*f.level);
+      for (const LevelDependence& l : f.level_secondary) lj["secondary"].push_back(level_json(l));
     }
   }
   j["measurement_chain"] = chain_to_json(d.chain);

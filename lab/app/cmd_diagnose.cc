@@ -24,6 +24,13 @@ void add_diagnose_command(CLI::App& app) {
   c->add_option("--baseline", dc->baseline,
                 "a measure folder the simulation was fitted to or last agreed with: what differed "
                 "there is the simulation's own misfit; the findings are what changed since");
+  c->add_option("--levels", dc->levels,
+                "measure folders of the same pairs at further excitation levels: each finding's "
+                "parameters per level and their law (relative to --baseline when given)");
+  c->add_option("--level-values", dc->level_values,
+                "the levels of --measured and of each --levels folder, in that order, in your unit "
+                "(e.g. force rms in N); default: each measurement's median excitation amplitude")
+      ->delimiter(',');
   c->add_option("--out", dc->out)->required();
   c->add_flag("!--no-plots", dc->plots, "skip the gnuplot figures");
   c->add_flag("!--no-validation", dc->validation,

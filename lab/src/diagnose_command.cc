@@ -1,6 +1,7 @@
 #include "fralab/lab/diagnose_command.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -48,6 +49,48 @@ MeasuredFolder read_measured_folder(const std::string& dir) {
   return f;
 }
 
+namespace {
+
+// The further levels' curves attached to the measurement's pairs (MeasuredPair::levels, a pair a
+// level's folder lacks left empty there) and the levels given; diagnosis.json's `levels`
+// (null without --levels or --level-values).
+Json attach_levels(const DiagnoseCommand& c, std::vector<MeasuredPair>& data) {
+  if (!c.level_values.empty() && c.level_values.size() != 1 + c.levels.size())
+    throw InputError("--level-values: " + std::to_string(c.level_values.size()) +
+                     " values for " + std::to_string(1 + c.levels.size()) +
+                     " measurements (the measured one, then each of --levels)");
+  for (size_t k = 0; k < c.level_values.size(); ++k)
+    if (!(c.level_values[k] > 0) || !std::isfinite(c.level_values[k]))
+      throw InputError("--level-values: value " + std::to_string(k + 1) +
+                       " is not a positive number");
+  if (c.levels.empty() && c.level_values.empty()) return nullptr;
+  auto level_of = [&](size_t k) { return c.level_values.empty() ? 0.0 : c.level_values[k]; };
+  Json j = Json::array();
+  j.push_back({{"folder", c.measured.empty() ? std::string("(measured)") : c.measured},
+               {"level", c.level_values.empty() ? Json(nullptr) : Json(level_of(0))}});
+  for (MeasuredPair& mp : data) {
+    mp.level = level_of(0);
+    mp.levels.assign(c.levels.size(), LevelCurve{});
+  }
+  for (size_t k = 0; k < c.levels.size(); ++k) {
+    int matched = 0;
+    for (const MeasuredPair& lp : read_measured_folder(c.levels[k]).data)
+      for (MeasuredPair& mp : data)
+        if (mp.pair == lp.pair) {
+          mp.levels[k] = {level_of(k + 1), lp.frd};
+          ++matched;
+        }
+    if (matched == 0)
+      throw InputError("--levels " + c.levels[k] + ": none of the measured pairs is in it");
+    j.push_back({{"folder", c.levels[k]},
+                 {"level", c.level_values.empty() ? Json(nullptr) : Json(level_of(k + 1))},
+                 {"pairs", matched}});
+  }
+  return j;
+}
+
+}  // namespace
+
 DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   DiagnoseResult res;
   if (c.out.empty()) throw InputError("--out DIR is required");
@@ -88,6 +131,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   DiagnoseOptions opt;
   opt.chain = folder.chain;
   std::vector<MeasuredPair> data = folder.data;
+  const Json levels_json = attach_levels(c, data);
   Json baseline_json;
   if (!c.baseline.empty()) {
     BaselineSummary s;
@@ -104,6 +148,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   Diagnosis d = diagnose(sim, data, opt);
   Json dj = diagnosis_to_json(d);
   if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
+  if (!levels_json.is_null()) dj["levels"] = levels_json;
   json_save_file(c.out + "/diagnosis.json", dj);
   Model ext = d.extended;
   ext.name = sim.name + " + diagnosis";

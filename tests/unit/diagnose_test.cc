@@ -843,7 +843,7 @@ Diagnosis multisine_backlash(double width, double pole) {
   };
   const auto fit = run(1), val = run(2);
   std::vector<MeasuredPair> data;
-  for (size_t i = 0; i < fit.size(); ++i) data.push_back({fit[i].pair, fit[i], val[i]});
+  for (size_t i = 0; i < fit.size(); ++i) data.push_back({fit[i].pair, fit[i], val[i], 0, {}});
   return diagnose(simulation(), data);
 }
 

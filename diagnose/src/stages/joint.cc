@@ -45,7 +45,7 @@ std::vector<std::vector<size_t>> groups_of(const std::vector<Finding>& fs) {
 }  // namespace
 
 void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
-            const std::vector<const PairFit*>& pairs, size_t min_params) {
+            const std::vector<const PairFit*>& pairs, size_t min_params, ParameterSigmas* sigmas) {
   // The free parameters: each finding's primary one and those of its others the data resolve.
   struct Param {
     size_t finding;
@@ -96,7 +96,7 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
   if (!residuals(x, &res)) return;
   const double start = res.squaredNorm();
   double chi2 = start, lambda = 1e-3;
-  for (int it = 0; it < 50; ++it) {
+  auto jacobian = [&] {
     Eigen::MatrixXd J(res.size(), np);
     for (int k = 0; k < np; ++k) {
       Eigen::VectorXd xh = x, rh;
@@ -108,6 +108,10 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
       }
       J.col(k) = (rh - res) / h;
     }
+    return J;
+  };
+  for (int it = 0; it < 50; ++it) {
+    const Eigen::MatrixXd J = jacobian();
     const Eigen::MatrixXd A = J.transpose() * J;
     const Eigen::VectorXd g = J.transpose() * res;
     bool accepted = false;
@@ -130,6 +134,26 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
     if (!accepted) break;
   }
   if (chi2 < start) set_x(fs, x);
+  if (!sigmas) return;
+  if (!(chi2 < start)) {  // the start stands: the Jacobian there
+    x = Eigen::VectorXd(np);
+    for (int k = 0; k < np; ++k) {
+      const double v = fs[params[size_t(k)].finding].parameters.at(params[size_t(k)].key);
+      x(k) = params[size_t(k)].log ? std::log(v) : v;
+    }
+    if (!residuals(x, &res)) return;
+  }
+  const Eigen::MatrixXd J = jacobian();
+  const Eigen::MatrixXd A = J.transpose() * J;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
+  if (!lu.isInvertible()) return;
+  const Eigen::MatrixXd cov = lu.inverse();
+  // chi2 rises by `scale` at 1 sigma, as in the intervals of stage 6: chi2 per point, at least 1
+  // (a point is two residuals, its real and imaginary parts).
+  const double scale = std::max(1.0, res.squaredNorm() / (0.5 * double(res.size())));
+  for (int k = 0; k < np; ++k)
+    if (cov(k, k) > 0)
+      (*sigmas)[{params[size_t(k)].finding, params[size_t(k)].key}] = std::sqrt(cov(k, k) * scale);
 }
 
 void joint(DiagnosisRun& r) {

@@ -1,17 +1,20 @@
-// Stage 7b, level (docs/method/diagnosis.md, "The stages"): a finding whose parameter is not the
-// same at the validation measurement's level. With a validation measurement at another excitation
-// level (fralab's own is 1.5x the amplitude), each finding's primary parameter is fitted again on
-// the validation points of its pairs, every other finding in place (Brent's minimum of chi2 over
-// the parameter, Boost.Math; the findings that share pairs refitted in turn, a few rounds), with
-// its 1-sigma interval as stage 6 takes it. When the two values
-// lie apart by more than kApart times their sigmas combined, the finding is not one linear
-// cause: it is marked level-dependent, with the parameter per level and its slope
-// (Finding::level), and said so in its explanation. A level is the median excitation amplitude
-// of the points (peak, input units); data that do not give it compare as "fitting" and
-// "validation", without a slope.
+// Stage 7b, level (docs/method/diagnosis.md, "The stages"): a finding whose parameters are not
+// the same at every excitation level. Besides the fitting measurement there may be a validation
+// measurement at another level (fralab's own is 1.5x the amplitude) and further levels
+// (`fralab diagnose --levels`). On each, the findings' primary parameters and their fitted
+// secondary ones (a moved mode's damping) are fitted again together on the points of their pairs
+// (Levenberg-Marquardt, refine() of stage 5b), starting from the values at the nearest level
+// already fitted (the fitting measurement's first), with their linearised 1-sigma. When a value
+// lies apart from the fitting measurement's by more than kApart times their sigmas combined, the
+// finding is not one linear cause: it is marked level-dependent, with each parameter per level and
+// its slope (Finding::level, Finding::level_secondary; a weighted straight line, the law, for three
+// levels or more), and said so in its explanation. A level is the one the data give
+// (MeasuredPair::level, LevelCurve::level), else the median excitation amplitude of the points
+// (peak, input units); data that give neither compare as "fitting" and "validation", without a
+// slope.
 #include <algorithm>
-#include <boost/math/tools/minima.hpp>
 #include <cmath>
+#include <numeric>
 
 #include "stages.h"
 
@@ -19,7 +22,6 @@ namespace fralab::diag {
 namespace {
 
 constexpr double kApart = 3.0;  // sigmas: a level dependence is named beyond this
-constexpr int kRounds = 4;      // rounds of the refit on the validation data
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -35,103 +37,230 @@ double half_width(const std::array<double, 2>& iv, double v) {
   return 0.5 * (lo + hi);
 }
 
-// A finding's validation points: its pairs on the validation measurement, with the levels of the
-// fitting and the validation points.
-struct ValidationPoints {
-  std::vector<PairFit> pairs;
-  double level_fit = 0, level_val = 0;
-  size_t n = 0;
+// A measurement other than the fitting one: the validation one (k = -1) or further level k.
+struct OtherMeasurement {
+  int k = -1;
+  const std::map<std::string, MultisineExcitation>* multisines = nullptr;
+  const Frd& curve(const MeasuredPair& mp) const { return k < 0 ? mp.validation : mp.levels[k].frd; }
+  double given_level(const MeasuredPair& mp) const { return k < 0 ? 0.0 : mp.levels[k].level; }
 };
 
-ValidationPoints validation_points(const DiagnosisRun& r, const Finding& f) {
-  ValidationPoints v;
-  std::vector<double> amp_fit, amp_val;
+// A finding's points on one other measurement: its pairs there, with the levels of the fitting
+// and the other measurement.
+struct LevelPoints {
+  std::vector<PairFit> pairs;
+  double level_fit = 0, level_other = 0;
+};
+
+LevelPoints level_points(const DiagnosisRun& r, const Finding& f, const OtherMeasurement& m) {
+  LevelPoints v;
+  std::vector<double> amp_fit, amp_other;
+  double given_fit = 0, given_other = 0;
   for (const MeasuredPair& mp : r.data) {
     if (std::find(f.pairs.begin(), f.pairs.end(), mp.pair) == f.pairs.end()) continue;
+    if (m.k >= 0 && size_t(m.k) >= mp.levels.size()) continue;
+    if (mp.level > 0) given_fit = mp.level;
+    if (m.given_level(mp) > 0) given_other = m.given_level(mp);
     for (const auto& pt : mp.frd.points)
       if (usable(pt, r.opt)) amp_fit.push_back(pt.amplitude);
     PairFit p;
     p.pair = mp.pair;
-    add_points(r, p, mp.validation, true);
-    amp_val.insert(amp_val.end(), p.amp.begin(), p.amp.end());
-    if (p.w.size() >= 3) {
-      v.n += p.w.size();
-      v.pairs.push_back(std::move(p));
-    }
+    add_points(r, p, m.curve(mp), *m.multisines);
+    amp_other.insert(amp_other.end(), p.amp.begin(), p.amp.end());
+    if (p.w.size() >= 3) v.pairs.push_back(std::move(p));
   }
-  v.level_fit = median(amp_fit);
-  v.level_val = median(amp_val);
+  v.level_fit = given_fit > 0 ? given_fit : median(amp_fit);
+  v.level_other = given_other > 0 ? given_other : median(amp_other);
   return v;
+}
+
+// One parameter a finding is compared by: its key, whether it is fitted in its logarithm (as
+// refine() takes it), its fitted value and 1-sigma.
+struct Compared {
+  std::string key;
+  bool log = false;
+  double v_fit = 0, s_fit = NAN;
+};
+
+// The slope of values against levels and its 1-sigma: the difference quotient for two, the
+// weighted least-squares line for three or more (sigma scaled by sqrt(chi2 / dof) beyond 1).
+void fit_slope(LevelDependence& ld, const std::vector<double>& sigmas) {
+  const size_t n = ld.levels.size();
+  ld.slope = NAN;
+  ld.slope_sigma = NAN;
+  if (std::any_of(ld.levels.begin(), ld.levels.end(), [](double l) { return !(l > 0); })) return;
+  if (n == 2) {
+    ld.slope = (ld.values[1] - ld.values[0]) / (ld.levels[1] - ld.levels[0]);
+    return;
+  }
+  double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const double w = 1 / (sigmas[k] * sigmas[k]);
+    sw += w;
+    sx += w * ld.levels[k];
+    sy += w * ld.values[k];
+    sxx += w * ld.levels[k] * ld.levels[k];
+    sxy += w * ld.levels[k] * ld.values[k];
+  }
+  const double det = sw * sxx - sx * sx;
+  if (!(det > 0)) return;
+  ld.slope = (sw * sxy - sx * sy) / det;
+  const double intercept = (sy - ld.slope * sx) / sw;
+  double chi2 = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const double e = (ld.values[k] - intercept - ld.slope * ld.levels[k]) / sigmas[k];
+    chi2 += e * e;
+  }
+  ld.slope_sigma = std::sqrt(sw / det) * std::sqrt(std::max(1.0, chi2 / double(n - 2)));
 }
 
 }  // namespace
 
 void level(DiagnosisRun& r) {
   const size_t nf = r.findings.size();
-  // Per finding: its primary parameter, its validation points, whether it is compared.
-  std::vector<std::string> keys(nf);
-  std::vector<ValidationPoints> val(nf);
-  std::vector<bool> compared(nf, false);
+  // The other measurements: the validation one, then each further level.
+  std::vector<OtherMeasurement> others;
+  if (std::any_of(r.data.begin(), r.data.end(),
+                  [](const MeasuredPair& mp) { return !mp.validation.points.empty(); }))
+    others.push_back({-1, &r.ms_val});
+  for (size_t k = 0; k < r.ms_levels.size(); ++k) others.push_back({int(k), &r.ms_levels[k]});
+  // Per finding: the parameters it is compared by (the primary first), as refine() fits them.
+  std::vector<std::vector<Compared>> params(nf);
   for (size_t i = 0; i < nf; ++i) {
     const Finding& f = r.findings[i];
-    keys[i] = cause_unit(f.cause)->primary_parameter(f).key;
-    if (keys[i].empty() || !f.intervals.count(keys[i]) || !f.parameters.count(keys[i])) continue;
-    val[i] = validation_points(r, f);
-    const bool levels_known = val[i].level_fit > 0 && val[i].level_val > 0;
-    compared[i] = !val[i].pairs.empty() &&
-                  !(levels_known && std::abs(val[i].level_val / val[i].level_fit - 1) < 0.05);
+    const CauseUnit& unit = *cause_unit(f.cause);
+    const std::string key = unit.primary_parameter(f).key;
+    if (key.empty() || !f.intervals.count(key) || !f.parameters.count(key)) continue;
+    auto compared = [&](const std::string& k, bool log) {
+      const double v = f.parameters.at(k);
+      return Compared{k, log, v, half_width(f.intervals.at(k), v)};
+    };
+    params[i].push_back(compared(key, unit.interval_domain().positive && f.parameters.at(key) > 0));
+    for (const SecondaryParameter& sp : unit.secondary_parameters(f))
+      if (sp.fitted && f.intervals.count(sp.key) && f.parameters.count(sp.key) &&
+          f.parameters.at(sp.key) > 0)
+        params[i].push_back(compared(sp.key, true));
   }
-  std::vector<std::vector<const PairFit*>> val_pairs(nf);
-  for (size_t i = 0; i < nf; ++i)
-    for (const PairFit& p : val[i].pairs) val_pairs[i].push_back(&p);
-  // chi2 of finding i's validation points with the findings `fs`, i's parameter at v.
-  auto chi2_at = [&](std::vector<Finding> fs, size_t i, double v) {
-    fs[i].parameters[keys[i]] = v;
-    return chi2_of(r, extended_by(r, fs, fs.size()), val_pairs[i]);
+  // Per finding and other measurement: the values of its parameters there and their intervals.
+  struct AtLevel {
+    bool compared = false;
+    double level_fit = 0, level_other = 0;
+    std::vector<double> values;
+    std::vector<std::array<double, 2>> intervals;
   };
-  // Every compared finding's parameter refitted on the validation data together (findings that
-  // share pairs, as a pair's frequency and its gain, move together): rounds of Brent's minimum
-  // over each in turn. The search: a factor of 2 either way for a positive parameter, else 20
-  // sigmas (at least half the value) either way.
-  std::vector<Finding> at_val = r.findings;
-  for (int round = 0; round < kRounds; ++round)
+  std::vector<std::vector<AtLevel>> at(nf, std::vector<AtLevel>(others.size()));
+  std::vector<std::vector<LevelPoints>> pts(others.size(), std::vector<LevelPoints>(nf));
+  for (size_t m = 0; m < others.size(); ++m)
     for (size_t i = 0; i < nf; ++i) {
-      if (!compared[i]) continue;
-      const Finding& f = r.findings[i];
-      const IntervalDomain domain = cause_unit(f.cause)->interval_domain();
-      const double v_fit = f.parameters.at(keys[i]);
-      const double s_fit = half_width(f.intervals.at(keys[i]), v_fit);
-      const double reach =
-          std::max(20 * (std::isfinite(s_fit) ? s_fit : 0.0), 0.5 * std::abs(v_fit));
-      const double lo = domain.positive ? v_fit / 2 : v_fit - std::max(reach, domain.floor);
-      const double hi = domain.positive ? v_fit * 2 : v_fit + std::max(reach, domain.floor);
-      boost::uintmax_t iters = 200;
-      at_val[i].parameters[keys[i]] =
-          boost::math::tools::brent_find_minima([&](double v) { return chi2_at(at_val, i, v); }, lo,
-                                                hi, 40, iters)
-              .first;
+      if (params[i].empty()) continue;
+      pts[m][i] = level_points(r, r.findings[i], others[m]);
+      const LevelPoints& v = pts[m][i];
+      const bool levels_known = v.level_fit > 0 && v.level_other > 0;
+      at[i][m].compared = !v.pairs.empty() &&
+                          !(levels_known && std::abs(v.level_other / v.level_fit - 1) < 0.05);
+      at[i][m].level_fit = v.level_fit;
+      at[i][m].level_other = v.level_other;
     }
+  // A measurement's level (the first compared finding's view of it; 0 unknown).
+  auto level_of = [&](size_t m, bool other) {
+    for (size_t i = 0; i < nf; ++i)
+      if (at[i][m].compared) return other ? at[i][m].level_other : at[i][m].level_fit;
+    return 0.0;
+  };
+  // The order: nearest the fitting measurement's level first (as given where a level is unknown),
+  // each started from the values at the nearest level already fitted.
+  std::vector<size_t> order(others.size());
+  std::iota(order.begin(), order.end(), 0);
+  auto distance = [&](double a, double b) {
+    return a > 0 && b > 0 ? std::abs(std::log(a / b)) : INFINITY;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return distance(level_of(a, true), level_of(a, false)) <
+           distance(level_of(b, true), level_of(b, false));
+  });
+  std::vector<std::vector<Finding>> fitted(others.size());
+  std::vector<size_t> done;
+  for (size_t m : order) {
+    std::vector<Finding> fs = r.findings;
+    double nearest = distance(level_of(m, true), level_of(m, false));
+    for (size_t d : done)
+      if (const double x = distance(level_of(m, true), level_of(d, true)); x < nearest) {
+        nearest = x;
+        fs = fitted[d];
+      }
+    std::vector<size_t> group;
+    std::vector<std::string> pair_names;
+    for (size_t i = 0; i < nf; ++i) {
+      if (!at[i][m].compared) continue;
+      group.push_back(i);
+      for (const PairFit& p : pts[m][i].pairs)
+        if (std::find(pair_names.begin(), pair_names.end(), p.pair) == pair_names.end())
+          pair_names.push_back(p.pair);
+    }
+    if (group.empty()) continue;
+    // The points of every pair a compared finding explains, once each.
+    std::vector<const PairFit*> pairs;
+    for (const std::string& name : pair_names)
+      for (size_t i : group) {
+        const auto it = std::find_if(pts[m][i].pairs.begin(), pts[m][i].pairs.end(),
+                                     [&](const PairFit& p) { return p.pair == name; });
+        if (it == pts[m][i].pairs.end()) continue;
+        pairs.push_back(&*it);
+        break;
+      }
+    ParameterSigmas sigmas;
+    refine(r, fs, group, pairs, 1, &sigmas);
+    for (size_t i : group)
+      for (const Compared& c : params[i]) {
+        const double v = fs[i].parameters.at(c.key);
+        const auto s = sigmas.find({i, c.key});
+        const double sg = s == sigmas.end() ? INFINITY : s->second;
+        at[i][m].values.push_back(v);
+        at[i][m].intervals.push_back(c.log ? std::array<double, 2>{v * std::exp(-sg), v * std::exp(sg)}
+                                           : std::array<double, 2>{v - sg, v + sg});
+      }
+    fitted[m] = std::move(fs);
+    done.push_back(m);
+  }
+  // Per finding: each parameter's values by level; level-dependent when one lies apart.
   for (size_t i = 0; i < nf; ++i) {
-    if (!compared[i]) continue;
     Finding& f = r.findings[i];
-    const double v_fit = f.parameters.at(keys[i]), v_val = at_val[i].parameters.at(keys[i]);
-    const double c_min = chi2_at(at_val, i, v_val);
-    const double s = std::max(1.0, c_min / double(val[i].n));
-    const auto iv_val =
-        parameter_interval([&](double v) { return chi2_at(at_val, i, v) - (c_min + s); }, v_val,
-                           cause_unit(f.cause)->interval_domain());
-    const double s_fit = half_width(f.intervals.at(keys[i]), v_fit);
-    const double s_val = half_width(iv_val, v_val);
-    if (!std::isfinite(s_fit) || !std::isfinite(s_val)) continue;
-    if (std::abs(v_val - v_fit) <= kApart * std::hypot(s_fit, s_val)) continue;
-    const bool levels_known = val[i].level_fit > 0 && val[i].level_val > 0;
-    LevelDependence ld;
-    ld.parameter = keys[i];
-    ld.levels = {val[i].level_fit, val[i].level_val};
-    ld.values = {v_fit, v_val};
-    ld.intervals = {f.intervals.at(keys[i]), iv_val};
-    ld.slope = levels_known ? (v_val - v_fit) / (val[i].level_val - val[i].level_fit) : NAN;
-    f.level = ld;
+    std::vector<LevelDependence> lds;
+    bool any_apart = false;
+    for (size_t q = 0; q < params[i].size(); ++q) {
+      const Compared& c = params[i][q];
+      if (!std::isfinite(c.s_fit)) break;
+      LevelDependence ld;
+      ld.parameter = c.key;
+      ld.apart = false;
+      std::vector<double> sigmas = {c.s_fit};
+      bool first = true;
+      for (size_t m = 0; m < others.size(); ++m) {
+        const AtLevel& a = at[i][m];
+        if (!a.compared) continue;
+        const double s_other = half_width(a.intervals[q], a.values[q]);
+        if (!std::isfinite(s_other)) continue;
+        if (first) {
+          ld.levels.push_back(a.level_fit);
+          ld.values.push_back(c.v_fit);
+          ld.intervals.push_back(f.intervals.at(c.key));
+          first = false;
+        }
+        ld.levels.push_back(a.level_other);
+        ld.values.push_back(a.values[q]);
+        ld.intervals.push_back(a.intervals[q]);
+        sigmas.push_back(s_other);
+        if (std::abs(a.values[q] - c.v_fit) > kApart * std::hypot(c.s_fit, s_other))
+          ld.apart = true;
+      }
+      if (ld.values.size() < 2) break;  // the primary (or this one) not compared
+      fit_slope(ld, sigmas);
+      any_apart = any_apart || ld.apart;
+      lds.push_back(std::move(ld));
+    }
+    if (!any_apart) continue;
+    f.level = lds[0];
+    f.level_secondary.assign(lds.begin() + 1, lds.end());
   }
 }
 

@@ -19,18 +19,31 @@ std::string input_of(const std::string& pair) { return PairId::parse(pair).input
 
 }  // namespace
 
-const MultisineExcitation* multisine_of(const DiagnosisRun& r, const std::string& pair,
-                                        double line_amplitude, bool validation) {
+namespace {
+
+const MultisineExcitation* multisine_in(const std::map<std::string, MultisineExcitation>& set,
+                                        const std::string& pair, double line_amplitude) {
   if (!(line_amplitude > 0)) return nullptr;
-  auto& set = validation ? r.ms_val : r.ms_fit;
   auto it = set.find(input_of(pair));
   return it == set.end() ? nullptr : &it->second;
 }
 
+}  // namespace
+
+const MultisineExcitation* multisine_of(const DiagnosisRun& r, const std::string& pair,
+                                        double line_amplitude, bool validation) {
+  return multisine_in(validation ? r.ms_val : r.ms_fit, pair, line_amplitude);
+}
+
 void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve, bool validation) {
+  add_points(r, p, curve, validation ? r.ms_val : r.ms_fit);
+}
+
+void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve,
+                const std::map<std::string, MultisineExcitation>& multisines) {
   for (const auto& pt : curve.points) {
     if (!usable(pt, r.opt)) continue;
-    const MultisineExcitation* ms = multisine_of(r, p.pair, pt.line_amplitude, validation);
+    const MultisineExcitation* ms = multisine_in(multisines, p.pair, pt.line_amplitude);
     const auto s = model_pair_response(r.sim, p.pair, pt.w, pt.amplitude, r.opt.chain, ms);
     if (!s || std::abs(*s) == 0) continue;
     add_point(p, pt, *s, r.opt);
@@ -52,6 +65,11 @@ void prepare(DiagnosisRun& r) {
         if (auto ms = multisine_excitation(mp.frd)) r.ms_fit.emplace(in, std::move(*ms));
       if (!r.ms_val.count(in))
         if (auto ms = multisine_excitation(mp.validation)) r.ms_val.emplace(in, std::move(*ms));
+      if (r.ms_levels.size() < mp.levels.size()) r.ms_levels.resize(mp.levels.size());
+      for (size_t k = 0; k < mp.levels.size(); ++k)
+        if (!r.ms_levels[k].count(in))
+          if (auto ms = multisine_excitation(mp.levels[k].frd))
+            r.ms_levels[k].emplace(in, std::move(*ms));
     }
   // The pairs the simulation can speak to (and those it has no path for).
   for (const auto& mp : r.data) {

@@ -38,6 +38,8 @@ struct DiagnosisRun {
   // prepare: per input excited by a multisine, its lines on the fitting (ms_fit) and the
   // validation (ms_val) measurement.
   std::map<std::string, MultisineExcitation> ms_fit, ms_val;
+  // prepare: the same for each further level (MeasuredPair::levels[k]).
+  std::vector<std::map<std::string, MultisineExcitation>> ms_levels;
   // prepare: the pairs the simulation can speak to (fit_causes extends their factor, and a
   // multisine actuator curve's sigma_eff), those it has no path for, and `pairs` as prepared
   // (fit_causes then copies the final sigma_eff into it; every later chi2 weighs by it).
@@ -91,6 +93,10 @@ double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const Pa
 /// with the simulation's response there and the multisine it was measured by; a point where the
 /// simulation gives no response, or zero, is left out.
 void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve, bool validation);
+/// The same with the multisines of the measurement `curve` belongs to (ms_fit, ms_val or one of
+/// ms_levels).
+void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve,
+                const std::map<std::string, MultisineExcitation>& multisines);
 
 /// The error metric of one pair under a response function (no response: the point counts as 0).
 double pair_error(const std::vector<double>& w, const std::vector<C>& meas,
@@ -123,9 +129,15 @@ void joint(DiagnosisRun& r);
 /// The parameters of the findings fs[group] (each primary one, and those besides it the data
 /// resolve) refined together by Levenberg-Marquardt on chi2 over `pairs`, every other finding of
 /// fs in place; left as they were when that does not lower chi2 or there are fewer than
-/// min_params (joint.cc).
+/// min_params (joint.cc). With `sigmas`: each parameter's linearised 1-sigma at the end, keyed
+/// (finding, parameter key): where chi2 rises by max(1, chi2 per point) as in stage 6's
+/// intervals, the others free: sqrt(diag((J^T J)^-1) max(1, chi2 per point)), J the weighted
+/// residuals' Jacobian there; for a parameter fitted in its logarithm (a positive scale) the
+/// sigma of its logarithm.
+using ParameterSigmas = std::map<std::pair<size_t, std::string>, double>;
 void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
-            const std::vector<const PairFit*>& pairs, size_t min_params);
+            const std::vector<const PairFit*>& pairs, size_t min_params,
+            ParameterSigmas* sigmas = nullptr);
 /// 5c. After 5b, path findings of one cause now consistent over every pair of a scope (the plant,
 /// an output, an input) become one finding there; true when any did (scope.cc).
 bool regroup(DiagnosisRun& r);

@@ -21,14 +21,27 @@ std::string explain(const Finding& f) {
               : "; common to every path from " + f.input + ": its actuator or calibration";
   if (f.scope == Scope::kPlant) ex += "; common to every path: a plant state";
   if (f.level) {
-    const LevelDependence& l = *f.level;
-    auto at = [&](size_t k) {
-      return fmt(l.values[k]) +
-             (l.levels[k] > 0 ? " at level " + fmt(l.levels[k])
-                              : std::string(k ? " on the validation data" : " on the data fitted"));
+    // Each parameter whose values lie apart: its value per level and its slope (with three levels
+    // or more, the line's, with its sigma and as a share of the value per 10 units of level).
+    auto said = [&](const LevelDependence& l) {
+      auto at = [&](size_t k) {
+        return fmt(l.values[k]) + (l.levels[k] > 0 ? " at level " + fmt(l.levels[k])
+                                                   : std::string(k ? " on the validation data"
+                                                                   : " on the data fitted"));
+      };
+      std::string s = l.parameter + " " + at(0);
+      for (size_t k = 1; k < l.values.size(); ++k) s += ", " + at(k);
+      if (std::isfinite(l.slope_sigma))
+        s += " (slope " + fmt(l.slope) + " +- " + fmt(l.slope_sigma) + " per unit of level, " +
+             fmt(100 * 10 * l.slope / l.values[0]) + " % per 10 units)";
+      else if (std::isfinite(l.slope))
+        s += " (slope " + fmt(l.slope) + " per unit of level)";
+      return s;
     };
-    ex += "; level-dependent, not one linear value: " + l.parameter + " " + at(0) + ", " + at(1) +
-          (std::isfinite(l.slope) ? " (slope " + fmt(l.slope) + " per unit of level)" : "");
+    std::string parts = f.level->apart ? said(*f.level) : "";
+    for (const LevelDependence& l : f.level_secondary)
+      if (l.apart) parts += (parts.empty() ? "" : "; ") + said(l);
+    ex += "; level-dependent, not one linear value: " + parts;
   }
   return ex;
 }

@@ -26,7 +26,8 @@ struct BaselineSummary {
   std::vector<std::string> without;  // measured pairs the baseline lacks (left as measured)
 };
 
-/// The data relative to `baseline` (the fitting curves, and the validation curves when present),
+/// The data relative to `baseline` (the fitting curves, and the validation and further level
+/// curves when present),
 /// a pair the simulation has no response for left as measured. A point whose frequency the
 /// baseline's curve lacks, or whose baseline point is invalid or without sigma, is kept as
 /// invalid with a note saying so (nothing recorded is dropped). InputError naming the pair when

@@ -78,6 +78,7 @@
 
 #include <array>
 #include <complex>
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
@@ -162,21 +163,40 @@ struct MultisineExcitation {
 /// lines no such period holds within kMaxMultisineLine harmonics (such a curve is taken as sines').
 std::optional<MultisineExcitation> multisine_excitation(const Frd& curve);
 
+/// The pair measured at a further excitation level (`fralab diagnose --levels`), beside the
+/// fitting and validation measurements: stage 7b refits each finding there. level: in the user's
+/// unit (a force rms in N, an amplitude); 0: the points' median excitation amplitude (peak, input
+/// units).
+struct LevelCurve {
+  double level = 0;
+  Frd frd;  // may be empty (the pair not measured at that level)
+};
+
 struct MeasuredPair {
   std::string pair;  // "X:O" (position-relative) or "u_X:X" (actuator)
   Frd frd;           // the measurement used for fitting
   Frd validation;    // an independent measurement (other seed or amplitude); may be empty
+  double level = 0;  // frd's level, as LevelCurve::level (0: from its points)
+  /// levels[k] of every pair is the k-th further measurement (the same length for every pair).
+  std::vector<LevelCurve> levels;
 };
 
-/// A finding whose parameter differs between two excitation levels beyond its sigmas (the
-/// fitting measurement and the validation one, stage 7b): not one linear cause. levels: the
-/// median excitation amplitude of each (peak, input units; 0 unknown), values and 1-sigma
-/// intervals of the parameter at each, slope d value / d level (NaN when a level is unknown).
+/// A finding whose parameter differs between excitation levels beyond its sigmas (the fitting
+/// measurement, the validation one and any further levels, stage 7b): not one linear cause.
+/// levels: each measurement's level (LevelCurve::level; 0 unknown), the fitting one first, then
+/// the validation one, then the further levels in their order; values and 1-sigma intervals of the
+/// parameter at each. slope: d value / d level, the two values' difference over the levels' for
+/// two levels, the weighted least-squares line (weights 1 / sigma^2) for three or more; NaN when a
+/// level is unknown. slope_sigma: the line's slope's 1-sigma (scaled by sqrt(chi2 / dof) when the
+/// line misfits beyond the sigmas), NaN for two levels. apart: the values lie apart beyond
+/// kApart (3) sigmas combined.
 struct LevelDependence {
   std::string parameter;
   std::vector<double> levels, values;
   std::vector<std::array<double, 2>> intervals;
   double slope = 0;
+  double slope_sigma = NAN;
+  bool apart = true;
 };
 
 struct Finding {
@@ -194,8 +214,11 @@ struct Finding {
   /// missing_path: the path fitted (the extended model's new path; its gain follows
   /// parameters["gain"]).
   std::optional<Tf> tf;
-  /// Set when the parameter depends on the level (see LevelDependence).
+  /// Set when the primary parameter, or a fitted secondary one (a moved mode's damping), depends
+  /// on the level (see LevelDependence): `level` is the primary's, `level_secondary` the fitted
+  /// secondaries' at the same levels.
   std::optional<LevelDependence> level;
+  std::vector<LevelDependence> level_secondary;
 };
 
 struct PairReport {  // per pair, for the report

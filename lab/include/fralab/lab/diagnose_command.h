@@ -19,6 +19,12 @@ struct DiagnoseCommand {
   /// A measure folder the simulation was fitted to or last agreed with: the measurement is
   /// diagnosed relative to it (diagnose/baseline.h); "" none.
   std::string baseline;
+  /// Measure folders of the same pairs at further excitation levels (stage 7b refits each finding
+  /// on each: its parameters per level and their law).
+  std::vector<std::string> levels;
+  /// The levels of `measured` and of each of `levels`, in that order, in the user's unit (a force
+  /// rms in N, an amplitude); empty: each measurement's median excitation amplitude.
+  std::vector<double> level_values;
   std::string out;
   MeasureOptions measure;  // flags of `measure`
   bool plots = true;
