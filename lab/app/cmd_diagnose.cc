@@ -16,7 +16,8 @@ void add_diagnose_command(CLI::App& app) {
   auto* c =
       app.add_subcommand("diagnose", "what the simulation gets wrong, why, and the extended model");
   c->add_option("--simulation", dc->simulation,
-                "the simulation (fralab-model/1 file or embedded name)")
+                "the simulation (a fralab-model/1 or fralab-ss/1 file, a state model .mat, or an "
+                "embedded name)")
       ->required();
   c->add_option("--engine", dc->engine,
                 "measure this engine model first (every flag of measure applies)");

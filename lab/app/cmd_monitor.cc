@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "fralab/diagnose/diagnose.h"
+#include "fralab/lab/envelope.h"
 #include "fralab/lab/monitor.h"
 #include "fralab/lcm/channels.h"
 #include "fralab/lcm/codec.h"
@@ -31,7 +32,7 @@ struct MonitorCommand {
 
 void run(const MonitorCommand& c) {
   std::optional<Model> sim;
-  if (!c.simulation.empty()) sim = load_model_or_embedded(c.simulation);
+  if (!c.simulation.empty()) sim = load_model_or_scheduled(c.simulation);
   std::cout << c.pair << (sim ? " against " + sim->name : std::string()) << "\n"
             << monitor_header(bool(sim)) << "\n";
   // By w and validity: a point is printed once (a step repeated after a refused point, e.g. a

@@ -1,3 +1,4 @@
+#include "fralab/exchange/state_space_mat.h"
 #include "fralab/lab/envelope.h"
 
 #include <Eigen/Dense>
@@ -817,6 +818,8 @@ Model scheduled_model_at(const std::string& file, double x) {
 }
 
 Model load_model_or_scheduled(const std::string& spec) {
+  if (fs::is_regular_file(spec))
+    if (const auto doc = state_space_document_if_mat(spec)) return parse_model(*doc, spec);
   if (!fs::exists(spec))
     if (const auto at = parse_model_at(spec); at && fs::is_regular_file(at->set)) {
       const Json j = json_load_file(at->set);

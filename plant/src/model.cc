@@ -2,6 +2,8 @@
 
 #include <set>
 
+#include "fralab/plant/state_space.h"
+
 namespace fralab {
 
 std::string unit_kind(const std::string& u) {
@@ -95,6 +97,8 @@ static NonlinearitySpec nonlinearity_from_json(const Json& j, const JsonWhere& w
 Model parse_model(const Json& doc, const std::string& source) {
   JsonWhere root{source, ""};
   json_require_object(doc, root);
+  if (doc.contains("format") && doc["format"] == kStateSpaceFormat)
+    return parse_state_space_model(doc, source);
   Model m;
   m.source = source;
   auto* warn = &m.warnings;

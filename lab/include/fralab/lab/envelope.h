@@ -203,8 +203,9 @@ inline constexpr const char* kScheduledModelFormat = "fralab-scheduled-model/1";
 /// InputError naming the file and key, or x outside the points' range.
 Model scheduled_model_at(const std::string& file, double x);
 
-/// A model spec as load_model_or_embedded reads it, and also "FILE@X" for a scheduled extended
-/// model FILE: what `--engine` and `--simulation` accept.
+/// A model spec as load_model_or_embedded reads it (a fralab-model/1 or fralab-ss/1 file, an
+/// embedded name), and also "FILE@X" for a scheduled extended model FILE and a state model in a
+/// .mat file (exchange/state_space_mat.h): what `--engine` and `--simulation` accept.
 Model load_model_or_scheduled(const std::string& spec);
 
 /// Leave-one-out over the points' folders under `dir` (each with its extended_model.json and

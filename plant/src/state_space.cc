@@ -1,0 +1,287 @@
+#include "fralab/plant/state_space.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <set>
+
+#include "fralab/core/error.h"
+
+namespace fralab {
+namespace {
+
+using Cd = std::complex<double>;
+
+constexpr double kCancel = 1e-7;   // a zero within this of a pole (relative, at least 1) cancels
+constexpr double kImag = 1e-9;     // a root with |imag| below this (relative) is real
+constexpr double kAgree = 1e-6;    // the path's factored response agrees with C(sI-A)^-1 B + D
+
+std::string size_str(const Eigen::MatrixXd& m) {
+  return std::to_string(m.rows()) + " x " + std::to_string(m.cols());
+}
+
+// Roots (each complex pair given once, by its member with positive imaginary part, or both) as
+// fralab's factors: real roots and (wn, zeta) pairs.
+std::vector<Root> as_roots(const std::vector<Cd>& r) {
+  std::vector<Root> out;
+  for (const Cd& z : r) {
+    const double scale = std::max(1.0, std::abs(z));
+    if (std::abs(z.imag()) <= kImag * scale)
+      out.push_back(Root::Real(z.real()));
+    else if (z.imag() > 0)
+      out.push_back(Root::Pair(std::abs(z), -z.real() / std::abs(z)));
+  }
+  return out;
+}
+
+Cd response(const StateSpace& ss, int i, int j, Cd s) {
+  const Eigen::Index n = ss.A.rows();
+  const Eigen::MatrixXcd M = s * Eigen::MatrixXcd::Identity(n, n) - ss.A.cast<Cd>();
+  const Eigen::VectorXcd x = M.partialPivLu().solve(ss.B.col(j).cast<Cd>());
+  return (ss.C.row(i).cast<Cd>() * x)(0) + ss.D(i, j);
+}
+
+Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string& key,
+                       bool optional_empty) {
+  if (!doc.contains(key)) {
+    if (optional_empty) return Eigen::MatrixXd(0, 0);
+    json_fail(root / key, "missing: the state model's " + key + " matrix (an array of rows)");
+  }
+  const JsonWhere w = root / key;
+  const Json& rows = doc[key];
+  if (!rows.is_array()) json_fail(w, "must be an array of rows");
+  if (rows.empty()) return Eigen::MatrixXd(0, 0);
+  const size_t cols = rows[0].is_array() ? rows[0].size() : 0;
+  Eigen::MatrixXd m(Eigen::Index(rows.size()), Eigen::Index(cols));
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (!rows[r].is_array() || rows[r].size() != cols)
+      json_fail(w / r, "every row must be an array of " + std::to_string(cols) + " numbers");
+    for (size_t c = 0; c < cols; ++c) m(Eigen::Index(r), Eigen::Index(c)) = json_number(rows[r][c], w / r / c);
+  }
+  return m;
+}
+
+}  // namespace
+
+void StateSpace::validate(const std::string& source) const {
+  const Eigen::Index n = A.rows(), m = Eigen::Index(inputs.size()), p = Eigen::Index(outputs.size());
+  auto fail = [&](const std::string& what) { throw InputError(source + ": " + what); };
+  if (n == 0) fail("A: no states");
+  if (A.cols() != n) fail("A is " + size_str(A) + ": it must be square");
+  if (Eigen::Index(states.size()) != n)
+    fail(std::to_string(states.size()) + " state names for " + std::to_string(n) + " states (A)");
+  if (m == 0) fail("no inputs");
+  if (p == 0) fail("no outputs");
+  if (B.rows() != n || B.cols() != m)
+    fail("B is " + size_str(B) + ", expected " + std::to_string(n) + " x " + std::to_string(m) +
+         " (states x inputs)");
+  if (C.rows() != p || C.cols() != n)
+    fail("C is " + size_str(C) + ", expected " + std::to_string(p) + " x " + std::to_string(n) +
+         " (outputs x states)");
+  if (D.size() != 0 && (D.rows() != p || D.cols() != m))
+    fail("D is " + size_str(D) + ", expected " + std::to_string(p) + " x " + std::to_string(m) +
+         " (outputs x inputs)");
+  for (const auto& [name, mat] : {std::pair<const char*, const Eigen::MatrixXd*>{"A", &A},
+                                  {"B", &B},
+                                  {"C", &C},
+                                  {"D", &D}})
+    for (Eigen::Index r = 0; r < mat->rows(); ++r)
+      for (Eigen::Index c = 0; c < mat->cols(); ++c)
+        if (!std::isfinite((*mat)(r, c)))
+          fail(std::string(name) + "(" + std::to_string(r + 1) + ", " + std::to_string(c + 1) +
+               ") is not a finite number");
+  std::set<std::string> seen;
+  for (const auto* names : {&states, &inputs, &outputs})
+    for (const std::string& s : *names) {
+      if (s.empty()) fail("a state, input or output name is empty");
+      if (!seen.insert(s).second) fail("the name \"" + s + "\" is given twice");
+    }
+  if (!input_delay_s.empty() && input_delay_s.size() != inputs.size())
+    fail(std::to_string(input_delay_s.size()) + " input delays for " +
+         std::to_string(inputs.size()) + " inputs");
+  if (!output_delay_s.empty() && output_delay_s.size() != outputs.size())
+    fail(std::to_string(output_delay_s.size()) + " output delays for " +
+         std::to_string(outputs.size()) + " outputs");
+  if (path_delay_s.size() != 0 && (path_delay_s.rows() != p || path_delay_s.cols() != m))
+    fail("delay_s is " + size_str(path_delay_s) + ", expected " + std::to_string(p) + " x " +
+         std::to_string(m) + " (outputs x inputs)");
+  std::vector<double> all(input_delay_s);
+  all.insert(all.end(), output_delay_s.begin(), output_delay_s.end());
+  all.insert(all.end(), path_delay_s.data(), path_delay_s.data() + path_delay_s.size());
+  for (double d : all)
+    if (!(d >= 0) || !std::isfinite(d)) fail("a delay is negative or not finite");
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+  if (es.info() != Eigen::Success) fail("A: its eigenvalues could not be computed");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Cd l = es.eigenvalues()(k);
+    if (!(l.real() < 0))
+      fail("A has a mode at " + std::to_string(l.real()) + (l.imag() >= 0 ? " + " : " - ") +
+           std::to_string(std::abs(l.imag())) +
+           "j rad/s, not in the open left half plane (an unstable or marginal mode: fralab's "
+           "simulations are stable)");
+  }
+}
+
+std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std::string& source) {
+  const Eigen::Index n = ss.A.rows();
+  const Eigen::VectorXd b = ss.B.col(j);
+  const Eigen::RowVectorXd c = ss.C.row(i);
+  const double d = ss.D.size() ? ss.D(i, j) : 0.0;
+  const std::string path = ss.inputs[size_t(j)] + " -> " + ss.outputs[size_t(i)];
+  // Zero at every frequency: D = 0 and every Markov parameter C A^k B (k < n) negligible.
+  {
+    Eigen::VectorXd v = b;
+    bool zero = d == 0;
+    const double an = std::max(ss.A.norm(), 1e-300);
+    double scale = c.norm() * b.norm();
+    for (Eigen::Index k = 0; k < n && zero; ++k) {
+      if (std::abs(c.dot(v)) > 1e-12 * scale) zero = false;
+      v = ss.A * v;
+      scale *= an;
+    }
+    if (zero) return std::nullopt;
+  }
+  // Poles: A's eigenvalues.
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
+  std::vector<Cd> poles(es.eigenvalues().data(), es.eigenvalues().data() + n);
+  // Zeros: the finite generalised eigenvalues of ([A b; c d], [I 0; 0 0]).
+  Eigen::MatrixXd M(n + 1, n + 1), N = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  M << ss.A, b, c, d;
+  N.topLeftCorner(n, n).setIdentity();
+  Eigen::GeneralizedEigenSolver<Eigen::MatrixXd> ges(M, N, false);
+  std::vector<Cd> zeros;
+  const double big = 1e8 * std::max(1.0, ss.A.cwiseAbs().maxCoeff());
+  for (Eigen::Index k = 0; k < n + 1; ++k) {
+    const Cd alpha = ges.alphas()(k);
+    const double beta = ges.betas()(k);
+    if (std::abs(beta) == 0 || std::abs(alpha / beta) > big) continue;
+    zeros.push_back(alpha / beta);
+  }
+  // A zero on a pole: the mode does not reach this path.
+  std::vector<bool> gone(poles.size(), false);
+  std::vector<Cd> kept_zeros;
+  for (const Cd& z : zeros) {
+    size_t best = poles.size();
+    double dist = INFINITY;
+    for (size_t k = 0; k < poles.size(); ++k)
+      if (!gone[k] && std::abs(z - poles[k]) < dist) {
+        dist = std::abs(z - poles[k]);
+        best = k;
+      }
+    if (best < poles.size() && dist <= kCancel * std::max(1.0, std::abs(poles[best])))
+      gone[best] = true;
+    else
+      kept_zeros.push_back(z);
+  }
+  std::vector<Cd> kept_poles;
+  for (size_t k = 0; k < poles.size(); ++k)
+    if (!gone[k]) kept_poles.push_back(poles[k]);
+  for (const Cd& z : kept_zeros)
+    if (std::abs(z) <= 1e-9 * std::max(1.0, ss.A.cwiseAbs().maxCoeff()))
+      throw InputError(source + ": the path " + path +
+                       " has a zero at s = 0 (a derivative): fralab's transfer functions are in "
+                       "DC-gain form and have no root at s = 0");
+  Tf tf;
+  tf.gain = d - c.dot(ss.A.partialPivLu().solve(b));
+  tf.zeros = as_roots(kept_zeros);
+  tf.poles = as_roots(kept_poles);
+  tf.delay_s = (ss.input_delay_s.empty() ? 0.0 : ss.input_delay_s[size_t(j)]) +
+               (ss.output_delay_s.empty() ? 0.0 : ss.output_delay_s[size_t(i)]) +
+               (ss.path_delay_s.size() ? ss.path_delay_s(i, j) : 0.0);
+  // The factored form must be the state model's response (a check, not an approximation).
+  for (double w : {0.0, 0.1, 1.0, 10.0, 100.0, 1000.0}) {
+    const Cd want = response(ss, i, j, Cd(0, w)), got = tf.rational(Cd(0, w));
+    if (std::abs(got - want) > kAgree * std::max(std::abs(want), 1e-12 * (std::abs(d) + c.norm() * b.norm())))
+      throw InputError(source + ": the path " + path + " could not be factored to agree with " +
+                       "C (sI - A)^-1 B + D at " + std::to_string(w) +
+                       " rad/s (nearly cancelling modes; give the model in a balanced form)");
+  }
+  return tf;
+}
+
+StateSpace state_space_from_json(const Json& doc, const std::string& source) {
+  const JsonWhere root{source, ""};
+  json_require_object(doc, root);
+  StateSpace ss;
+  ss.A = matrix(doc, root, "A", false);
+  ss.B = matrix(doc, root, "B", false);
+  ss.C = matrix(doc, root, "C", false);
+  ss.D = matrix(doc, root, "D", true);
+  ss.path_delay_s = matrix(doc, root, "delay_s", true);
+  auto names = [&](const std::string& key, std::vector<std::string>& out,
+                   std::vector<double>* delays) {
+    const Json& a = json_array_member(doc, root, key);
+    for (size_t k = 0; k < a.size(); ++k) {
+      json_require_object(a[k], root / key / k);
+      out.push_back(json_string_member(a[k], root / key / k, "name"));
+      if (delays) delays->push_back(json_number_member(a[k], root / key / k, "delay_s", 0.0));
+    }
+  };
+  names("states", ss.states, nullptr);
+  names("inputs", ss.inputs, &ss.input_delay_s);
+  names("outputs", ss.outputs, &ss.output_delay_s);
+  if (ss.D.size() == 0) ss.D = Eigen::MatrixXd::Zero(Eigen::Index(ss.outputs.size()), Eigen::Index(ss.inputs.size()));
+  return ss;
+}
+
+Model parse_state_space_model(const Json& doc, const std::string& source) {
+  const JsonWhere root{source, ""};
+  json_require_object(doc, root);
+  const std::string format = json_string_member(doc, root, "format");
+  if (format != kStateSpaceFormat)
+    json_fail(root / "format",
+              "expected \"" + std::string(kStateSpaceFormat) + "\", found \"" + format + "\"");
+  const StateSpace ss = state_space_from_json(doc, source);
+  ss.validate(source);
+  // The document as a fralab-model/1 one: the channels as given (their delays moved into the
+  // paths), the paths the state model implies.
+  Json m = doc;
+  m["format"] = kModelFormat;
+  for (const char* key : {"states", "A", "B", "C", "D", "delay_s"}) m.erase(key);
+  for (const char* key : {"inputs", "outputs"})
+    for (Json& ch : m[key]) ch.erase("delay_s");
+  m["paths"] = Json::array();
+  for (int i = 0; i < int(ss.outputs.size()); ++i)
+    for (int j = 0; j < int(ss.inputs.size()); ++j)
+      if (const auto tf = state_space_path(ss, i, j, source))
+        m["paths"].push_back(
+            {{"output", ss.outputs[size_t(i)]}, {"input", ss.inputs[size_t(j)]}, {"tf", tf_to_json(*tf)}});
+  return parse_model(m, source);
+}
+
+Json state_space_document(const StateSpace& ss, const std::string& name) {
+  auto rows = [](const Eigen::MatrixXd& x) {
+    Json r = Json::array();
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      Json row = Json::array();
+      for (Eigen::Index k = 0; k < x.cols(); ++k) row.push_back(x(i, k));
+      r.push_back(row);
+    }
+    return r;
+  };
+  Json doc = {{"format", kStateSpaceFormat}, {"name", name}};
+  doc["states"] = Json::array();
+  for (const auto& s : ss.states) doc["states"].push_back({{"name", s}});
+  doc["inputs"] = Json::array();
+  for (size_t k = 0; k < ss.inputs.size(); ++k) {
+    Json in = {{"name", ss.inputs[k]}, {"units", "1"}, {"full_scale", 1.0}};
+    if (!ss.input_delay_s.empty() && ss.input_delay_s[k] > 0) in["delay_s"] = ss.input_delay_s[k];
+    doc["inputs"].push_back(in);
+  }
+  doc["outputs"] = Json::array();
+  for (size_t k = 0; k < ss.outputs.size(); ++k) {
+    Json out = {{"name", ss.outputs[k]}, {"units", "1"}};
+    if (!ss.output_delay_s.empty() && ss.output_delay_s[k] > 0)
+      out["delay_s"] = ss.output_delay_s[k];
+    doc["outputs"].push_back(out);
+  }
+  doc["A"] = rows(ss.A);
+  doc["B"] = rows(ss.B);
+  doc["C"] = rows(ss.C);
+  doc["D"] = rows(ss.D);
+  if (ss.path_delay_s.size()) doc["delay_s"] = rows(ss.path_delay_s);
+  return doc;
+}
+
+}  // namespace fralab

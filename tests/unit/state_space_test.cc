@@ -1,0 +1,132 @@
+// A simulation given as state space (plant/state_space.h, docs/formats.md §2b): the transfer
+// functions it implies against C (sI - A)^-1 B + D, and bad files refused naming what is wrong.
+#include "fralab/plant/state_space.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "fralab/core/error.h"
+#include "test_util.h"
+
+namespace fralab {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::source_path;
+using Cd = std::complex<double>;
+
+constexpr double kAgree = 1e-9;  // relative: the paths' responses against the state model's
+
+Json four_state_doc() { return json_load_file(source_path("tests/data/state_space/ss.json")); }
+
+// C (sI - A)^-1 B + D at s = j w for output i, input j, with the delays.
+Cd direct(const StateSpace& ss, int i, int j, double w) {
+  const Eigen::Index n = ss.A.rows();
+  const Eigen::MatrixXcd M = Cd(0, w) * Eigen::MatrixXcd::Identity(n, n) - ss.A.cast<Cd>();
+  const Eigen::VectorXcd x = M.partialPivLu().solve(ss.B.col(j).cast<Cd>());
+  const double delay = ss.input_delay_s[size_t(j)] + ss.output_delay_s[size_t(i)];
+  return ((ss.C.row(i).cast<Cd>() * x)(0) + ss.D(i, j)) * std::exp(Cd(0, -w * delay));
+}
+
+TEST(StateSpace, EveryPathsResponseIsTheStateModelsToOnePartInABillion) {
+  const Json doc = four_state_doc();
+  const StateSpace ss = state_space_from_json(doc, "ss.json");
+  const Model m = parse_model(doc, "ss.json");
+  ASSERT_EQ(m.inputs.size(), 2u);
+  ASSERT_EQ(m.outputs.size(), 3u);
+  int paths = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j) {
+      const ModelPath* p = m.path(ss.outputs[size_t(i)], ss.inputs[size_t(j)]);
+      // fuel reaches every output; nozzle enters at T4 and Wf, which every output sees too.
+      ASSERT_NE(p, nullptr) << ss.outputs[size_t(i)] << " <- " << ss.inputs[size_t(j)];
+      ++paths;
+      for (double w = 1e-3; w < 1e4; w *= 1.3) {
+        const Cd want = direct(ss, i, j, w), got = p->tf.at(w);
+        EXPECT_LT(std::abs(got - want), kAgree * std::abs(want))
+            << p->input << " -> " << p->output << " at " << w << " rad/s";
+      }
+    }
+  EXPECT_EQ(paths, 6);
+}
+
+// A mode an input does not reach is no pole of its paths; an output no state feeds is no path.
+TEST(StateSpace, AModeAnInputDoesNotReachIsCancelledAndAZeroPathIsNone) {
+  StateSpace ss;
+  ss.A = Eigen::MatrixXd{{-1, 0, 0}, {0, -5, 0}, {0, 0, -30}};
+  ss.B = Eigen::MatrixXd{{1, 0}, {0, 1}, {1, 0}};
+  ss.C = Eigen::MatrixXd{{1, 1, 0}, {0, 0, 0}};
+  ss.D = Eigen::MatrixXd::Zero(2, 2);
+  ss.states = {"a", "b", "c"};
+  ss.inputs = {"u", "v"};
+  ss.outputs = {"y", "z"};
+  ss.validate("inline");
+  const auto yu = state_space_path(ss, 0, 0, "inline");
+  ASSERT_TRUE(yu.has_value());
+  ASSERT_EQ(yu->poles.size(), 1u);  // b is not reached from u, c not seen at y
+  EXPECT_NEAR(yu->poles[0].real, -1, 1e-12);
+  EXPECT_NEAR(yu->gain, 1, 1e-12);
+  const auto yv = state_space_path(ss, 0, 1, "inline");
+  ASSERT_TRUE(yv.has_value());
+  ASSERT_EQ(yv->poles.size(), 1u);
+  EXPECT_NEAR(yv->poles[0].real, -5, 1e-12);
+  EXPECT_FALSE(state_space_path(ss, 1, 0, "inline").has_value());  // z: C's row is zero
+}
+
+// A light mode is a (wn, zeta) pair of the path.
+TEST(StateSpace, ALightlyDampedModeIsOnePairWithItsDamping) {
+  constexpr double wn = 12.0, zeta = 0.01;
+  StateSpace ss;
+  ss.A = Eigen::MatrixXd{{0, 1}, {-wn * wn, -2 * zeta * wn}};
+  ss.B = Eigen::MatrixXd{{0}, {wn * wn}};
+  ss.C = Eigen::MatrixXd{{1, 0}};
+  ss.D = Eigen::MatrixXd::Zero(1, 1);
+  ss.states = {"x", "v"};
+  ss.inputs = {"f"};
+  ss.outputs = {"y"};
+  const auto tf = state_space_path(ss, 0, 0, "inline");
+  ASSERT_TRUE(tf.has_value());
+  ASSERT_EQ(tf->poles.size(), 1u);
+  ASSERT_TRUE(tf->poles[0].pair);
+  EXPECT_NEAR(tf->poles[0].wn, wn, 1e-10);
+  EXPECT_NEAR(tf->poles[0].zeta, zeta, 1e-10);
+  EXPECT_NEAR(tf->gain, 1, 1e-12);
+  EXPECT_TRUE(tf->zeros.empty());
+}
+
+void expect_refused(const std::function<void(Json&)>& spoil, const std::string& what) {
+  Json doc = four_state_doc();
+  spoil(doc);
+  try {
+    parse_model(doc, "bad.json");
+    ADD_FAILURE() << "accepted: " << what;
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bad.json")) << what;
+    EXPECT_THAT(e.what(), HasSubstr(what));
+  }
+}
+
+TEST(StateSpace, BadModelsAreRefusedNamingTheFileAndWhatIsWrong) {
+  expect_refused([](Json& d) { d["B"].erase(0); }, "B is 3 x 2, expected 4 x 2");
+  expect_refused([](Json& d) { d["C"][0].push_back(1); }, "/C/1");
+  expect_refused([](Json& d) { d["A"][1][1] = 0.5; }, "not in the open left half plane");
+  expect_refused([](Json& d) { d["outputs"][2]["name"] = "speed"; }, "given twice");
+  expect_refused([](Json& d) { d["states"].erase(3); }, "3 state names for 4 states");
+  expect_refused([](Json& d) { d.erase("A"); }, "/A");
+  expect_refused([](Json& d) { d["inputs"][0]["delay_s"] = -1; }, "negative");
+  StateSpace ss = state_space_from_json(four_state_doc(), "bad.json");
+  ss.A(2, 2) = NAN;
+  EXPECT_THROW(
+      {
+        try {
+          ss.validate("bad.json");
+        } catch (const InputError& e) {
+          EXPECT_THAT(e.what(), HasSubstr("A(3, 3) is not a finite number"));
+          throw;
+        }
+      },
+      InputError);
+}
+
+}  // namespace
+}  // namespace fralab
