@@ -146,6 +146,7 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   r.d.chain = opt.chain;
   r.d.extended = sim;
   prepare(r);
+  states(r);
   modes(r);
   fit_causes(r);
   scope(r);

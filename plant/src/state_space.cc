@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <memory>
 #include <set>
 
 #include "fralab/core/error.h"
@@ -247,7 +248,9 @@ Model parse_state_space_model(const Json& doc, const std::string& source) {
       if (const auto tf = state_space_path(ss, i, j, source))
         m["paths"].push_back(
             {{"output", ss.outputs[size_t(i)]}, {"input", ss.inputs[size_t(j)]}, {"tf", tf_to_json(*tf)}});
-  return parse_model(m, source);
+  Model model = parse_model(m, source);
+  model.state_space = std::make_shared<const StateSpace>(ss);
+  return model;
 }
 
 Json state_space_document(const StateSpace& ss, const std::string& name) {

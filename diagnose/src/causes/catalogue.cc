@@ -21,6 +21,7 @@ const CauseUnit& hysteresis_cause();
 const CauseUnit& deadband_cause();
 const CauseUnit& measurement_coupling_cause();
 const CauseUnit& missing_path_cause();
+const CauseUnit& state_parameter_cause();
 
 const std::vector<const LinearCause*>& linear_catalogue() {
   static const std::vector<const LinearCause*> v{&gain_mismatch_cause(),     &time_delay_cause(),
@@ -34,7 +35,8 @@ const std::vector<const CauseUnit*>& cause_units() {
   static const std::vector<const CauseUnit*> v = [] {
     std::vector<const CauseUnit*> all(linear_catalogue().begin(), linear_catalogue().end());
     for (const CauseUnit* u : {&hysteresis_cause(), &deadband_cause(),
-                               &measurement_coupling_cause(), &missing_path_cause()})
+                               &measurement_coupling_cause(), &missing_path_cause(),
+                               &state_parameter_cause()})
       all.push_back(u);
     return all;
   }();

@@ -177,7 +177,8 @@ void scope(DiagnosisRun& r) {
   // A pair's own move of a root that the modes stage moved over the pair is that mode again.
   std::erase_if(r.raw, [&](const PairCause& pc) { return moved_as_mode(r, pc); });
   std::vector<bool> used(r.raw.size(), false);
-  r.findings = r.coupling_findings;
+  r.findings = r.state_findings;
+  r.findings.insert(r.findings.end(), r.coupling_findings.begin(), r.coupling_findings.end());
   r.findings.insert(r.findings.end(), r.path_findings.begin(), r.path_findings.end());
   r.findings.insert(r.findings.end(), r.mode_findings.begin(), r.mode_findings.end());
   group(

@@ -49,6 +49,8 @@ struct DiagnosisRun {
   // (measurement coupling, then missing paths), and per pair the best candidate refused and why.
   std::vector<PairCause> raw;
   std::vector<Finding> coupling_findings, path_findings;
+  // states: the state model's entries moved over every pair (a state model simulation only).
+  std::vector<Finding> state_findings;
   // modes: the modes moved over every pair of their scope before any pair is diagnosed alone.
   std::vector<Finding> mode_findings;
   std::map<size_t, std::string> refused;
@@ -113,6 +115,9 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
 // The stages (docs/method/diagnosis.md, "The stages").
 /// 1. The usable points of every pair against the simulation, and the multisines.
 void prepare(DiagnosisRun& r);
+/// 3a. Where the simulation is a state model, its entries (A, B, C) moved over every pair
+/// (states.cc).
+void states(DiagnosisRun& r);
 /// 3b. A lightly damped pair every path of a scope holds is moved once over all those pairs, the
 /// modes one after the other while each earns its place; each pair's factor then holds them
 /// (modes.cc).

@@ -106,6 +106,7 @@ enum class CauseKind {
   kDampingError,
   kSignError,
   kMissingPath,
+  kStateParameter,
 };
 /// Where a finding sits: one path, every path into an output (its sensor), every path from an
 /// input (its actuator or calibration), every path (the plant).

@@ -18,6 +18,7 @@
 
 #include <complex>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -68,6 +69,8 @@ struct ModelPath {
   Json extra = Json::object();
 };
 
+struct StateSpace;  // plant/state_space.h
+
 struct Model {
   std::string name;
   std::string source;  // file the model was read from (for messages)
@@ -79,6 +82,10 @@ struct Model {
   std::vector<std::string> warnings;  // unknown keys etc., for the caller to print
   Json extra = Json::object();
   Json operating_point_extra = Json::object();
+  /// The state model the paths were derived from, when the model was given as one
+  /// (plant/state_space.h); the diagnosis takes its entries as candidate causes. Not written by
+  /// model_to_json (a model file holds the paths).
+  std::shared_ptr<const StateSpace> state_space;
 
   /// Index of an input/output by name, or -1.
   int input_index(const std::string& name) const;

@@ -1,0 +1,159 @@
+#include "state_parameter.h"
+
+#include <cmath>
+#include <memory>
+
+#include "fralab/core/error.h"
+
+namespace fralab::diag {
+namespace {
+
+constexpr double kSameRoot = 1e-9;  // a path's root is the state model's: within this (relative)
+
+StateEntry entry_of(const Finding& f) {
+  return {f.text_parameters.at("matrix")[0], int(f.parameters.at("row")) - 1,
+          int(f.parameters.at("col")) - 1};
+}
+
+bool same(const Root& a, const Root& b) {
+  if (a.pair != b.pair) return false;
+  if (!a.pair) return std::abs(a.real - b.real) <= kSameRoot * std::abs(b.real);
+  return std::abs(a.wn - b.wn) <= kSameRoot * b.wn && std::abs(a.zeta - b.zeta) <= kSameRoot;
+}
+
+// t, whose rational part holds `from`'s (where no other finding moved its roots), changed to hold
+// `to`'s: each root of `from` taken out of t (or, when another finding moved it, cancelled by the
+// same root on the other side), `to`'s roots put in, the gain scaled by to's over from's.
+void replace(Tf& t, const Tf& from, const Tf& to) {
+  auto take = [&](std::vector<Root>& side, std::vector<Root>& other, const Root& r) {
+    for (auto it = side.begin(); it != side.end(); ++it)
+      if (same(*it, r)) {
+        side.erase(it);
+        return;
+      }
+    other.push_back(r);
+  };
+  for (const Root& r : from.poles) take(t.poles, t.zeros, r);
+  for (const Root& r : from.zeros) take(t.zeros, t.poles, r);
+  t.poles.insert(t.poles.end(), to.poles.begin(), to.poles.end());
+  t.zeros.insert(t.zeros.end(), to.zeros.begin(), to.zeros.end());
+  t.gain *= to.gain / from.gain;
+}
+
+class StateParameter final : public CauseUnit {
+ public:
+  CauseKind kind() const override { return CauseKind::kStateParameter; }
+  const char* name() const override { return "state_parameter"; }
+  PrimaryParameter primary_parameter(const Finding& f) const override {
+    return {"to", f.parameters.at("from")};
+  }
+  IntervalDomain interval_domain() const override { return {false, 1e-9}; }
+  void settle(Finding& f) const override {
+    if (f.parameters.count("time_constant_from_s"))
+      f.parameters["time_constant_to_s"] = -1 / f.parameters.at("to");
+  }
+  // Every path of the model: its state model's path before and after the entry's move replaced.
+  void apply(Model& m, const Finding& f) const override {
+    if (!m.state_space) throw InputError("state_parameter: the simulation is not a state model");
+    const StateSpace& ss = *m.state_space;
+    const StateEntry e = entry_of(f);
+    const StateSpace moved = with_entry(ss, e, f.parameters.at("to"));
+    const auto before = state_paths(ss), after = state_paths(moved);
+    if (!before || !after) return;  // not a stable state model at that value: left unchanged
+    for (size_t i = 0; i < ss.outputs.size(); ++i)
+      for (size_t j = 0; j < ss.inputs.size(); ++j) {
+        const auto& from = (*before)[i][j];
+        const auto& to = (*after)[i][j];
+        ModelPath* p = m.path(ss.outputs[i], ss.inputs[j]);
+        if (p && from && to) {
+          replace(p->tf, *from, *to);
+        } else if (p && from && !to) {
+          p->tf.gain = 0;
+        } else if (!p && to) {
+          m.paths.push_back({ss.outputs[i], ss.inputs[j], *to, Json::object()});
+        }
+      }
+    m.state_space = std::make_shared<const StateSpace>(moved);
+  }
+  std::string explain(const Finding& f) const override {
+    const auto& tp = f.text_parameters;
+    const std::string entry = tp.at("matrix") + "(" + fmt(f.parameters.at("row")) + ", " +
+                              fmt(f.parameters.at("col")) + ")";
+    const std::string move = fmt(f.parameters.at("from")) + " -> " + fmt(f.parameters.at("to"));
+    std::string what;
+    if (tp.at("matrix") == "A" && f.parameters.count("time_constant_from_s"))
+      what = "the state " + tp.at("state") + "'s own rate " + entry + " " + move +
+             " 1/s (time constant " + fmt(f.parameters.at("time_constant_from_s")) + " -> " +
+             fmt(f.parameters.at("time_constant_to_s")) + " s)";
+    else if (tp.at("matrix") == "A")
+      what = "the coupling " + entry + " into the state " + tp.at("state") + " " + move;
+    else if (tp.at("matrix") == "B")
+      what = "how " + tp.at("input") + " drives the state " + tp.at("state") + ", " + entry + " " +
+             move;
+    else
+      what = "how the state " + tp.at("state") + " shows at " + tp.at("output") + ", " + entry +
+             " " + move;
+    return what + ": one parameter of the state model, fitted over every path it reaches";
+  }
+};
+
+}  // namespace
+
+double entry_value(const StateSpace& ss, const StateEntry& e) {
+  const Eigen::MatrixXd& m = e.matrix == 'A' ? ss.A : e.matrix == 'B' ? ss.B : ss.C;
+  return m(e.row, e.col);
+}
+
+StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v) {
+  StateSpace out = ss;
+  Eigen::MatrixXd& m = e.matrix == 'A' ? out.A : e.matrix == 'B' ? out.B : out.C;
+  m(e.row, e.col) = v;
+  return out;
+}
+
+std::optional<std::vector<std::vector<std::optional<Tf>>>> state_paths(const StateSpace& ss) {
+  try {
+    ss.validate("state model");
+    std::vector<std::vector<std::optional<Tf>>> out(ss.outputs.size());
+    for (size_t i = 0; i < ss.outputs.size(); ++i)
+      for (size_t j = 0; j < ss.inputs.size(); ++j)
+        out[i].push_back(state_space_path(ss, int(i), int(j), "state model"));
+    return out;
+  } catch (const InputError&) {
+    return std::nullopt;
+  }
+}
+
+Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, double to,
+                                const std::vector<std::string>& pairs) {
+  Finding f;
+  f.cause = CauseKind::kStateParameter;
+  f.scope = Scope::kPlant;
+  f.pairs = pairs;
+  f.parameters = {{"from", entry_value(ss, e)},
+                  {"to", to},
+                  {"row", e.row + 1},
+                  {"col", e.col + 1}};
+  f.text_parameters["matrix"] = std::string(1, e.matrix);
+  if (e.matrix == 'A') {
+    f.text_parameters["state"] = ss.states[size_t(e.row)];
+    if (e.row == e.col) {
+      f.parameters["time_constant_from_s"] = -1 / entry_value(ss, e);
+      f.parameters["time_constant_to_s"] = -1 / to;
+    }
+  } else if (e.matrix == 'B') {
+    f.text_parameters["state"] = ss.states[size_t(e.row)];
+    f.text_parameters["input"] = ss.inputs[size_t(e.col)];
+  } else {
+    f.text_parameters["state"] = ss.states[size_t(e.col)];
+    f.text_parameters["output"] = ss.outputs[size_t(e.row)];
+  }
+  return f;
+}
+
+const CauseUnit& state_parameter_cause() {
+  static const StateParameter c;
+  return c;
+}
+
+}  // namespace fralab::diag

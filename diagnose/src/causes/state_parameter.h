@@ -1,0 +1,41 @@
+// state_parameter: one entry of the simulation's state model (plant/state_space.h) changed. A
+// diagonal entry of A is a state's own rate (-1 / its time constant, 1/s), another entry of A a
+// coupling between states, an entry of B how an input drives a state, of C how a state shows at an
+// output. The entry moves every pole, zero and gain of every path the state reaches, so it is
+// fitted once over every pair (stage 3a, stages/states.cc) and is one finding.
+//
+// Parameters (docs/formats.md §15): `from`, `to` (the entry's value in the simulation and as
+// fitted; A's in 1/s, B's and C's in the state's units per input or output unit), `row` and `col`
+// (1-based), for a diagonal entry of A `time_constant_from_s` and `time_constant_to_s`; text
+// parameters `matrix` ("A", "B" or "C") and `state`, and `input` or `output` for B and C (the
+// names of the state model).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "cause.h"
+#include "fralab/plant/state_space.h"
+
+namespace fralab::diag {
+
+/// An entry of A, B or C (row, col 0-based).
+struct StateEntry {
+  char matrix = 'A';
+  int row = 0, col = 0;
+};
+
+/// The entry's value in `ss`.
+double entry_value(const StateSpace& ss, const StateEntry& e);
+/// `ss` with the entry set to v.
+StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v);
+/// Every path of `ss` (outputs x inputs; nullopt: zero), delays included; nullopt as a whole when
+/// a path cannot be factored (an unstable or degenerate entry: not a candidate value).
+std::optional<std::vector<std::vector<std::optional<Tf>>>> state_paths(const StateSpace& ss);
+
+/// A finding of the entry moved from its value in `ss` to `to`, scope plant, over `pairs`.
+Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, double to,
+                                const std::vector<std::string>& pairs);
+
+}  // namespace fralab::diag

@@ -1,0 +1,169 @@
+// Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
+// model (plant/state_space.h), its own entries are candidate causes, each fitted once over every
+// pair: a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
+// coupling), of B (how an input drives a state) and of C (how a state shows at an output). One
+// changed state moves the poles, zeros and gains of every path it reaches; fitted pair by pair it
+// splits into pieces or is missed.
+//
+// Each candidate's value by a scan (kScan points: a diagonal entry of A over its logarithm within
+// a factor kSpan either way, keeping its sign; another entry over +-kSpan times its value) and
+// Brent's method between the scan's neighbours; on each pair the factor G_moved / G_sim of its
+// path (the actuator's own pair: 1). Greedy, at most kMaxEntries, while the best lowers chi2 by
+// more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
+// and lowers the error of the pairs; each accepted entry's factor stays on the pairs, so the
+// stages after it fit what it leaves.
+#include <algorithm>
+#include <cmath>
+
+#include "../causes/state_parameter.h"
+#include "fralab/core/numerics.h"
+#include "fralab/core/pair_id.h"
+#include "stages.h"
+
+namespace fralab::diag {
+namespace {
+
+constexpr int kScan = 41;
+constexpr double kSpan = 4;
+constexpr int kMaxEntries = 3;
+constexpr int kBrentBits = 30;
+
+// The factor of the entry moved to v on every prepared pair (empty: the state model is not stable
+// or cannot be factored at v).
+std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss,
+                                    const std::vector<std::vector<std::optional<Tf>>>& base,
+                                    const StateEntry& e, double v) {
+  const auto moved = state_paths(with_entry(ss, e, v));
+  if (!moved) return {};
+  std::vector<std::vector<C>> F(r.pairs.size());
+  for (size_t k = 0; k < r.pairs.size(); ++k) {
+    const PairFit& p = r.pairs[k];
+    F[k].assign(p.w.size(), C(1, 0));
+    const PairId id = PairId::parse(p.pair);
+    if (id.actuator()) continue;
+    const auto oi = std::find(ss.outputs.begin(), ss.outputs.end(), id.output);
+    const auto ii = std::find(ss.inputs.begin(), ss.inputs.end(), id.input);
+    if (oi == ss.outputs.end() || ii == ss.inputs.end()) continue;
+    const size_t i = size_t(oi - ss.outputs.begin()), j = size_t(ii - ss.inputs.begin());
+    const auto& from = base[i][j];
+    const auto& to = (*moved)[i][j];
+    if (!from) continue;
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const C s(0, p.w[q]);
+      F[k][q] = to ? to->rational(s) / from->rational(s) : C(0, 0);
+    }
+  }
+  return F;
+}
+
+double chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
+  double c = 0;
+  for (size_t k = 0; k < r.pairs.size(); ++k) {
+    const PairFit& p = r.pairs[k];
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const C f = F.empty() ? p.factor[q] : p.factor[q] * F[k][q];
+      c += std::norm((p.meas[q] - p.sim[q] * f) / p.sig[q]);
+    }
+  }
+  return c;
+}
+
+// rms |ln(model / measured)| over every prepared pair with F on top of their factors.
+double error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
+  double s = 0;
+  size_t n = 0;
+  for (size_t k = 0; k < r.pairs.size(); ++k) {
+    const PairFit& p = r.pairs[k];
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const C f = F.empty() ? p.factor[q] : p.factor[q] * F[k][q];
+      const C m = p.sim[q] * f;
+      if (std::abs(m) == 0 || std::abs(p.meas[q]) == 0) continue;
+      s += std::norm(std::log(m / p.meas[q]));
+      ++n;
+    }
+  }
+  return n ? std::sqrt(s / double(n)) : 0;
+}
+
+struct Fitted {
+  StateEntry e;
+  double value = 0, chi2 = INFINITY;
+  std::vector<std::vector<C>> F;
+};
+
+Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss,
+                 const std::vector<std::vector<std::optional<Tf>>>& base, const StateEntry& e) {
+  const double v0 = entry_value(ss, e);
+  const bool rate = e.matrix == 'A' && e.row == e.col;
+  // The scan's coordinate x: ln |v| for a rate (its sign kept), v itself otherwise.
+  auto value = [&](double x) { return rate ? std::copysign(std::exp(x), v0) : x; };
+  const double lo = rate ? std::log(std::abs(v0) / kSpan) : v0 - kSpan * std::abs(v0);
+  const double hi = rate ? std::log(std::abs(v0) * kSpan) : v0 + kSpan * std::abs(v0);
+  auto chi2_at = [&](double x) {
+    const auto F = factors(r, ss, base, e, value(x));
+    return F.empty() ? INFINITY : chi2_with(r, F);
+  };
+  std::vector<double> xs(kScan), cs(kScan);
+  size_t best = 0;
+  for (int q = 0; q < kScan; ++q) {
+    xs[size_t(q)] = lo + (hi - lo) * q / (kScan - 1);
+    cs[size_t(q)] = chi2_at(xs[size_t(q)]);
+    if (cs[size_t(q)] < cs[best]) best = size_t(q);
+  }
+  Fitted f;
+  f.e = e;
+  if (!std::isfinite(cs[best])) return f;
+  const double a = xs[best > 0 ? best - 1 : 0], b = xs[std::min(best + 1, xs.size() - 1)];
+  const double x = detail::brent_minimum(chi2_at, a, b, kBrentBits);
+  f.value = value(x);
+  f.F = factors(r, ss, base, e, f.value);
+  f.chi2 = f.F.empty() ? INFINITY : chi2_with(r, f.F);
+  return f;
+}
+
+double earned(double c0, double c, size_t n) {
+  const double s = std::max(1.0, c / double(std::max<size_t>(n, 1)));
+  return (c0 - c) / s - std::log(2.0 * double(n));
+}
+
+}  // namespace
+
+void states(DiagnosisRun& r) {
+  if (!r.sim.state_space || r.pairs.empty()) return;
+  StateSpace ss = *r.sim.state_space;
+  size_t n = 0;
+  std::vector<std::string> pairs;
+  for (const PairFit& p : r.pairs) {
+    n += p.w.size();
+    if (!PairId::parse(p.pair).actuator()) pairs.push_back(p.pair);
+  }
+  for (int round = 0; round < kMaxEntries; ++round) {
+    const auto base = state_paths(ss);
+    if (!base) return;
+    std::vector<StateEntry> candidates;
+    for (int i = 0; i < ss.A.rows(); ++i)
+      for (int j = 0; j < ss.A.cols(); ++j)
+        if (ss.A(i, j) != 0) candidates.push_back({'A', i, j});
+    for (int i = 0; i < ss.B.rows(); ++i)
+      for (int j = 0; j < ss.B.cols(); ++j)
+        if (ss.B(i, j) != 0) candidates.push_back({'B', i, j});
+    for (int i = 0; i < ss.C.rows(); ++i)
+      for (int j = 0; j < ss.C.cols(); ++j)
+        if (ss.C(i, j) != 0) candidates.push_back({'C', i, j});
+    const double c0 = chi2_with(r, {}), e0 = error_with(r, {});
+    Fitted best;
+    for (const StateEntry& e : candidates) {
+      Fitted f = fit_entry(r, ss, *base, e);
+      if (f.chi2 < best.chi2) best = std::move(f);
+    }
+    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n) <= 0 ||
+        !(error_with(r, best.F) < e0))
+      return;
+    r.state_findings.push_back(state_parameter_finding(ss, best.e, best.value, pairs));
+    for (size_t k = 0; k < r.pairs.size(); ++k)
+      for (size_t q = 0; q < r.pairs[k].w.size(); ++q) r.pairs[k].factor[q] *= best.F[k][q];
+    ss = with_entry(ss, best.e, best.value);
+  }
+}
+
+}  // namespace fralab::diag
