@@ -11,6 +11,7 @@
 // --plants modal (tests/util/random_modal.h: structures, light modes common to every path) is
 // measured in-process: each path's exact response on a grid dense enough for its lightest mode,
 // with noise of known sigma, and a validation measurement; the diagnosis runs in this process.
+// --plants state (tests/util/random_state.h: state models, entries changed) likewise.
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
 #include <sys/wait.h>
 
@@ -21,6 +22,7 @@
 
 #include "random_machine.h"
 #include "random_modal.h"
+#include "random_state.h"
 #include "random_plant.h"
 
 using namespace fralab;
@@ -80,8 +82,9 @@ int main(int argc, char** argv) {
   app.add_option("--plants", plants,
                  "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
                  "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
-                 "modal (random_modal.h: structures, measured in-process)")
-      ->check(CLI::IsMember({"random", "machine", "modal"}))
+                 "modal (random_modal.h: structures, measured in-process) or state (random_state.h: "
+                 "state models with changed entries, measured in-process)")
+      ->check(CLI::IsMember({"random", "machine", "modal", "state"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const std::string bin =
@@ -91,11 +94,28 @@ int main(int argc, char** argv) {
   for (int i = first; i < first + cases; ++i) {
     const RandomCase c = plants == "machine" ? random_machine_case(seed, i)
                          : plants == "modal" ? random_modal_case(seed, i)
-                                             : random_case(seed, i);
+                         : plants == "state"  ? random_state_case(seed, i)
+                                              : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);
     save_model(dir + "/engine.json", c.engine);
+    if (plants == "state") {
+      Diagnosis d;
+      try {
+        d = diagnose(c.simulation, state_measurement(c, seed + uint64_t(i)));
+      } catch (const InputError& e) {
+        std::printf("%s: the diagnosis failed: %s\n", c.name.c_str(), e.what());
+        ++failed, ++failing;
+        total.hidden += int(c.hidden.size());
+        total.findings += 1;
+        continue;
+      }
+      json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
+      ++complete;
+      report(c, d.findings, total, failing);
+      continue;
+    }
     if (plants == "modal") {
       const Diagnosis d = diagnose(c.simulation, modal_measurement(c, seed + uint64_t(i)));
       json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));

@@ -190,15 +190,50 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std
   tf.delay_s = (ss.input_delay_s.empty() ? 0.0 : ss.input_delay_s[size_t(j)]) +
                (ss.output_delay_s.empty() ? 0.0 : ss.output_delay_s[size_t(i)]) +
                (ss.path_delay_s.size() ? ss.path_delay_s(i, j) : 0.0);
-  // The factored form must be the state model's response (a check, not an approximation).
-  for (double w : {0.0, 0.1, 1.0, 10.0, 100.0, 1000.0}) {
-    const Cd want = response(ss, i, j, Cd(0, w)), got = tf.rational(Cd(0, w));
-    if (std::abs(got - want) > kAgree * std::max(std::abs(want), 1e-12 * (std::abs(d) + c.norm() * b.norm())))
-      throw InputError(source + ": the path " + path + " could not be factored to agree with " +
-                       "C (sI - A)^-1 B + D at " + std::to_string(w) +
-                       " rad/s (nearly cancelling modes; give the model in a balanced form)");
+  // The factored form must be the state model's response (a check, not an approximation): at
+  // each of the modes' frequencies and a decade beyond the slowest and the fastest, within kAgree
+  // of the path's largest magnitude there.
+  std::vector<double> ws = {0.0};
+  double lo = INFINITY, hi = 0;
+  for (const Cd& p : poles) lo = std::min(lo, std::abs(p)), hi = std::max(hi, std::abs(p));
+  for (const Cd& p : poles) ws.push_back(std::abs(p));
+  ws.push_back(lo / 10), ws.push_back(hi * 10);
+  std::vector<Cd> want(ws.size());
+  double peak = 0;
+  for (size_t k = 0; k < ws.size(); ++k) {
+    want[k] = response(ss, i, j, Cd(0, ws[k]));
+    peak = std::max(peak, std::abs(want[k]));
   }
+  for (size_t k = 0; k < ws.size(); ++k)
+    if (std::abs(tf.rational(Cd(0, ws[k])) - want[k]) > kAgree * peak)
+      throw InputError(source + ": the path " + path + " could not be factored to agree with " +
+                       "C (sI - A)^-1 B + D at " + std::to_string(ws[k]) +
+                       " rad/s (nearly cancelling modes; give the model in a balanced form)");
   return tf;
+}
+
+std::optional<ModeParticipation> mode_participation(const StateSpace& ss, Cd s, double rel) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, true);
+  if (es.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXcd& l = es.eigenvalues();
+  Eigen::Index k = 0;
+  for (Eigen::Index q = 1; q < l.size(); ++q)
+    if (std::abs(l(q) - s) < std::abs(l(k) - s)) k = q;
+  if (std::abs(l(k) - s) > rel * std::abs(s)) return std::nullopt;
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  const Eigen::FullPivLU<Eigen::MatrixXcd> lu(V);
+  if (!lu.isInvertible()) return std::nullopt;  // a defective A: no participation factors
+  const Eigen::MatrixXcd W = lu.inverse();
+  ModeParticipation out;
+  out.eigenvalue = l(k);
+  double sum = 0;
+  std::vector<double> p(size_t(l.size()));
+  for (Eigen::Index j = 0; j < l.size(); ++j) sum += p[size_t(j)] = std::abs(V(j, k) * W(k, j));
+  for (Eigen::Index j = 0; j < l.size(); ++j)
+    out.states.emplace_back(ss.states[size_t(j)], sum > 0 ? p[size_t(j)] / sum : 0.0);
+  std::stable_sort(out.states.begin(), out.states.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  return out;
 }
 
 StateSpace state_space_from_json(const Json& doc, const std::string& source) {

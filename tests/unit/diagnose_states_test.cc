@@ -106,6 +106,32 @@ TEST(DiagnoseStates, TheExtendedModelRespondsAsTheTruth) {
     }
 }
 
+// A pole moved on one path only (no entry of the state model does that): the pole shift names
+// the state model's mode it moves and the states in it.
+TEST(DiagnoseStates, APathsPoleShiftNamesTheStateModelsModeAndItsStates) {
+  const Model sim = parse_model(simulation_doc(), "ss.json");
+  Model truth = sim;
+  truth.state_space.reset();
+  ModelPath* p = truth.path("temp", "fuel");
+  ASSERT_NE(p, nullptr);
+  // The path's slowest real pole moved by 30 %.
+  Root* slow = nullptr;
+  for (Root& r : p->tf.poles)
+    if (!r.pair && (!slow || std::abs(r.real) < std::abs(slow->real))) slow = &r;
+  ASSERT_NE(slow, nullptr);
+  const double from = slow->real;
+  slow->real *= 1.3;
+  const Diagnosis d = diagnose(sim, measure(truth, 5));
+  const std::string json = diagnosis_to_json(d).dump(1);
+  const Finding* shift = nullptr;
+  for (const Finding& f : d.findings)
+    if (f.cause == CauseKind::kPoleShift && std::abs(f.parameters.at("from_rad_s") + from) < 1e-6 * std::abs(from))
+      shift = &f;
+  ASSERT_NE(shift, nullptr) << json;
+  EXPECT_THAT(shift->explanation, ::testing::HasSubstr("the state model's mode at")) << json;
+  EXPECT_THAT(shift->explanation, ::testing::HasSubstr("its states")) << json;
+}
+
 // Nothing changed: no finding.
 TEST(DiagnoseStates, TheSameStateModelGivesNoFinding) {
   const Model sim = parse_model(simulation_doc(), "ss.json");

@@ -94,6 +94,24 @@ TEST(StateSpace, ALightlyDampedModeIsOnePairWithItsDamping) {
   EXPECT_TRUE(tf->zeros.empty());
 }
 
+// Participation factors: a mode of one state is that state's; a symmetric coupling shares it.
+TEST(StateSpace, AModesParticipationFactorsNameTheStatesInIt) {
+  StateSpace ss;
+  ss.states = {"a", "b"};
+  ss.A = Eigen::MatrixXd{{-1, 1}, {0, -5}};
+  auto one = mode_participation(ss, {-1.0005, 0});
+  ASSERT_TRUE(one.has_value());
+  EXPECT_NEAR(one->eigenvalue.real(), -1, 1e-12);
+  EXPECT_EQ(one->states[0].first, "a");
+  EXPECT_NEAR(one->states[0].second, 1, 1e-12);
+  EXPECT_FALSE(mode_participation(ss, {-2, 0}).has_value());  // no mode of A there
+  ss.A = Eigen::MatrixXd{{-2, 1}, {1, -2}};
+  auto shared = mode_participation(ss, {-3, 0});
+  ASSERT_TRUE(shared.has_value());
+  EXPECT_NEAR(shared->states[0].second, 0.5, 1e-12);
+  EXPECT_NEAR(shared->states[1].second, 0.5, 1e-12);
+}
+
 void expect_refused(const std::function<void(Json&)>& spoil, const std::string& what) {
   Json doc = four_state_doc();
   spoil(doc);

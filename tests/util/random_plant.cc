@@ -27,6 +27,8 @@ std::string HiddenEffect::describe() const {
   std::ostringstream s;
   s << to_string(cause) << " [" << to_string(scope) << (input.empty() ? "" : " " + input)
     << (output.empty() ? "" : " " + output) << "] " << param << "=" << value;
+  for (const auto& [k, v] : text) s << " " << k << "=" << v;
+  for (const auto& [k, v] : exact) s << " " << k << "=" << v;
   return s.str();
 }
 
@@ -35,6 +37,14 @@ bool HiddenEffect::matches(const Finding& f) const {
   const auto it = f.parameters.find(param);
   if (it == f.parameters.end()) return param.empty();
   const double tol = std::max(tol_abs, tol_rel * std::abs(value));
+  for (const auto& [k, v] : text) {
+    const auto t = f.text_parameters.find(k);
+    if (t == f.text_parameters.end() || t->second != v) return false;
+  }
+  for (const auto& [k, v] : exact) {
+    const auto x = f.parameters.find(k);
+    if (x == f.parameters.end() || x->second != v) return false;
+  }
   return std::abs(it->second - value) <= tol;
 }
 

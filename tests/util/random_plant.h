@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,10 @@ struct HiddenEffect {
   std::string param;
   double value = 0;
   double tol_abs = 0, tol_rel = 0;
+  /// Text parameters the finding must carry with these values (a state model's entry: its
+  /// `matrix` and `state`), and parameters it must carry exactly (the entry's `row` and `col`).
+  std::map<std::string, std::string> text;
+  std::map<std::string, double> exact;
   std::string describe() const;
   /// Whether a finding names this effect at its place within tolerance.
   bool matches(const Finding& f) const;

@@ -10,8 +10,9 @@
 // Brent's method between the scan's neighbours; on each pair the factor G_moved / G_sim of its
 // path (the actuator's own pair: 1). Greedy, at most kMaxEntries, while the best lowers chi2 by
 // more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
-// and lowers the error of the pairs; each accepted entry's factor stays on the pairs, so the
-// stages after it fit what it leaves.
+// and lowers the error of the pairs; then, kBackfitRounds times, each accepted entry is fitted
+// again with the others in place and replaced by another entry that fits better there. The
+// accepted entries' factor stays on the pairs, so the stages after it fit what they leave.
 #include <algorithm>
 #include <cmath>
 
@@ -27,14 +28,14 @@ constexpr int kScan = 41;
 constexpr double kSpan = 4;
 constexpr int kMaxEntries = 3;
 constexpr int kBrentBits = 30;
+constexpr int kBackfitRounds = 2;
 
-// The factor of the entry moved to v on every prepared pair (empty: the state model is not stable
-// or cannot be factored at v).
-std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss,
-                                    const std::vector<std::vector<std::optional<Tf>>>& base,
-                                    const StateEntry& e, double v) {
-  const auto moved = state_paths(with_entry(ss, e, v));
-  if (!moved) return {};
+using Paths = std::vector<std::vector<std::optional<Tf>>>;
+
+// On every prepared pair, its path's response under `to` over that under `from` (the actuator's
+// own pair, and a path `from` lacks: 1).
+std::vector<std::vector<C>> path_ratio(const DiagnosisRun& r, const StateSpace& ss,
+                                       const Paths& from, const Paths& to) {
   std::vector<std::vector<C>> F(r.pairs.size());
   for (size_t k = 0; k < r.pairs.size(); ++k) {
     const PairFit& p = r.pairs[k];
@@ -45,15 +46,24 @@ std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss,
     const auto ii = std::find(ss.inputs.begin(), ss.inputs.end(), id.input);
     if (oi == ss.outputs.end() || ii == ss.inputs.end()) continue;
     const size_t i = size_t(oi - ss.outputs.begin()), j = size_t(ii - ss.inputs.begin());
-    const auto& from = base[i][j];
-    const auto& to = (*moved)[i][j];
-    if (!from) continue;
+    const auto& a = from[i][j];
+    const auto& b = to[i][j];
+    if (!a) continue;
     for (size_t q = 0; q < p.w.size(); ++q) {
       const C s(0, p.w[q]);
-      F[k][q] = to ? to->rational(s) / from->rational(s) : C(0, 0);
+      F[k][q] = b ? b->rational(s) / a->rational(s) : C(0, 0);
     }
   }
   return F;
+}
+
+// The factor of the entry moved to v on every prepared pair, over `base` (ss's paths); empty
+// when the state model is not stable or cannot be factored at v.
+std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
+                                    const StateEntry& e, double v) {
+  const auto moved = state_paths(with_entry(ss, e, v));
+  if (!moved) return {};
+  return path_ratio(r, ss, base, *moved);
 }
 
 double chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
@@ -91,8 +101,8 @@ struct Fitted {
   std::vector<std::vector<C>> F;
 };
 
-Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss,
-                 const std::vector<std::vector<std::optional<Tf>>>& base, const StateEntry& e) {
+Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
+                 const StateEntry& e) {
   const double v0 = entry_value(ss, e);
   const bool rate = e.matrix == 'A' && e.row == e.col;
   // The scan's coordinate x: ln |v| for a rate (its sign kept), v itself otherwise.
@@ -126,44 +136,107 @@ double earned(double c0, double c, size_t n) {
   return (c0 - c) / s - std::log(2.0 * double(n));
 }
 
+// The state model's nonzero entries of A, B and C.
+std::vector<StateEntry> candidates_of(const StateSpace& ss) {
+  std::vector<StateEntry> out;
+  for (int i = 0; i < ss.A.rows(); ++i)
+    for (int j = 0; j < ss.A.cols(); ++j)
+      if (ss.A(i, j) != 0) out.push_back({'A', i, j});
+  for (int i = 0; i < ss.B.rows(); ++i)
+    for (int j = 0; j < ss.B.cols(); ++j)
+      if (ss.B(i, j) != 0) out.push_back({'B', i, j});
+  for (int i = 0; i < ss.C.rows(); ++i)
+    for (int j = 0; j < ss.C.cols(); ++j)
+      if (ss.C(i, j) != 0) out.push_back({'C', i, j});
+  return out;
+}
+
+bool same_entry(const StateEntry& a, const StateEntry& b) {
+  return a.matrix == b.matrix && a.row == b.row && a.col == b.col;
+}
+
+// The best entry to move on top of `ss` (the others' factors on the pairs), `skip` left out.
+Fitted best_entry(const DiagnosisRun& r, const StateSpace& ss,
+                  const std::vector<StateEntry>& skip) {
+  Fitted best;
+  const auto base = state_paths(ss);
+  if (!base) return best;
+  for (const StateEntry& e : candidates_of(ss)) {
+    if (std::any_of(skip.begin(), skip.end(), [&](const StateEntry& s) { return same_entry(s, e); }))
+      continue;
+    Fitted f = fit_entry(r, ss, *base, e);
+    if (f.chi2 < best.chi2) best = std::move(f);
+  }
+  return best;
+}
+
 }  // namespace
 
 void states(DiagnosisRun& r) {
   if (!r.sim.state_space || r.pairs.empty()) return;
-  StateSpace ss = *r.sim.state_space;
+  const StateSpace& sim = *r.sim.state_space;
+  const auto sim_paths = state_paths(sim);
+  if (!sim_paths) return;
   size_t n = 0;
   std::vector<std::string> pairs;
+  std::vector<std::vector<C>> f0;  // the pairs' factors before this stage
   for (const PairFit& p : r.pairs) {
     n += p.w.size();
+    f0.push_back(p.factor);
     if (!PairId::parse(p.pair).actuator()) pairs.push_back(p.pair);
   }
+  // The accepted entries (distinct, so their order does not matter); set_factors puts those but
+  // `skip` on the pairs and returns that state model.
+  std::vector<Fitted> taken;
+  auto set_factors = [&](size_t skip) {
+    StateSpace ss = sim;
+    for (size_t j = 0; j < taken.size(); ++j)
+      if (j != skip) ss = with_entry(ss, taken[j].e, taken[j].value);
+    const auto paths = state_paths(ss);
+    const auto F = paths ? path_ratio(r, sim, *sim_paths, *paths) : std::vector<std::vector<C>>{};
+    for (size_t k = 0; k < r.pairs.size(); ++k)
+      for (size_t q = 0; q < r.pairs[k].w.size(); ++q)
+        r.pairs[k].factor[q] = F.empty() ? f0[k][q] : f0[k][q] * F[k][q];
+    return ss;
+  };
+  auto entries_but = [&](size_t skip) {
+    std::vector<StateEntry> out;
+    for (size_t j = 0; j < taken.size(); ++j)
+      if (j != skip) out.push_back(taken[j].e);
+    return out;
+  };
   for (int round = 0; round < kMaxEntries; ++round) {
-    const auto base = state_paths(ss);
-    if (!base) return;
-    std::vector<StateEntry> candidates;
-    for (int i = 0; i < ss.A.rows(); ++i)
-      for (int j = 0; j < ss.A.cols(); ++j)
-        if (ss.A(i, j) != 0) candidates.push_back({'A', i, j});
-    for (int i = 0; i < ss.B.rows(); ++i)
-      for (int j = 0; j < ss.B.cols(); ++j)
-        if (ss.B(i, j) != 0) candidates.push_back({'B', i, j});
-    for (int i = 0; i < ss.C.rows(); ++i)
-      for (int j = 0; j < ss.C.cols(); ++j)
-        if (ss.C(i, j) != 0) candidates.push_back({'C', i, j});
+    const StateSpace ss = set_factors(taken.size());
     const double c0 = chi2_with(r, {}), e0 = error_with(r, {});
-    Fitted best;
-    for (const StateEntry& e : candidates) {
-      Fitted f = fit_entry(r, ss, *base, e);
-      if (f.chi2 < best.chi2) best = std::move(f);
-    }
+    Fitted best = best_entry(r, ss, entries_but(taken.size()));
     if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n) <= 0 ||
         !(error_with(r, best.F) < e0))
-      return;
-    r.state_findings.push_back(state_parameter_finding(ss, best.e, best.value, pairs));
-    for (size_t k = 0; k < r.pairs.size(); ++k)
-      for (size_t q = 0; q < r.pairs[k].w.size(); ++q) r.pairs[k].factor[q] *= best.F[k][q];
-    ss = with_entry(ss, best.e, best.value);
+      break;
+    taken.push_back(std::move(best));
   }
+  // Each accepted entry taken out and the best entry put in its place, the others as they are:
+  // a first pick that stood in for two changed entries gives way to the entries that changed.
+  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round) {
+    bool swapped = false;
+    for (size_t j = 0; j < taken.size(); ++j) {
+      const StateSpace ss = set_factors(j);
+      const auto base = state_paths(ss);
+      if (!base) continue;
+      Fitted again = fit_entry(r, ss, *base, taken[j].e);
+      Fitted best = best_entry(r, ss, entries_but(j));
+      if (std::isfinite(best.chi2) && best.chi2 < again.chi2 * (1 - 1e-9) &&
+          !same_entry(best.e, taken[j].e)) {
+        taken[j] = std::move(best);
+        swapped = true;
+      } else if (std::isfinite(again.chi2)) {
+        taken[j] = std::move(again);
+      }
+    }
+    if (!swapped) break;
+  }
+  set_factors(taken.size());
+  for (const Fitted& t : taken)
+    r.state_findings.push_back(state_parameter_finding(sim, t.e, t.value, pairs));
 }
 
 }  // namespace fralab::diag

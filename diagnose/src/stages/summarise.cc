@@ -6,12 +6,38 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fralab/plant/state_space.h"
 #include "stages.h"
 
 namespace fralab::diag {
 namespace {
 
 // The report's explanation of a finding: what the residual shows, and what its scope says.
+// A moved root of a state model simulation: the mode of A it is and the states that take part
+// in it (those with a participation of 5 % or more), "" otherwise.
+std::string state_mode(const Model& sim, const Finding& f) {
+  if (!sim.state_space) return "";
+  const char* key = f.cause == CauseKind::kPoleShift      ? "from_rad_s"
+                    : f.cause == CauseKind::kDampingError ? "wn_rad_s"
+                                                          : nullptr;
+  if (!key || !f.parameters.count(key)) return "";
+  const double wn = f.parameters.at(key);
+  const auto z = f.parameters.find("from_zeta");
+  const C s = z == f.parameters.end() || z->second >= 1
+                  ? C(-wn, 0)
+                  : wn * C(-z->second, std::sqrt(1 - z->second * z->second));
+  const auto mp = mode_participation(*sim.state_space, s);
+  if (!mp) return "";
+  std::string text = "; the state model's mode at " + fmt(mp->eigenvalue.real()) +
+                     (std::abs(mp->eigenvalue.imag()) > 0
+                          ? " +- " + fmt(std::abs(mp->eigenvalue.imag())) + "j"
+                          : std::string()) +
+                     " rad/s, its states";
+  for (const auto& [name, share] : mp->states)
+    if (share >= 0.05) text += " " + name + " " + fmt(share);
+  return text;
+}
+
 std::string explain(const Finding& f) {
   std::string ex = cause_unit(f.cause)->explain(f);
   if (f.scope == Scope::kOutput) ex += "; common to every path into " + f.output + ": its sensor";
@@ -106,7 +132,7 @@ void summarise(DiagnosisRun& r) {
     cause_unit(f.cause)->apply(one, f);
     f.error_before = error_over(r, r.sim, f.pairs, false);
     f.error_after = error_over(r, one, f.pairs, false);
-    if (f.explanation.empty()) f.explanation = explain(f);
+    if (f.explanation.empty()) f.explanation = explain(f) + state_mode(r.sim, f);
   }
   for (auto& x : d.dropped)
     if (x.finding.explanation.empty()) x.finding.explanation = explain(x.finding);

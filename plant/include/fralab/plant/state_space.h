@@ -11,6 +11,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <complex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -47,6 +48,16 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int output, int input,
 /// `fralab-model/1`, with `delay_s`), its states, A, B, C and D (arrays of rows; D optional, zero)
 /// and `delay_s` (optional, outputs x inputs), and each nonzero path as a transfer function. InputError naming `source` and the JSON path when malformed.
 Model parse_state_space_model(const Json& doc, const std::string& source);
+
+/// The mode of A nearest `s` (rad/s, a pole of a path) within `rel` of |s|, and each state's
+/// participation in it: p_k = |v_k w_k| / sum_j |v_j w_j|, v the mode's right eigenvector and w
+/// its left one (a row of V^-1), largest first; empty when no mode of A lies that near.
+struct ModeParticipation {
+  std::complex<double> eigenvalue;
+  std::vector<std::pair<std::string, double>> states;
+};
+std::optional<ModeParticipation> mode_participation(const StateSpace& ss, std::complex<double> s,
+                                                    double rel = 1e-3);
 
 /// The matrices and names of a `fralab-ss/1` document (read only, not validated).
 StateSpace state_space_from_json(const Json& doc, const std::string& source);

@@ -1,0 +1,156 @@
+#include "random_state.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <random>
+
+#include "fralab/core/error.h"
+#include "fralab/plant/state_space.h"
+
+namespace fralab::testing {
+namespace {
+
+using C = std::complex<double>;
+
+Json document(const StateSpace& ss, const std::string& name) {
+  Json d = state_space_document(ss, name);
+  for (Json& in : d["inputs"]) in["full_scale"] = 10.0;
+  return d;
+}
+
+bool stable(const Eigen::MatrixXd& A) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+  for (Eigen::Index k = 0; k < A.rows(); ++k)
+    if (!(es.eigenvalues()(k).real() < -1e-3)) return false;
+  return true;
+}
+
+}  // namespace
+
+RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
+  std::mt19937_64 g(seed * 2000003u + uint64_t(index) * 7u + 3u);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto logu = [&](double lo, double hi) { return lo * std::pow(hi / lo, u(g)); };
+  const int n = 2 + int(g() % 11), ni = 1 + int(g() % 3), no = 2 + int(g() % 4);
+  StateSpace ss;
+  for (int k = 0; k < n; ++k) ss.states.push_back("S" + std::to_string(k + 1));
+  for (int k = 0; k < ni; ++k) ss.inputs.push_back("U" + std::to_string(k + 1));
+  for (int k = 0; k < no; ++k) ss.outputs.push_back("Y" + std::to_string(k + 1));
+  // A: each state's own rate over two decades, couplings between 40 % of the pairs of states
+  // (a chain through every state, so modes are shared), drawn again until stable.
+  do {
+    ss.A = Eigen::MatrixXd::Zero(n, n);
+    for (int k = 0; k < n; ++k) ss.A(k, k) = -logu(0.5, 50);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        if (i == j) continue;
+        if (j == i + 1 || u(g) < 0.4)
+          ss.A(i, j) = (u(g) < 0.5 ? -1 : 1) * logu(0.1, 0.6) *
+                       std::sqrt(std::abs(ss.A(i, i) * ss.A(j, j)));
+      }
+  } while (!stable(ss.A));
+  // B: each input drives one or two states; C: each output sees one to three.
+  ss.B = Eigen::MatrixXd::Zero(n, ni);
+  for (int j = 0; j < ni; ++j)
+    for (int q = 0, m = 1 + int(g() % 2); q < m; ++q)
+      ss.B(int(g() % uint64_t(n)), j) = (u(g) < 0.8 ? 1 : -1) * logu(0.3, 3) * std::abs(ss.A(0, 0));
+  ss.C = Eigen::MatrixXd::Zero(no, n);
+  for (int i = 0; i < no; ++i)
+    for (int q = 0, m = 1 + int(g() % 3); q < m; ++q)
+      ss.C(i, int(g() % uint64_t(n))) = (u(g) < 0.8 ? 1 : -1) * logu(0.3, 3);
+  ss.D = Eigen::MatrixXd::Zero(no, ni);
+  RandomCase c;
+  c.name = "case" + std::to_string(index);
+  try {
+    c.simulation = parse_model(document(ss, "random state model " + std::to_string(index)),
+                               c.name + "/simulation");
+  } catch (const InputError&) {  // a path that does not factor: the next draw of this case
+    return random_state_case(seed + 1000003u, index, n_hidden);
+  }
+  // The hidden entries: distinct nonzero entries of A (its diagonal: a time constant), B or C,
+  // each moved by a factor 1.3-2 either way (a coupling or a gain: also of either size).
+  StateSpace truth = ss;
+  const int hide = n_hidden >= 0 ? n_hidden : int(g() % 4);
+  std::vector<std::tuple<char, int, int>> taken;
+  for (int h = 0, tries = 0; h < hide && tries < 100; ++tries) {
+    const double r = u(g);
+    const char matrix = r < 0.5 ? 'A' : r < 0.75 ? 'B' : 'C';
+    Eigen::MatrixXd& M = matrix == 'A' ? truth.A : matrix == 'B' ? truth.B : truth.C;
+    int i = int(g() % uint64_t(M.rows())), j = int(g() % uint64_t(M.cols()));
+    if (matrix == 'A' && u(g) < 0.6) j = i;  // mostly a time constant
+    if (M(i, j) == 0 ||
+        std::find(taken.begin(), taken.end(), std::tuple{matrix, i, j}) != taken.end())
+      continue;
+    const double factor = logu(1.3, 2.0);
+    const double was = M(i, j);
+    M(i, j) = was * (u(g) < 0.5 ? factor : 1 / factor);
+    if (matrix == 'A' && !stable(truth.A)) {
+      M(i, j) = was;
+      continue;
+    }
+    taken.emplace_back(matrix, i, j);
+    HiddenEffect e;
+    e.cause = CauseKind::kStateParameter;
+    e.scope = Scope::kPlant;
+    e.param = "to";
+    e.value = M(i, j);
+    e.tol_rel = 0.02;
+    e.text["matrix"] = std::string(1, matrix);
+    e.text["state"] = ss.states[size_t(matrix == 'C' ? j : i)];
+    e.exact["row"] = i + 1;
+    e.exact["col"] = j + 1;
+    c.hidden.push_back(e);
+    ++h;
+  }
+  try {
+    c.engine = parse_model(document(truth, "engine " + std::to_string(index)), c.name + "/engine");
+  } catch (const InputError&) {
+    return random_state_case(seed + 1000003u, index, n_hidden);
+  }
+  return c;
+}
+
+std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
+  const Eigen::MatrixXd& A = c.simulation.state_space->A;
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+  double lo = INFINITY, hi = 0;
+  for (Eigen::Index k = 0; k < A.rows(); ++k) {
+    lo = std::min(lo, std::abs(es.eigenvalues()(k)));
+    hi = std::max(hi, std::abs(es.eigenvalues()(k)));
+  }
+  lo /= 10, hi *= 10;
+  std::mt19937_64 fit_rng(seed), val_rng(seed + 1);
+  std::normal_distribution<double> nd(0, std::sqrt(0.5));
+  const int n = int(std::ceil(10 * std::log10(hi / lo))) + 1;
+  auto curve = [&](size_t o, size_t i, std::mt19937_64& rng) {
+    Frd f;
+    f.pair = c.engine.inputs[i].name + ":" + c.engine.outputs[o].name;
+    for (int j = 0; j < n; ++j) {
+      const double w = lo * std::pow(hi / lo, double(j) / (n - 1));
+      const C gv = c.engine.position_to_output(int(o), int(i), w);
+      if (std::abs(gv) == 0) continue;
+      const C v = gv + rel_sigma * std::abs(gv) * C(nd(rng), nd(rng));
+      FrdPoint p;
+      p.w = w, p.mag = std::abs(v), p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
+      p.sigma = rel_sigma * std::abs(gv);
+      f.points.push_back(p);
+    }
+    return f;
+  };
+  std::vector<MeasuredPair> out;
+  for (size_t o = 0; o < c.engine.outputs.size(); ++o)
+    for (size_t i = 0; i < c.engine.inputs.size(); ++i) {
+      if (!c.engine.path(c.engine.outputs[o].name, c.engine.inputs[i].name)) continue;
+      MeasuredPair mp;
+      mp.frd = curve(o, i, fit_rng);
+      mp.pair = mp.frd.pair;
+      mp.validation = curve(o, i, val_rng);
+      out.push_back(mp);
+    }
+  return out;
+}
+
+}  // namespace fralab::testing

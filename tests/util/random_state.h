@@ -1,0 +1,25 @@
+// A generator of random state-model plants for the diagnosis's self-check (stage 3a): 2-12
+// named states with dense coupling (modes shared by many paths), 1-3 inputs, 2-5 outputs, the
+// simulation given as a state model (plant/state_space.h); each case hides 0-3 changed entries in
+// the engine (a state's time constant, a coupling, how an input drives a state, how a state shows
+// at an output) and says which `state_parameter` finding must name each. Measured in-process
+// (exact responses, 0.2 % noise, a validation measurement), as random_modal.h. Deterministic in
+// the seed.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "random_plant.h"
+
+namespace fralab::testing {
+
+/// Case `index` of the sequence drawn from `seed`; n_hidden < 0: 0-3 at random.
+RandomCase random_state_case(uint64_t seed, int index, int n_hidden = -1);
+
+/// Every X:O pair of c's engine over the band of its modes (a decade beyond each end), 10 points
+/// a decade, relative sigma `rel_sigma`; the validation measurement with another seed.
+std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed,
+                                            double rel_sigma = 0.002);
+
+}  // namespace fralab::testing
