@@ -22,8 +22,8 @@
 
 #include "random_machine.h"
 #include "random_modal.h"
-#include "random_state.h"
 #include "random_plant.h"
+#include "random_state.h"
 
 using namespace fralab;
 using namespace fralab::testing;
@@ -79,11 +79,12 @@ int main(int argc, char** argv) {
   app.add_option("--excitation", excitation, "stepped or auto (any of fralab's)")
       ->capture_default_str();
   std::string plants = "random";
-  app.add_option("--plants", plants,
-                 "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
-                 "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
-                 "modal (random_modal.h: structures, measured in-process) or state (random_state.h: "
-                 "state models with changed entries, measured in-process)")
+  app.add_option(
+         "--plants", plants,
+         "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
+         "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
+         "modal (random_modal.h: structures, measured in-process) or state (random_state.h: "
+         "state models with changed entries, measured in-process)")
       ->check(CLI::IsMember({"random", "machine", "modal", "state"}))
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -94,8 +95,8 @@ int main(int argc, char** argv) {
   for (int i = first; i < first + cases; ++i) {
     const RandomCase c = plants == "machine" ? random_machine_case(seed, i)
                          : plants == "modal" ? random_modal_case(seed, i)
-                         : plants == "state"  ? random_state_case(seed, i)
-                                              : random_case(seed, i);
+                         : plants == "state" ? random_state_case(seed, i)
+                                             : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);

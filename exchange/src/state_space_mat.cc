@@ -28,7 +28,7 @@ Eigen::MatrixXd real_matrix(const matvar_t* v, const std::string& where) {
   Eigen::MatrixXd m(r, c);
   for (Eigen::Index k = 0; k < r * c; ++k)
     m(k % r, k / r) = v->class_type == MAT_C_DOUBLE ? static_cast<const double*>(v->data)[k]
-                                                   : static_cast<const float*>(v->data)[k];
+                                                    : static_cast<const float*>(v->data)[k];
   return m;
 }
 
@@ -84,7 +84,8 @@ StateSpace from_fields(const std::function<const matvar_t*(const char*)>& get,
                        const std::string& where) {
   StateSpace ss;
   for (const char* key : {"A", "B", "C"})
-    if (!get(key)) throw InputError(where + ": no variable " + key + " (nor ABCD and nx, Dymola's)");
+    if (!get(key))
+      throw InputError(where + ": no variable " + key + " (nor ABCD and nx, Dymola's)");
   ss.A = real_matrix(get("A"), where + ": A");
   ss.B = real_matrix(get("B"), where + ": B");
   ss.C = real_matrix(get("C"), where + ": C");
@@ -137,8 +138,8 @@ StateSpace read_state_space_mat(const std::string& path) {
     ss.B = abcd.topRightCorner(nx, nu);
     ss.C = abcd.bottomLeftCorner(ny, nx);
     ss.D = abcd.bottomRightCorner(ny, nu);
-    std::vector<std::string> all = var("xuyName") ? names(var("xuyName"), path + ": xuyName")
-                                                  : std::vector<std::string>{};
+    std::vector<std::string> all =
+        var("xuyName") ? names(var("xuyName"), path + ": xuyName") : std::vector<std::string>{};
     if (!all.empty() && Eigen::Index(all.size()) != nx + nu + ny)
       throw InputError(path + ": xuyName has " + std::to_string(all.size()) + " names for " +
                        std::to_string(nx + nu + ny) + " states, inputs and outputs (ABCD)");
@@ -162,8 +163,9 @@ StateSpace read_state_space_mat(const std::string& path) {
           },
           where);
     }
-  throw InputError(path + ": no state model (variables A, B, C, a struct holding them, or "
-                          "Dymola's ABCD and nx)");
+  throw InputError(path +
+                   ": no state model (variables A, B, C, a struct holding them, or "
+                   "Dymola's ABCD and nx)");
 }
 
 std::optional<Json> state_space_document_if_mat(const std::string& path) {

@@ -56,8 +56,8 @@ namespace {
 // (null without --levels or --level-values).
 Json attach_levels(const DiagnoseCommand& c, std::vector<MeasuredPair>& data) {
   if (!c.level_values.empty() && c.level_values.size() != 1 + c.levels.size())
-    throw InputError("--level-values: " + std::to_string(c.level_values.size()) +
-                     " values for " + std::to_string(1 + c.levels.size()) +
+    throw InputError("--level-values: " + std::to_string(c.level_values.size()) + " values for " +
+                     std::to_string(1 + c.levels.size()) +
                      " measurements (the measured one, then each of --levels)");
   for (size_t k = 0; k < c.level_values.size(); ++k)
     if (!(c.level_values[k] > 0) || !std::isfinite(c.level_values[k]))

@@ -1,4 +1,3 @@
-#include "fralab/exchange/state_space_mat.h"
 #include "fralab/lab/envelope.h"
 
 #include <Eigen/Dense>
@@ -15,6 +14,7 @@
 #include "fralab/core/error.h"
 #include "fralab/core/text.h"
 #include "fralab/diagnose/report.h"
+#include "fralab/exchange/state_space_mat.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/plant/embedded_models.h"
 #include "fralab/plant/schedule.h"

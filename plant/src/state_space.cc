@@ -14,9 +14,9 @@ namespace {
 
 using Cd = std::complex<double>;
 
-constexpr double kCancel = 1e-7;   // a zero within this of a pole (relative, at least 1) cancels
-constexpr double kImag = 1e-9;     // a root with |imag| below this (relative) is real
-constexpr double kAgree = 1e-6;    // the path's factored response agrees with C(sI-A)^-1 B + D
+constexpr double kCancel = 1e-7;  // a zero within this of a pole (relative, at least 1) cancels
+constexpr double kImag = 1e-9;    // a root with |imag| below this (relative) is real
+constexpr double kAgree = 1e-6;   // the path's factored response agrees with C(sI-A)^-1 B + D
 
 std::string size_str(const Eigen::MatrixXd& m) {
   return std::to_string(m.rows()) + " x " + std::to_string(m.cols());
@@ -58,7 +58,8 @@ Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string
   for (size_t r = 0; r < rows.size(); ++r) {
     if (!rows[r].is_array() || rows[r].size() != cols)
       json_fail(w / r, "every row must be an array of " + std::to_string(cols) + " numbers");
-    for (size_t c = 0; c < cols; ++c) m(Eigen::Index(r), Eigen::Index(c)) = json_number(rows[r][c], w / r / c);
+    for (size_t c = 0; c < cols; ++c)
+      m(Eigen::Index(r), Eigen::Index(c)) = json_number(rows[r][c], w / r / c);
   }
   return m;
 }
@@ -66,7 +67,8 @@ Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string
 }  // namespace
 
 void StateSpace::validate(const std::string& source) const {
-  const Eigen::Index n = A.rows(), m = Eigen::Index(inputs.size()), p = Eigen::Index(outputs.size());
+  const Eigen::Index n = A.rows(), m = Eigen::Index(inputs.size()),
+                     p = Eigen::Index(outputs.size());
   auto fail = [&](const std::string& what) { throw InputError(source + ": " + what); };
   if (n == 0) fail("A: no states");
   if (A.cols() != n) fail("A is " + size_str(A) + ": it must be square");
@@ -83,10 +85,8 @@ void StateSpace::validate(const std::string& source) const {
   if (D.size() != 0 && (D.rows() != p || D.cols() != m))
     fail("D is " + size_str(D) + ", expected " + std::to_string(p) + " x " + std::to_string(m) +
          " (outputs x inputs)");
-  for (const auto& [name, mat] : {std::pair<const char*, const Eigen::MatrixXd*>{"A", &A},
-                                  {"B", &B},
-                                  {"C", &C},
-                                  {"D", &D}})
+  for (const auto& [name, mat] :
+       {std::pair<const char*, const Eigen::MatrixXd*>{"A", &A}, {"B", &B}, {"C", &C}, {"D", &D}})
     for (Eigen::Index r = 0; r < mat->rows(); ++r)
       for (Eigen::Index c = 0; c < mat->cols(); ++c)
         if (!std::isfinite((*mat)(r, c)))
@@ -257,7 +257,8 @@ StateSpace state_space_from_json(const Json& doc, const std::string& source) {
   names("states", ss.states, nullptr);
   names("inputs", ss.inputs, &ss.input_delay_s);
   names("outputs", ss.outputs, &ss.output_delay_s);
-  if (ss.D.size() == 0) ss.D = Eigen::MatrixXd::Zero(Eigen::Index(ss.outputs.size()), Eigen::Index(ss.inputs.size()));
+  if (ss.D.size() == 0)
+    ss.D = Eigen::MatrixXd::Zero(Eigen::Index(ss.outputs.size()), Eigen::Index(ss.inputs.size()));
   return ss;
 }
 
@@ -281,8 +282,9 @@ Model parse_state_space_model(const Json& doc, const std::string& source) {
   for (int i = 0; i < int(ss.outputs.size()); ++i)
     for (int j = 0; j < int(ss.inputs.size()); ++j)
       if (const auto tf = state_space_path(ss, i, j, source))
-        m["paths"].push_back(
-            {{"output", ss.outputs[size_t(i)]}, {"input", ss.inputs[size_t(j)]}, {"tf", tf_to_json(*tf)}});
+        m["paths"].push_back({{"output", ss.outputs[size_t(i)]},
+                              {"input", ss.inputs[size_t(j)]},
+                              {"tf", tf_to_json(*tf)}});
   Model model = parse_model(m, source);
   model.state_space = std::make_shared<const StateSpace>(ss);
   return model;

@@ -261,7 +261,8 @@ TEST(DiagnoseRealData, F16LevelsOneToThreeGiveEachModesLawInTheForce) {
   }
   const Diagnosis d = diagnose(sim, relative_to_baseline(sim, data, l1, {}));
   const std::string json = diagnosis_to_json(d).dump(1);
-  for (auto [sim_hz, l2_hz] : {std::pair{kTorsionL1Hz, kTorsionL2Hz}, {kBendingL1Hz, kBendingL2Hz}}) {
+  for (auto [sim_hz, l2_hz] :
+       {std::pair{kTorsionL1Hz, kTorsionL2Hz}, {kBendingL1Hz, kBendingL2Hz}}) {
     const Finding* f = moved_mode(d, sim_hz);
     ASSERT_NE(f, nullptr) << sim_hz << json;
     ASSERT_TRUE(f->level.has_value()) << sim_hz << json;

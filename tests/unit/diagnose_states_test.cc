@@ -18,8 +18,8 @@ namespace {
 
 using C = std::complex<double>;
 constexpr double kRelSigma = 0.002;
-constexpr double kValueRel = 0.02;    // the entry within 2 % of the truth's
-constexpr double kErrorShare = 0.2;   // error after <= this share of before
+constexpr double kValueRel = 0.02;   // the entry within 2 % of the truth's
+constexpr double kErrorShare = 0.2;  // error after <= this share of before
 
 Json simulation_doc() {
   return json_load_file(testing::source_path("tests/data/state_space/ss.json"));
@@ -75,7 +75,8 @@ TEST(DiagnoseStates, OneStatesTimeConstantIsOneFindingNamingTheState) {
   EXPECT_EQ(f.parameters.at("col"), 2);
   EXPECT_NEAR(f.parameters.at("time_constant_to_s") / 4.5, 1, kValueRel);
   EXPECT_EQ(f.pairs.size(), 6u);
-  EXPECT_LE(d.error_after, kErrorShare * d.error_before) << d.error_before << " -> " << d.error_after;
+  EXPECT_LE(d.error_after, kErrorShare * d.error_before)
+      << d.error_before << " -> " << d.error_after;
   EXPECT_THAT(f.explanation, ::testing::HasSubstr("time constant"));
 }
 
@@ -90,7 +91,8 @@ TEST(DiagnoseStates, AnInputsCouplingToAStateIsOneFindingNamingBoth) {
   EXPECT_EQ(f.text_parameters.at("state"), "Wf");
   EXPECT_EQ(f.text_parameters.at("input"), "nozzle");
   EXPECT_NEAR(f.parameters.at("to") / 1.6, 1, kValueRel);
-  EXPECT_LE(d.error_after, kErrorShare * d.error_before) << d.error_before << " -> " << d.error_after;
+  EXPECT_LE(d.error_after, kErrorShare * d.error_before)
+      << d.error_before << " -> " << d.error_after;
 }
 
 // The extended model carries the moved entry: its responses are the truth's.
@@ -125,7 +127,8 @@ TEST(DiagnoseStates, APathsPoleShiftNamesTheStateModelsModeAndItsStates) {
   const std::string json = diagnosis_to_json(d).dump(1);
   const Finding* shift = nullptr;
   for (const Finding& f : d.findings)
-    if (f.cause == CauseKind::kPoleShift && std::abs(f.parameters.at("from_rad_s") + from) < 1e-6 * std::abs(from))
+    if (f.cause == CauseKind::kPoleShift &&
+        std::abs(f.parameters.at("from_rad_s") + from) < 1e-6 * std::abs(from))
       shift = &f;
   ASSERT_NE(shift, nullptr) << json;
   EXPECT_THAT(shift->explanation, ::testing::HasSubstr("the state model's mode at")) << json;

@@ -106,8 +106,8 @@ TEST(StateSpaceMat, TheStateModelFralabExportsReadsBackWithItsPathDelays) {
 
 // The model read from .mat and from its JSON give the same responses.
 TEST(StateSpaceMat, TheModelFromMatRespondsAsTheModelFromJson) {
-  const Json doc = *state_space_document_if_mat(
-      source_path("tests/data/state_space/ss_variables_v7.mat"));
+  const Json doc =
+      *state_space_document_if_mat(source_path("tests/data/state_space/ss_variables_v7.mat"));
   const Model from_mat = parse_model(doc, "ss_variables_v7.mat");
   const Model from_json =
       parse_model(json_load_file(source_path("tests/data/state_space/ss.json")), "ss.json");

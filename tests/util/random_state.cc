@@ -48,8 +48,8 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
       for (int j = 0; j < n; ++j) {
         if (i == j) continue;
         if (j == i + 1 || u(g) < 0.4)
-          ss.A(i, j) = (u(g) < 0.5 ? -1 : 1) * logu(0.1, 0.6) *
-                       std::sqrt(std::abs(ss.A(i, i) * ss.A(j, j)));
+          ss.A(i, j) =
+              (u(g) < 0.5 ? -1 : 1) * logu(0.1, 0.6) * std::sqrt(std::abs(ss.A(i, i) * ss.A(j, j)));
       }
   } while (!stable(ss.A));
   // B: each input drives one or two states; C: each output sees one to three.

@@ -34,9 +34,9 @@ const std::vector<const LinearCause*>& linear_catalogue() {
 const std::vector<const CauseUnit*>& cause_units() {
   static const std::vector<const CauseUnit*> v = [] {
     std::vector<const CauseUnit*> all(linear_catalogue().begin(), linear_catalogue().end());
-    for (const CauseUnit* u : {&hysteresis_cause(), &deadband_cause(),
-                               &measurement_coupling_cause(), &missing_path_cause(),
-                               &state_parameter_cause()})
+    for (const CauseUnit* u :
+         {&hysteresis_cause(), &deadband_cause(), &measurement_coupling_cause(),
+          &missing_path_cause(), &state_parameter_cause()})
       all.push_back(u);
     return all;
   }();

@@ -130,10 +130,7 @@ Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, doubl
   f.cause = CauseKind::kStateParameter;
   f.scope = Scope::kPlant;
   f.pairs = pairs;
-  f.parameters = {{"from", entry_value(ss, e)},
-                  {"to", to},
-                  {"row", e.row + 1},
-                  {"col", e.col + 1}};
+  f.parameters = {{"from", entry_value(ss, e)}, {"to", to}, {"row", e.row + 1}, {"col", e.col + 1}};
   f.text_parameters["matrix"] = std::string(1, e.matrix);
   if (e.matrix == 'A') {
     f.text_parameters["state"] = ss.states[size_t(e.row)];

@@ -41,7 +41,9 @@ double half_width(const std::array<double, 2>& iv, double v) {
 struct OtherMeasurement {
   int k = -1;
   const std::map<std::string, MultisineExcitation>* multisines = nullptr;
-  const Frd& curve(const MeasuredPair& mp) const { return k < 0 ? mp.validation : mp.levels[k].frd; }
+  const Frd& curve(const MeasuredPair& mp) const {
+    return k < 0 ? mp.validation : mp.levels[k].frd;
+  }
   double given_level(const MeasuredPair& mp) const { return k < 0 ? 0.0 : mp.levels[k].level; }
 };
 
@@ -156,8 +158,8 @@ void level(DiagnosisRun& r) {
       pts[m][i] = level_points(r, r.findings[i], others[m]);
       const LevelPoints& v = pts[m][i];
       const bool levels_known = v.level_fit > 0 && v.level_other > 0;
-      at[i][m].compared = !v.pairs.empty() &&
-                          !(levels_known && std::abs(v.level_other / v.level_fit - 1) < 0.05);
+      at[i][m].compared =
+          !v.pairs.empty() && !(levels_known && std::abs(v.level_other / v.level_fit - 1) < 0.05);
       at[i][m].level_fit = v.level_fit;
       at[i][m].level_other = v.level_other;
     }
@@ -216,8 +218,9 @@ void level(DiagnosisRun& r) {
         const auto s = sigmas.find({i, c.key});
         const double sg = s == sigmas.end() ? INFINITY : s->second;
         at[i][m].values.push_back(v);
-        at[i][m].intervals.push_back(c.log ? std::array<double, 2>{v * std::exp(-sg), v * std::exp(sg)}
-                                           : std::array<double, 2>{v - sg, v + sg});
+        at[i][m].intervals.push_back(
+            c.log ? std::array<double, 2>{v * std::exp(-sg), v * std::exp(sg)}
+                  : std::array<double, 2>{v - sg, v + sg});
       }
     fitted[m] = std::move(fs);
     done.push_back(m);

@@ -162,7 +162,8 @@ Fitted best_entry(const DiagnosisRun& r, const StateSpace& ss,
   const auto base = state_paths(ss);
   if (!base) return best;
   for (const StateEntry& e : candidates_of(ss)) {
-    if (std::any_of(skip.begin(), skip.end(), [&](const StateEntry& s) { return same_entry(s, e); }))
+    if (std::any_of(skip.begin(), skip.end(),
+                    [&](const StateEntry& s) { return same_entry(s, e); }))
       continue;
     Fitted f = fit_entry(r, ss, *base, e);
     if (f.chi2 < best.chi2) best = std::move(f);
@@ -209,8 +210,7 @@ void states(DiagnosisRun& r) {
     const StateSpace ss = set_factors(taken.size());
     const double c0 = chi2_with(r, {}), e0 = error_with(r, {});
     Fitted best = best_entry(r, ss, entries_but(taken.size()));
-    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n) <= 0 ||
-        !(error_with(r, best.F) < e0))
+    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n) <= 0 || !(error_with(r, best.F) < e0))
       break;
     taken.push_back(std::move(best));
   }

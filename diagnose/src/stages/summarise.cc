@@ -28,11 +28,11 @@ std::string state_mode(const Model& sim, const Finding& f) {
                   : wn * C(-z->second, std::sqrt(1 - z->second * z->second));
   const auto mp = mode_participation(*sim.state_space, s);
   if (!mp) return "";
-  std::string text = "; the state model's mode at " + fmt(mp->eigenvalue.real()) +
-                     (std::abs(mp->eigenvalue.imag()) > 0
-                          ? " +- " + fmt(std::abs(mp->eigenvalue.imag())) + "j"
-                          : std::string()) +
-                     " rad/s, its states";
+  std::string text =
+      "; the state model's mode at " + fmt(mp->eigenvalue.real()) +
+      (std::abs(mp->eigenvalue.imag()) > 0 ? " +- " + fmt(std::abs(mp->eigenvalue.imag())) + "j"
+                                           : std::string()) +
+      " rad/s, its states";
   for (const auto& [name, share] : mp->states)
     if (share >= 0.05) text += " " + name + " " + fmt(share);
   return text;

@@ -77,8 +77,8 @@
 #pragma once
 
 #include <array>
-#include <complex>
 #include <cmath>
+#include <complex>
 #include <map>
 #include <optional>
 #include <string>

@@ -46,7 +46,8 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int output, int input,
 
 /// A `fralab-ss/1` document as the model fralab runs: its inputs and outputs (the objects of
 /// `fralab-model/1`, with `delay_s`), its states, A, B, C and D (arrays of rows; D optional, zero)
-/// and `delay_s` (optional, outputs x inputs), and each nonzero path as a transfer function. InputError naming `source` and the JSON path when malformed.
+/// and `delay_s` (optional, outputs x inputs), and each nonzero path as a transfer function.
+/// InputError naming `source` and the JSON path when malformed.
 Model parse_state_space_model(const Json& doc, const std::string& source);
 
 /// The mode of A nearest `s` (rad/s, a pole of a path) within `rel` of |s|, and each state's
