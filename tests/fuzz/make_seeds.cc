@@ -135,6 +135,14 @@ int main(int argc, char** argv) {
   "paths": [{"output": "P3", "input": "Wf",
     "tf": {"gain": 0.03, "zeros": [{"real": 192}], "poles": [{"real": -2.8}], "delay_s": 0.011}}]}
 )";
+  // A state model (fralab-ss/1): two states, one input, two outputs, delays of each kind.
+  std::ofstream(d + "/model/seed_ss.json") << R"({"format": "fralab-ss/1", "name": "seed",
+ "states": [{"name": "N"}, {"name": "T4"}],
+ "inputs": [{"name": "u", "units": "1", "full_scale": 1, "delay_s": 0.01}],
+ "outputs": [{"name": "y", "units": "1"}, {"name": "z", "units": "1", "delay_s": 0.002}],
+ "A": [[-3, 0.5], [0.2, -0.5]], "B": [[1], [0.5]], "C": [[1, 0], [0, 1]], "D": [[0], [0.01]],
+ "delay_s": [[0], [0.001]]}
+)";
   Frd f;
   f.pair = "Wf:P3";
   for (int i = 0; i < 4; ++i) {
