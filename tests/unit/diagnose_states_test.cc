@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "exact_measurement.h"
 #include "fralab/diagnose/diagnose.h"
 #include "fralab/plant/state_space.h"
 #include "test_util.h"
@@ -26,32 +27,9 @@ Json simulation_doc() {
 }
 
 std::vector<MeasuredPair> measure(const Model& truth, uint64_t seed) {
-  std::mt19937_64 fit_rng(seed), val_rng(seed + 1);
-  std::normal_distribution<double> nd(0, std::sqrt(0.5));
-  auto curve = [&](size_t o, size_t i, std::mt19937_64& rng) {
-    Frd f;
-    f.pair = truth.inputs[i].name + ":" + truth.outputs[o].name;
-    for (double lw = -2; lw <= 2 + 1e-9; lw += 0.125) {
-      const double w = std::pow(10.0, lw);
-      const C g = truth.position_to_output(int(o), int(i), w);
-      const C v = g + kRelSigma * std::abs(g) * C(nd(rng), nd(rng));
-      FrdPoint p;
-      p.w = w, p.mag = std::abs(v), p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
-      p.sigma = kRelSigma * std::abs(g);
-      f.points.push_back(p);
-    }
-    return f;
-  };
-  std::vector<MeasuredPair> out;
-  for (size_t o = 0; o < truth.outputs.size(); ++o)
-    for (size_t i = 0; i < truth.inputs.size(); ++i) {
-      MeasuredPair mp;
-      mp.frd = curve(o, i, fit_rng);
-      mp.pair = mp.frd.pair;
-      mp.validation = curve(o, i, val_rng);
-      out.push_back(mp);
-    }
-  return out;
+  std::vector<double> w;
+  for (double lw = -2; lw <= 2 + 1e-9; lw += 0.125) w.push_back(std::pow(10.0, lw));
+  return testing::exact_measurement(truth, w, seed, kRelSigma);
 }
 
 Diagnosis diagnose_changed(const std::string& matrix, int row, int col, double value) {

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 
+#include "exact_measurement.h"
 #include "fralab/identify/pole_set_fit.h"
 
 namespace fralab::testing {
@@ -136,33 +137,9 @@ std::vector<MeasuredPair> modal_measurement(const RandomCase& c, uint64_t seed, 
   lo /= 1.3, hi *= 1.3;
   const double ratio = 1 + zmin / 2;  // four lines in the half-power band 2 zeta wn
   const int n = int(std::ceil(std::log(hi / lo) / std::log(ratio))) + 1;
-  std::mt19937_64 fit_rng(seed), val_rng(seed + 1);
-  std::normal_distribution<double> nd(0, std::sqrt(0.5));
-  auto curve = [&](size_t o, size_t i, std::mt19937_64& rng) {
-    Frd f;
-    f.pair = c.engine.inputs[i].name + ":" + c.engine.outputs[o].name;
-    for (int j = 0; j < n; ++j) {
-      const double w = lo * std::pow(ratio, j);
-      const C g = c.engine.position_to_output(int(o), int(i), w);
-      const C v = g + rel_sigma * std::abs(g) * C(nd(rng), nd(rng));
-      FrdPoint p;
-      p.w = w, p.mag = std::abs(v), p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
-      p.sigma = rel_sigma * std::abs(g);
-      f.points.push_back(p);
-    }
-    return f;
-  };
-  std::vector<MeasuredPair> out;
-  for (size_t o = 0; o < c.engine.outputs.size(); ++o) {
-    for (size_t i = 0; i < c.engine.inputs.size(); ++i) {
-      MeasuredPair mp;
-      mp.frd = curve(o, i, fit_rng);
-      mp.pair = mp.frd.pair;
-      mp.validation = curve(o, i, val_rng);
-      out.push_back(mp);
-    }
-  }
-  return out;
+  std::vector<double> w;
+  for (int j = 0; j < n; ++j) w.push_back(lo * std::pow(ratio, j));
+  return exact_measurement(c.engine, w, seed, rel_sigma);
 }
 
 }  // namespace fralab::testing

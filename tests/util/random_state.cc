@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 
+#include "exact_measurement.h"
 #include "fralab/core/error.h"
 #include "fralab/plant/state_space.h"
 
@@ -122,35 +123,10 @@ std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, 
     hi = std::max(hi, std::abs(es.eigenvalues()(k)));
   }
   lo /= 10, hi *= 10;
-  std::mt19937_64 fit_rng(seed), val_rng(seed + 1);
-  std::normal_distribution<double> nd(0, std::sqrt(0.5));
   const int n = int(std::ceil(10 * std::log10(hi / lo))) + 1;
-  auto curve = [&](size_t o, size_t i, std::mt19937_64& rng) {
-    Frd f;
-    f.pair = c.engine.inputs[i].name + ":" + c.engine.outputs[o].name;
-    for (int j = 0; j < n; ++j) {
-      const double w = lo * std::pow(hi / lo, double(j) / (n - 1));
-      const C gv = c.engine.position_to_output(int(o), int(i), w);
-      if (std::abs(gv) == 0) continue;
-      const C v = gv + rel_sigma * std::abs(gv) * C(nd(rng), nd(rng));
-      FrdPoint p;
-      p.w = w, p.mag = std::abs(v), p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
-      p.sigma = rel_sigma * std::abs(gv);
-      f.points.push_back(p);
-    }
-    return f;
-  };
-  std::vector<MeasuredPair> out;
-  for (size_t o = 0; o < c.engine.outputs.size(); ++o)
-    for (size_t i = 0; i < c.engine.inputs.size(); ++i) {
-      if (!c.engine.path(c.engine.outputs[o].name, c.engine.inputs[i].name)) continue;
-      MeasuredPair mp;
-      mp.frd = curve(o, i, fit_rng);
-      mp.pair = mp.frd.pair;
-      mp.validation = curve(o, i, val_rng);
-      out.push_back(mp);
-    }
-  return out;
+  std::vector<double> w;
+  for (int j = 0; j < n; ++j) w.push_back(lo * std::pow(hi / lo, double(j) / (n - 1)));
+  return exact_measurement(c.engine, w, seed, rel_sigma);
 }
 
 }  // namespace fralab::testing
