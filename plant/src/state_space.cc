@@ -40,7 +40,7 @@ Cd response(const StateSpace& ss, int i, int j, Cd s) {
   const Eigen::Index n = ss.A.rows();
   const Eigen::MatrixXcd M = s * Eigen::MatrixXcd::Identity(n, n) - ss.A.cast<Cd>();
   const Eigen::VectorXcd x = M.partialPivLu().solve(ss.B.col(j).cast<Cd>());
-  return (ss.C.row(i).cast<Cd>() * x)(0) + ss.D(i, j);
+  return (ss.C.row(i).cast<Cd>() * x)(0) + (ss.D.size() ? ss.D(i, j) : 0.0);
 }
 
 Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string& key,
