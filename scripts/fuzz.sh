@@ -38,10 +38,11 @@ bad=0
 for r in "${readers[@]}"; do
   [ -x build-fuzz/bin/fuzz_"$r" ] || { echo "fuzz $r: build-fuzz/bin/fuzz_$r is not built"; exit 2; }
   # A "shapes" input builds a whole state model (up to 8 x 8 paths, 0.1-1 s optimised, tens of
-  # seconds under the sanitizers for the largest): fewer runs, a longer timeout.
+  # seconds under the sanitizers for the largest, and 150-200 s for one of them on a busy
+  # machine): fewer runs, a longer timeout.
   n=$runs timeout=20
   if [ "$r" = shapes ]; then
-    n=$((runs < ${FUZZ_SHAPES_RUNS:-1000} ? runs : ${FUZZ_SHAPES_RUNS:-1000})) timeout=180
+    n=$((runs < ${FUZZ_SHAPES_RUNS:-1000} ? runs : ${FUZZ_SHAPES_RUNS:-1000})) timeout=600
   fi
   work=$(mktemp -d)
   cp tests/fuzz/corpus/"$r"/* "$work"/
