@@ -196,13 +196,6 @@ size_t points_over(const DiagnosisRun& r, const SharedMode& m) {
   return n;
 }
 
-// The stage's criterion: by how much the drop of chi2 from c0 to c, over n points, exceeds k
-// penalties ln 2n, in units of the misfit level s = max(1, c / n) (> 0: the move earns its place).
-double earned(double c0, double c, size_t n, int k) {
-  const double s = std::max(1.0, c / double(std::max<size_t>(n, 1)));
-  return (c0 - c) / s - k * std::log(2.0 * double(n));
-}
-
 // From (lwn, lz): the frequency and the damping alternately by Brent's method (the frequency
 // within the damping's share either side, the damping within a factor e^0.5), at most kRounds,
 // until both settle. Then the move at the simulated damping (`kept`, chi2 at lz0) is replaced by
@@ -396,6 +389,11 @@ void modes(DiagnosisRun& r) {
     r.mode_findings.push_back(finding_of(r, taken[j], fits[j]));
     apply_factor(r, taken[j], fits[j].F, false);
   }
+}
+
+double earned(double c0, double c, size_t n, int k) {
+  const double s = std::max(1.0, c / double(std::max<size_t>(n, 1)));
+  return (c0 - c) / s - k * std::log(2.0 * double(n));
 }
 
 }  // namespace fralab::diag

@@ -115,6 +115,10 @@ std::array<double, 2> parameter_interval(const std::function<double(double)>& g,
 // The stages (docs/method/diagnosis.md, "The stages").
 /// 1. The usable points of every pair against the simulation, and the multisines.
 void prepare(DiagnosisRun& r);
+/// The criterion of stages 3a and 3b: by how much the drop of chi2 from c0 to c, over n points,
+/// exceeds k penalties ln 2n, in units of the misfit level s = max(1, c / n) (> 0: the move
+/// earns its place).
+double earned(double c0, double c, size_t n, int k);
 /// 3a. Where the simulation is a state model, its entries (A, B, C) moved over every pair
 /// (states.cc).
 void states(DiagnosisRun& r);

@@ -131,11 +131,6 @@ Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
   return f;
 }
 
-double earned(double c0, double c, size_t n) {
-  const double s = std::max(1.0, c / double(std::max<size_t>(n, 1)));
-  return (c0 - c) / s - std::log(2.0 * double(n));
-}
-
 // The state model's nonzero entries of A, B and C.
 std::vector<StateEntry> candidates_of(const StateSpace& ss) {
   std::vector<StateEntry> out;
@@ -210,7 +205,8 @@ void states(DiagnosisRun& r) {
     const StateSpace ss = set_factors(taken.size());
     const double c0 = chi2_with(r, {}), e0 = error_with(r, {});
     Fitted best = best_entry(r, ss, entries_but(taken.size()));
-    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n) <= 0 || !(error_with(r, best.F) < e0))
+    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n, 1) <= 0 ||
+        !(error_with(r, best.F) < e0))
       break;
     taken.push_back(std::move(best));
   }
