@@ -1,7 +1,5 @@
 #include "fralab/analyze/pair_analyzer.h"
 
-#include <fftw3.h>
-
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -9,6 +7,7 @@
 
 #include "fralab/analyze/bla.h"
 #include "fralab/analyze/fourier_filter.h"
+#include "fralab/analyze/period_fft.h"
 #include "fralab/analyze/repeats.h"
 
 namespace fralab {
@@ -437,22 +436,14 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     }
   }
   // Spectra of every period of both channels (window mean removed: DC does not touch lines k >= 1).
-  std::vector<double> buf(P);
-  std::vector<std::complex<double>> spec(P / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()),
-                                        FFTW_ESTIMATE);
+  PeriodFft fft(P);
   std::vector<std::vector<std::complex<double>>> X1(M), X2(M);
   const double* a = samples(e1_, st.sample);
   const double* b = samples(e2_, st.sample);
   for (int p = 0; p < M; ++p) {
-    std::copy(a + size_t(p) * P, a + size_t(p + 1) * P, buf.begin());
-    fftw_execute(plan);
-    X1[p] = spec;
-    std::copy(b + size_t(p) * P, b + size_t(p + 1) * P, buf.begin());
-    fftw_execute(plan);
-    X2[p] = spec;
+    X1[p] = fft(a + size_t(p) * P);
+    X2[p] = fft(b + size_t(p) * P);
   }
-  fftw_destroy_plan(plan);
   std::vector<bool> excited(P / 2 + 1, false);
   for (int k : st.lines)
     if (k >= 0 && k <= P / 2) excited[k] = true;
@@ -548,15 +539,8 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
   std::vector<bool> excited(P / 2 + 1, false);
   for (int k : lines)
     if (k >= 0 && k <= P / 2) excited[k] = true;
-  std::vector<double> buf(P);
-  std::vector<Complex> spec(P / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(P, buf.data(), reinterpret_cast<fftw_complex*>(spec.data()),
-                                        FFTW_ESTIMATE);
-  auto period_spectrum = [&](const double* x, int p) {
-    std::copy(x + size_t(p) * P, x + size_t(p + 1) * P, buf.begin());
-    fftw_execute(plan);
-    return spec;
-  };
+  PeriodFft fft(P);
+  auto period_spectrum = [&](const double* x, int p) { return fft(x + size_t(p) * P); };
   const size_t L = lines.size();
   ex.x1.assign(L, std::vector<Complex>(M));
   ex.x2.assign(L, std::vector<Complex>(M));
@@ -606,7 +590,6 @@ PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) 
       }
     }
   }
-  fftw_destroy_plan(plan);
   // A channel's mean level on line j's unexcited neighbours, relative to line j.
   auto distortion = [&](const std::vector<Complex>& x, size_t j) {
     double lvl = 0;
@@ -775,6 +758,27 @@ Frd PairAnalyzer::frd() const {
   std::stable_sort(f.points.begin(), f.points.end(),
                    [](const FrdPoint& x, const FrdPoint& y) { return x.w < y.w; });
   return f;
+}
+
+std::vector<Frd> analyse_run_in_memory(const std::vector<StatusEvent>& events,
+                                       const std::vector<Block>& blocks,
+                                       const std::vector<std::string>& pairs,
+                                       const AnalyzerOptions& options) {
+  const auto store = std::make_shared<SampleStore>();
+  std::vector<std::unique_ptr<PairAnalyzer>> an;
+  for (const std::string& p : pairs)
+    an.push_back(std::make_unique<PairAnalyzer>(p, options, store));
+  for (const StatusEvent& e : events)
+    if (e.seq >= 0)
+      for (auto& a : an) a->on_status(e);
+  for (const Block& b : blocks)
+    for (auto& a : an) a->on_block(b);
+  std::vector<Frd> out;
+  for (auto& a : an) {
+    a->flush();
+    out.push_back(a->frd());
+  }
+  return out;
 }
 
 }  // namespace fralab

@@ -102,6 +102,7 @@ MeasureResult run_measure(const MeasureOptions& given) {
     run.start_and_supervise();
     run.wait_for_identifier();
     run.verify_tape();
+    run.check_data();
     run.analyse_resumed();
   } catch (const std::exception& e) {
     throw run.abandon(e);

@@ -10,6 +10,7 @@
 
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/acquire/model_info.h"
+#include "fralab/lab/data_check.h"
 #include "fralab/lab/envelope.h"
 #include "fralab/lab/progress.h"
 #include "fralab/lcm/channels.h"
@@ -288,10 +289,20 @@ void MeasureRun::verify_tape() {
   r_.tape_blocks = n;
 }
 
+void MeasureRun::check_data() {
+  DataQualityOptions dq;
+  dq.noise_free = o_.no_noise;
+  CheckedTape checked = check_tape(dir_.tape(), r_.run_id, r_.pairs, dq);
+  print_data_quality(checked.quality);
+  run_.data_quality = std::move(checked.quality);
+  mended_curves_ = std::move(checked.mended_curves);
+}
+
 void MeasureRun::analyse_resumed() {
-  if (o_.resume) {
+  if (o_.resume || mended_curves_) {
     // The curves in pair order, as the live identifier takes them.
-    std::vector<Frd> curves = analyze_tape_file(dir_.tape(), r_.pairs, {});
+    std::vector<Frd> curves =
+        mended_curves_ ? *mended_curves_ : analyze_tape_file(dir_.tape(), r_.pairs, {});
     if (o_.fit)
       fit_failure_ = save_curves_and_fit(curves, o_.out, o_.fit_delay,
                                          model_.name + ": measured transfer matrix", o_.timeout_s);

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "fralab/core/json_util.h"
 #include "fralab/core/measure_dir.h"
@@ -44,8 +46,13 @@ class MeasureRun {
   /// The tape read back (every tape block and status event, the done status) while the recorder
   /// still runs, then the recorder stopped; InputError naming the tape when something is missing.
   void verify_tape();
+  /// The tape's data checked (exchange/data_quality.h; DIR/run.json "data_quality"), each fault
+  /// printed; when one was mended, every pair analysed again from the mended series (the tape
+  /// stays as recorded).
+  void check_data();
   /// A resumed run has no live analysers: the whole tape is analysed as they would (tape = live),
-  /// then fitted as the live identifier would.
+  /// then fitted as the live identifier would. A run whose data were mended: its curves of the
+  /// mended series saved over the live ones and fitted again.
   void analyse_resumed();
   /// On a failure or a stop signal: every process stopped (the acquisition first), DIR/run.json
   /// "interrupted" or "failed" with the reason; returns the error to throw, which says how to
@@ -76,6 +83,7 @@ class MeasureRun {
   std::string url_;
   ResumePoint from_;  // a fresh run starts at the default
   MeasureResult r_;
+  std::optional<std::vector<Frd>> mended_curves_;  // check_data(): the mended series' curves
   std::string fit_failure_;  // the identifier's, when it failed after everything was measured
   std::chrono::steady_clock::time_point t_fit_;
   // Deputies for the processes on other hosts (declared before the supervisor: it uses them until

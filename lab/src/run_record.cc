@@ -151,6 +151,7 @@ Json run_record_to_json(const RunRecord& r) {
   if (r.retransmissions) j["retransmissions"] = *r.retransmissions;
   if (r.items_retransmitted) j["items_retransmitted"] = *r.items_retransmitted;
   if (r.adaptive) j["adaptive"] = *r.adaptive;
+  if (r.data_quality) j["data_quality"] = data_quality_to_json(*r.data_quality);
   put_back_unknown_members(j, r.unknown);
   return j;
 }
@@ -188,6 +189,8 @@ RunRecord run_record_from_json(const Json& j, const std::string& file) {
     json_require_object(in.member("adaptive"), in.at("adaptive"));
     r.adaptive = in.member("adaptive");
   }
+  if (in.has("data_quality"))
+    r.data_quality = data_quality_from_json(in.member("data_quality"), in.at("data_quality"));
   collect_unknown_members(j, run_record_to_json(r), Json::json_pointer(), r.unknown);
   return r;
 }

@@ -134,7 +134,7 @@ Model parse_model(const Json& doc, const std::string& source) {
     ModelInput in;
     in.extra = json_unknown_members(j, w,
                                     {"name", "units", "full_scale", "actuator", "noise_rms",
-                                     "test_amplitude_pct", "measurement_coupling"},
+                                     "test_amplitude_pct", "measurement_coupling", "faults"},
                                     warn);
     in.name = json_string_member(j, w, "name");
     check_name(in.name, w / "name");
@@ -169,6 +169,7 @@ Model parse_model(const Json& doc, const std::string& source) {
       c.gain = json_number_member(cs[k], wc, "gain");
       in.measurement_coupling.push_back(c);
     }
+    if (j.contains("faults")) in.faults = channel_faults_from_json(j["faults"], w / "faults", true);
     m.inputs.push_back(std::move(in));
   }
   const Json& outs = json_array_member(doc, root, "outputs");
@@ -177,7 +178,8 @@ Model parse_model(const Json& doc, const std::string& source) {
     const Json& j = outs[i];
     json_require_object(j, w);
     ModelOutput out;
-    out.extra = json_unknown_members(j, w, {"name", "units", "noise_rms", "sensor"}, warn);
+    out.extra =
+        json_unknown_members(j, w, {"name", "units", "noise_rms", "sensor", "faults"}, warn);
     out.name = json_string_member(j, w, "name");
     check_name(out.name, w / "name");
     if (!names.insert(out.name).second)
@@ -192,6 +194,8 @@ Model parse_model(const Json& doc, const std::string& source) {
       json_unknown_members(s, w / "sensor", {"tf"}, warn);
       out.sensor = tf_from_json(json_member(s, w / "sensor", "tf"), w / "sensor" / "tf", warn);
     }
+    if (j.contains("faults"))
+      out.faults = channel_faults_from_json(j["faults"], w / "faults", false);
     m.outputs.push_back(std::move(out));
   }
   const Json& paths = json_array_member(doc, root, "paths", true);
@@ -221,6 +225,26 @@ Model parse_model(const Json& doc, const std::string& source) {
       }
     }
   }
+  // A swap names another channel, and only one of the two lists it.
+  auto check_swaps = [&](const std::string& name, const std::vector<ChannelFault>& faults,
+                         const JsonWhere& w) {
+    for (size_t k = 0; k < faults.size(); ++k) {
+      if (faults[k].kind != ChannelFaultKind::kSwap) continue;
+      const std::string& other = faults[k].with;
+      if (other == name || (m.input_index(other) < 0 && m.output_index(other) < 0))
+        json_fail(w / k / "with", "no other channel named \"" + other + "\"");
+      const int oi = m.input_index(other), oo = m.output_index(other);
+      const auto& theirs = oi >= 0 ? m.inputs[oi].faults : m.outputs[oo].faults;
+      for (const ChannelFault& f : theirs) {
+        if (f.kind == ChannelFaultKind::kSwap && f.with == name && name < other)
+          json_fail(w / k, "the swap of " + name + " and " + other + " is listed on both");
+      }
+    }
+  };
+  for (size_t i = 0; i < m.inputs.size(); ++i)
+    check_swaps(m.inputs[i].name, m.inputs[i].faults, root / "inputs" / i / "faults");
+  for (size_t i = 0; i < m.outputs.size(); ++i)
+    check_swaps(m.outputs[i].name, m.outputs[i].faults, root / "outputs" / i / "faults");
   return m;
 }
 
@@ -267,6 +291,7 @@ Json model_to_json(const Model& m) {
         ji["measurement_coupling"].push_back({{"output", c.output}, {"gain", c.gain}});
       }
     }
+    if (!in.faults.empty()) ji["faults"] = channel_faults_to_json(in.faults);
     j["inputs"].push_back(ji);
   }
   j["outputs"] = Json::array();
@@ -276,6 +301,7 @@ Json model_to_json(const Model& m) {
     jo["units"] = out.units;
     jo["noise_rms"] = out.noise_rms;
     if (out.sensor) jo["sensor"] = Json{{"tf", tf_to_json(*out.sensor)}};
+    if (!out.faults.empty()) jo["faults"] = channel_faults_to_json(out.faults);
     j["outputs"].push_back(jo);
   }
   j["paths"] = Json::array();

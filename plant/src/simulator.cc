@@ -1,5 +1,6 @@
 #include "fralab/plant/simulator.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace fralab {
@@ -28,6 +29,12 @@ Simulator::Simulator(const Model& model, const SimulatorOptions& options)
     c.noise = opt_.noise ? in.noise_rms : 0.0;
     for (const auto& m : in.measurement_coupling)
       c.coupling.emplace_back(model_.output_index(m.output), m.gain);
+    for (const ChannelFault& f : in.faults) {
+      if (f.kind != ChannelFaultKind::kStuck) continue;
+      const auto from = int64_t(std::llround(f.from_s * opt_.sample_rate_hz));
+      const double to = std::min(9e18, (f.from_s + f.for_s) * opt_.sample_rate_hz);
+      c.stuck.emplace_back(from, int64_t(std::llround(to)));
+    }
     names_.push_back(in.name);
     inputs_.push_back(std::move(c));
   }
@@ -41,7 +48,8 @@ Simulator::Simulator(const Model& model, const SimulatorOptions& options)
     pc.input = model_.input_index(p.input);
     pc.output = model_.output_index(p.output);
     const ModelInput& in = model_.inputs[pc.input];
-    pc.from_position = !in.nonlinearity.empty();
+    // A stuck actuator is a nonlinearity of its position too: the paths follow the position.
+    pc.from_position = !in.nonlinearity.empty() || !inputs_[pc.input].stuck.empty();
     Tf chain = p.tf;
     if (!pc.from_position && in.actuator) chain = *in.actuator * chain;
     const auto& sensor = model_.outputs[pc.output].sensor;
@@ -59,6 +67,23 @@ Simulator::Simulator(const Model& model, const SimulatorOptions& options)
                       static_cast<uint32_t>(c), 0x6672616cU};
     rng_.emplace_back(seq);
   }
+  auto channel_index = [&](const std::string& n) {
+    for (size_t c = 0; c < names_.size(); ++c)
+      if (names_[c] == n) return int(c);
+    return -1;
+  };
+  for (size_t c = 0; c < names_.size(); ++c) {
+    const bool is_input = c < model_.inputs.size();
+    const auto& faults =
+        is_input ? model_.inputs[c].faults : model_.outputs[c - model_.inputs.size()].faults;
+    std::vector<ChannelFault> own;
+    for (const ChannelFault& f : faults) {
+      if (f.kind == ChannelFaultKind::kSwap) swaps_.emplace_back(int(c), channel_index(f.with));
+      if (f.kind != ChannelFaultKind::kSwap && f.kind != ChannelFaultKind::kStuck) own.push_back(f);
+    }
+    faulty_.emplace_back(std::move(own), model_.dc(names_[c]), opt_.sample_rate_hz, opt_.seed,
+                         int(c));
+  }
   du_.assign(inputs_.size(), 0.0);
   pos_.assign(inputs_.size(), 0.0);
   out_.assign(model_.outputs.size(), 0.0);
@@ -70,6 +95,7 @@ void Simulator::reset() {
     for (auto& n : c.nl) n->reset();
   }
   for (auto& p : paths_) p.lti->reset();
+  for (auto& f : faulty_) f.reset();
   k_ = 0;
 }
 
@@ -84,6 +110,10 @@ void Simulator::step(const double* commands, double* channels) {
     du_[i] = commands[i] - c.dc;
     double p = c.actuator ? c.actuator->step(du_[i]) : du_[i];
     for (auto& n : c.nl) p = n->apply(p);
+    for (const auto& [from, to] : c.stuck) {
+      if (k_ == from) c.held = k_ > 0 ? pos_[i] : p;
+      if (k_ >= from && k_ < to) p = c.held;
+    }
     pos_[i] = p;
   }
   std::fill(out_.begin(), out_.end(), 0.0);
@@ -95,12 +125,16 @@ void Simulator::step(const double* commands, double* channels) {
     double v = pos_[i];
     for (const auto& [o, g] : inputs_[i].coupling) v += g * out_[o];
     double noise = inputs_[i].noise > 0.0 ? inputs_[i].noise * gauss(rng_[i]) : 0.0;
-    channels[i] = inputs_[i].dc + v + noise;
+    channels[i] = faulty_[i].empty() ? inputs_[i].dc + v + noise
+                                     : faulty_[i].apply(k_, inputs_[i].dc + v, noise);
   }
   for (size_t o = 0; o < out_.size(); ++o) {
     double noise = out_noise_[o] > 0.0 ? out_noise_[o] * gauss(rng_[ni + o]) : 0.0;
-    channels[ni + o] = out_dc_[o] + out_[o] + noise;
+    channels[ni + o] = faulty_[ni + o].empty()
+                           ? out_dc_[o] + out_[o] + noise
+                           : faulty_[ni + o].apply(k_, out_dc_[o] + out_[o], noise);
   }
+  for (const auto& [a, b] : swaps_) std::swap(channels[a], channels[b]);
   ++k_;
 }
 

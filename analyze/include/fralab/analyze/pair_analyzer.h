@@ -186,4 +186,12 @@ class PairAnalyzer {
   int64_t done_sample_ = 0;
 };
 
+/// Every pair over a whole run held in memory (offline: a mended series re-cut into blocks), one
+/// sample store for all: the status events (seq >= 0; the start and abort events define no
+/// window) then the blocks in order, flushed at the end. The same numbers as the tape's analysis.
+std::vector<Frd> analyse_run_in_memory(const std::vector<StatusEvent>& events,
+                                       const std::vector<Block>& blocks,
+                                       const std::vector<std::string>& pairs,
+                                       const AnalyzerOptions& options = {});
+
 }  // namespace fralab

@@ -21,6 +21,7 @@
 
 #include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
+#include "fralab/exchange/data_quality.h"
 
 namespace fralab {
 
@@ -86,6 +87,9 @@ struct RunRecord : RunOutcome {
   /// adaptive_steps_json (acquire/adaptive_sine.h) writes them for acquire.json too; kept as
   /// that JSON.
   std::optional<Json> adaptive;
+  /// "data_quality": the tape's checks (exchange/data_quality.h), written when the run ends;
+  /// absent in runs recorded before them.
+  std::optional<DataQuality> data_quality;
   /// Members this version does not know: JSON pointer (in the file) -> value as read.
   Json unknown = Json::object();
 };

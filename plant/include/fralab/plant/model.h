@@ -14,6 +14,8 @@
 //   inputs[i].measurement_coupling [{"output": "P3", "gain": g}]: the recorded position channel
 //                                  sees g * (noise-free deviation of that output), as the report's
 //                                  fuel-flow measurement dPfn = Pfn - P3 sees P3 (Appendix A)
+//   inputs[i].faults, outputs[i].faults  recording faults the emulator puts into the channel
+//                                  (plant/faults.h); a simulation's are ignored
 #pragma once
 
 #include <complex>
@@ -24,6 +26,7 @@
 #include <vector>
 
 #include "fralab/core/tf.h"
+#include "fralab/plant/faults.h"
 
 namespace fralab {
 
@@ -51,6 +54,7 @@ struct ModelInput {
   double noise_rms = 0.0;
   double test_amplitude_pct = 0.0;  // 0: not set
   std::vector<MeasurementCoupling> measurement_coupling;
+  std::vector<ChannelFault> faults;  // its position channel's, and `stuck` (plant/faults.h)
   Json extra = Json::object();
 };
 
@@ -58,7 +62,8 @@ struct ModelOutput {
   std::string name;
   std::string units;
   double noise_rms = 0.0;
-  std::optional<Tf> sensor;  // identity when absent
+  std::optional<Tf> sensor;          // identity when absent
+  std::vector<ChannelFault> faults;  // its recorded channel's (plant/faults.h)
   Json extra = Json::object();
 };
 

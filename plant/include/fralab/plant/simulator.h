@@ -7,7 +7,8 @@
 // actuator is linear) or from the position samples (path * sensor, when it has nonlinearities), so
 // every channel driven by one linear actuator shares the same hold factor and the ratio of any two
 // of them is exact (see lti.h). Noise: white Gaussian, noise_rms per channel, from a seeded
-// generator per channel: the same seed gives the same samples.
+// generator per channel: the same seed gives the same samples. Recording faults listed in the
+// model (plant/faults.h) act on the channels after the noise; `stuck` on the actuator position.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/plant/faults.h"
 #include "fralab/plant/lti.h"
 #include "fralab/plant/model.h"
 #include "fralab/plant/nonlinearity.h"
@@ -51,7 +53,9 @@ class Simulator {
     std::unique_ptr<FohLti> actuator;  // null: identity
     std::vector<std::unique_ptr<Nonlinearity>> nl;
     double noise = 0.0;
-    std::vector<std::pair<int, double>> coupling;  // (output index, gain)
+    std::vector<std::pair<int, double>> coupling;    // (output index, gain)
+    std::vector<std::pair<int64_t, int64_t>> stuck;  // [from, to) samples: the position held
+    double held = 0.0;
   };
   struct PathChain {
     int input = 0;
@@ -67,6 +71,8 @@ class Simulator {
   std::vector<double> out_dc_, out_noise_;
   std::vector<std::mt19937_64> rng_;
   std::vector<double> du_, pos_, out_;
+  std::vector<FaultyChannel> faulty_;       // per channel (empty when it has none)
+  std::vector<std::pair<int, int>> swaps_;  // channel pairs exchanged after the faults
   int64_t k_ = 0;
 };
 

@@ -1,0 +1,126 @@
+// The recording's faults told from the plant's response (docs/method/data-quality.md): a run's
+// channels, as recorded, checked against what a clean recording of a periodic excitation looks
+// like, before anything is fitted. What can be mended is mended in a copy of the series (the tape
+// itself stays as recorded); what cannot is said, with its channel and time span.
+//
+// Channels checked: every channel of the series except the commands u_<input>, the reference
+// (ref_*) and the plant's underrun flag. Times are seconds on the sample clock (t = n / fs).
+// Checks, each on one channel x[n]:
+//   lost      samples that are NaN (a link that lost them). Mended by linear interpolation between
+//             the good samples either side when the gap is at most max_gap_s; longer gaps stay
+//             NaN (the analyser then makes the windows they cut invalid, naming the gap).
+//   held      runs of identical consecutive samples (a link that repeated its last value) away
+//             from the channel's extremes, on a channel whose resolution makes a repeat
+//             improbable: repeats are expected with probability q / (sigma_d sqrt(2 pi)) per
+//             sample (q the smallest nonzero step, sigma_d the robust spread of the steps);
+//             flagged when runs of two or more exceed 5 sqrt(expected) + 3. Mended as lost.
+//   clipping  samples equal to the channel's largest (smallest) value, when more than
+//             max(5, 3 m2 + 3) of them (m2: how many share the next value inside): a transducer
+//             or converter at its range. Not mended (a clipped peak is not known); the share of
+//             samples and the level are reported.
+//   hum       lines at multiples m = 1..max_harmonic of 50 and 60 Hz (within mains_search_hz),
+//             away from every excited line, standing above the spectrum around them: |X|^2 of
+//             the Hann-windowed channel above hum_ratio times the mean noise power there (the
+//             median over +-2 Hz, excited lines and the candidate excluded, over ln 2) and as
+//             far above a multisine's non-excited grid lines there (where its distortion sits),
+//             and lasting: in each quarter of the run at least half its amplitude over the run
+//             (a sine step's harmonic holds in one). The frequency is refined (Brent on the
+//             line's amplitude), its amplitude A and phase fitted over the channel, and the
+//             sinusoid subtracted.
+//   drift     the means of the excitation's whole periods (a multisine's; a sine window's
+//             blocks of whole cycles) regressed on time: a slope beyond drift_sigmas times its
+//             sigma (from the means' scatter about the line) and beyond min_drift, the
+//             channel's units per second. Mended by subtracting rate (t - t_mid).
+//   clock     the channel's own clock runs at another rate than the excitation's: within each
+//             integration window, the phase of each block (a multisine period; a sine's block of
+//             whole cycles) at the excited frequencies against the window's mean gives the delay
+//             of the block, tau_b = -sum_k |Y_k|^2 w_k phi_bk / sum_k |Y_k|^2 w_k^2 (w in rad/s);
+//             tau_b regressed on the block's time over every window gives the rate error
+//             eps = d tau / dt (> 0: the channel's samples lag more and more, its clock runs
+//             fast), flagged beyond clock_sigmas times its sigma and above min_clock. Mended by
+//             reading sample n of the channel at n / (1 - eps) (linear interpolation; the clocks
+//             taken as agreeing at sample 0: an offset between them is a delay the data cannot
+//             tell from the plant's).
+//   no response  a multisine period whose excited lines hold no more than the noise (power
+//             below 4 times that of the non-excited lines) while the same excitation gives more
+//             than 30 times elsewhere in the run: a dead channel (to the end of the run) or an
+//             actuator stuck or its sensor silent (a span). Not mended; the span is reported.
+// Faults the data alone cannot tell (a wiring sign, a units factor, two channels swapped) are
+// the diagnosis' to name beside its findings (diagnose/data_faults.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fralab/core/frd.h"
+#include "fralab/core/json_util.h"
+#include "fralab/exchange/schedule.h"
+#include "fralab/exchange/time_series.h"
+
+namespace fralab {
+
+enum class DataFaultKind { kLost, kHeld, kClipping, kHum, kDrift, kClock, kNoResponse };
+/// "lost_samples", "held_samples", "clipping", "hum", "drift", "clock", "no_response".
+const char* to_string(DataFaultKind k);
+
+struct DataFault {
+  std::string channel;
+  DataFaultKind kind = DataFaultKind::kLost;
+  double from_s = 0.0, to_s = 0.0;  // the span it was seen in, s
+  /// The kind's figure: lost/held/clipping the share of the channel's samples; hum the
+  /// amplitude (channel units, peak); drift the rate (units/s); clock the rate error eps;
+  /// no_response its length, s.
+  double size = 0.0;
+  double sigma = 0.0;         // drift, clock: the figure's standard deviation; else 0
+  double frequency_hz = 0.0;  // hum: the line, Hz
+  double phase_deg = 0.0;     // hum: A cos(2 pi f t + phase) on the sample clock, degrees
+  double level = 0.0;         // clipping: the value clipped at; held/lost: samples mended
+  bool mended = false;        // the analysis uses the series with it mended
+  std::string action;         // what was done, one sentence
+  std::string text;           // what was seen, one sentence
+  /// held/lost: the runs of samples mended, [first, last] sample numbers (not in the JSON).
+  std::vector<std::pair<int64_t, int64_t>> spans;
+};
+
+struct DataQualityOptions {
+  double max_gap_s = 0.1;        // lost/held runs mended up to this length, s
+  double mains_search_hz = 0.5;  // hum: around each multiple of 50 and 60 Hz, Hz
+  int max_harmonic = 5;          // hum: multiples checked
+  double hum_ratio = 100.0;      // hum: line power over the mean noise power there
+  double drift_sigmas = 8.0;     // drift: slope over its sigma
+  double clock_sigmas = 8.0;     // clock: rate error over its sigma
+  double min_clock = 2e-6;       // clock: below this, not reported (2 ppm)
+  /// A simulation without noise: a channel repeats exactly where nothing excites it, so held
+  /// samples are not looked for.
+  bool noise_free = false;
+  /// Throws InputError naming the option.
+  void validate() const;
+};
+
+struct DataQuality {
+  std::vector<std::string> checked;  // channels checked
+  std::vector<DataFault> faults;     // in channel order, then kind
+  bool any_mended() const;
+};
+
+/// The checks above on `s`, with the excitation of `schedule` (its integrate windows).
+DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
+                               const DataQualityOptions& o = {});
+/// `s` with every fault of `q` marked mended undone (the tape itself is not touched).
+TimeSeries mend_series(const TimeSeries& s, const DataQuality& q);
+
+/// The curves of a mended series with the mending's own uncertainty added to each point's sigma:
+/// a clock error's, sigma_eps, is a delay error up to sigma_eps to_s at the run's end, so a point
+/// of a pair with that channel (as E1 or E2) gets sigma^2 + (|G| w sigma_eps to_s)^2.
+void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q);
+
+/// docs/formats.md §13 "data_quality": {"checked": [...], "faults": [{"channel", "kind",
+/// "from_s", "to_s", "size", "sigma", "frequency_hz", "phase_deg", "level", "mended", "action",
+/// "text"}]}.
+Json data_quality_to_json(const DataQuality& q);
+/// InputError naming `where` for a malformed section.
+DataQuality data_quality_from_json(const Json& j, const JsonWhere& where);
+
+}  // namespace fralab

@@ -1,0 +1,841 @@
+#include "fralab/exchange/data_quality.h"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <map>
+#include <numbers>
+#include <set>
+
+#include "fralab/analyze/period_fft.h"
+#include "fralab/core/numerics.h"
+#include "fralab/core/text.h"
+
+namespace fralab {
+namespace {
+
+using Complex = std::complex<double>;
+constexpr double kPi = std::numbers::pi;
+
+constexpr std::pair<DataFaultKind, const char*> kKindWords[] = {
+    {DataFaultKind::kLost, "lost_samples"},     {DataFaultKind::kHeld, "held_samples"},
+    {DataFaultKind::kClipping, "clipping"},     {DataFaultKind::kHum, "hum"},
+    {DataFaultKind::kDrift, "drift"},           {DataFaultKind::kClock, "clock"},
+    {DataFaultKind::kNoResponse, "no_response"}};
+
+bool checked_channel(const std::string& c) {
+  return !c.starts_with("u_") && !c.starts_with("ref_") && c != "underrun";
+}
+
+std::string fmt(double v) { return significant(v, 4); }
+
+// The largest n <= N whose prime factors are 2, 3, 5 and 7 (FFTW's fast sizes).
+int64_t smooth_size(int64_t N) {
+  for (int64_t n = N; n > 1; --n) {
+    int64_t m = n;
+    for (int p : {2, 3, 5, 7})
+      while (m % p == 0) m /= p;
+    if (m == 1) return n;
+  }
+  return N;
+}
+
+// One integration window of the schedule, cut into blocks: a multisine's periods, or a sine's
+// blocks of whole cycles.
+struct Window {
+  int64_t from = 0;  // first sample (absolute)
+  std::vector<int64_t> block_from, block_len;
+  std::vector<double> freqs_hz;  // the excited frequencies
+  bool multisine = false;
+  int period = 0;
+  std::vector<int> lines;  // multisine: excited bins of a period
+  std::string signature;   // the excitation (inputs and amplitudes, lines): equal, equal response
+};
+
+std::vector<Window> windows_of(const Schedule& sch, const TimeSeries& s) {
+  std::vector<Window> out;
+  const double fs = s.sample_rate_hz;
+  const int64_t end = s.start_sample + s.n_samples;
+  for (const StatusEvent& e : sch.events) {
+    if (e.state != RunState::kIntegrate || e.n_samples <= 0) continue;
+    if (e.sample < s.start_sample || e.sample + e.n_samples > end) continue;
+    Window w;
+    w.from = e.sample;
+    w.signature = std::to_string(int(e.excitation)) + ":";
+    for (size_t i = 0; i < e.inputs.size() && i < e.amplitudes.size(); ++i)
+      w.signature += e.inputs[i] + "=" + significant(e.amplitudes[i], 6) + ",";
+    if (e.excitation == Excitation::kMultisine) {
+      const int P = e.period_samples;
+      if (P < 8 || e.n_samples / P < 2) continue;
+      w.multisine = true;
+      w.period = P;
+      std::set<int> lines(e.lines.begin(), e.lines.end());
+      for (int k : lines)
+        if (k >= 1 && k < P / 2) w.lines.push_back(k);
+      for (int k : w.lines) w.freqs_hz.push_back(k * fs / P);
+      w.signature += "P" + std::to_string(P);
+      for (int k : w.lines) w.signature += "," + std::to_string(k);
+      for (int64_t b = 0; b + P <= e.n_samples; b += P) {
+        w.block_from.push_back(e.sample + b);
+        w.block_len.push_back(P);
+      }
+    } else if (e.excitation == Excitation::kStepped && e.frequency_hz > 0 && e.n_cycles >= 2) {
+      const int K = std::min(8, e.n_cycles), c = e.n_cycles / K;
+      const double per_cycle = fs / e.frequency_hz;
+      for (int b = 0; b < K; ++b) {
+        const auto a = int64_t(std::llround(b * c * per_cycle)),
+                   z = int64_t(std::llround((b + 1) * c * per_cycle));
+        if (z > e.n_samples) break;
+        w.block_from.push_back(e.sample + a);
+        w.block_len.push_back(z - a);
+      }
+      w.freqs_hz = {e.frequency_hz};
+      w.signature += "f" + significant(e.frequency_hz, 9);
+    } else {
+      continue;
+    }
+    if (w.block_from.size() >= 2) out.push_back(std::move(w));
+  }
+  return out;
+}
+
+// Per block of a window: the channel's complex amplitude at each excited frequency (phase on the
+// sample clock), its mean, and the mean power on a period's non-excited bins in the excited band
+// (multisine; NaN otherwise). A block holding a NaN sample has no values (empty).
+struct BlockValues {
+  std::vector<std::vector<Complex>> y;  // [block][frequency]
+  std::vector<double> mean, t, noise;   // per block
+};
+
+BlockValues block_values(const Window& w, const double* x, int64_t start, double fs) {
+  BlockValues v;
+  const size_t B = w.block_from.size();
+  v.y.resize(B);
+  v.mean.assign(B, 0.0);
+  v.t.assign(B, 0.0);
+  v.noise.assign(B, std::nan(""));
+  std::unique_ptr<PeriodFft> fft;
+  if (w.multisine) fft = std::make_unique<PeriodFft>(w.period);
+  std::vector<bool> excited;
+  if (w.multisine) {
+    excited.assign(size_t(w.period / 2 + 1), false);
+    for (int k : w.lines) excited[size_t(k)] = true;
+  }
+  for (size_t b = 0; b < B; ++b) {
+    const double* xb = x + (w.block_from[b] - start);
+    const int64_t L = w.block_len[b];
+    double m = 0;
+    for (int64_t n = 0; n < L; ++n) m += xb[n];
+    m /= double(L);
+    v.mean[b] = m;
+    v.t[b] = (double(w.block_from[b]) + 0.5 * double(L)) / fs;
+    if (!std::isfinite(m)) continue;
+    if (w.multisine) {
+      const auto& X = (*fft)(xb);
+      // X(k) is the phasor on the period's own start; a whole number of periods from the run's
+      // sample 0 is the same phase on every line only when the period divides the start: rotate
+      // to the sample clock.
+      for (size_t j = 0; j < w.lines.size(); ++j) {
+        const int k = w.lines[j];
+        const double ph = -2 * kPi * double(k) * double(w.block_from[b] % w.period) / w.period;
+        v.y[b].push_back(X[size_t(k)] * std::polar(2.0 / w.period, ph));
+      }
+      double pn = 0;
+      int nn = 0;
+      for (int k = w.lines.front(); k <= w.lines.back(); ++k) {
+        if (excited[size_t(k)]) continue;
+        pn += std::norm(X[size_t(k)] * (2.0 / w.period));
+        ++nn;
+      }
+      if (nn > 0) v.noise[b] = pn / nn;
+    } else {
+      // Least squares of a cos + b sin + c at the step's frequency (whole cycles: the DFT).
+      const double om = 2 * kPi * w.freqs_hz[0] / fs;
+      Complex acc = 0;
+      for (int64_t n = 0; n < L; ++n)
+        acc += (xb[n] - m) * std::polar(1.0, -om * double(w.block_from[b] + n));
+      v.y[b].push_back(acc * (2.0 / double(L)));
+    }
+  }
+  return v;
+}
+
+// Within-window regression of per-block values z_b on the blocks' times over every window:
+// slope = sum_w W_w sum_b (t - tbar_w)(z - zbar_w) / sum_w W_w sum_b (t - tbar_w)^2, its sigma
+// from the weights' information scaled by the residuals' reduced chi-square when above 1.
+struct Slope {
+  double value = 0, sigma = 0;
+  int blocks = 0;
+};
+struct SlopeAccumulator {
+  double sxy = 0, sxx = 0, info = 0;
+  std::vector<std::vector<double>> t, z;
+  std::vector<double> weight;
+  void add(std::vector<double> tb, std::vector<double> zb, double W) {
+    if (tb.size() < 2 || !(W > 0)) return;
+    t.push_back(std::move(tb));
+    z.push_back(std::move(zb));
+    weight.push_back(W);
+  }
+  // `empirical`: sigma from the residual scatter alone (weights relative only).
+  Slope solve(bool empirical) const {
+    Slope s;
+    double sxy = 0, sxx = 0;
+    std::vector<double> tbar(t.size()), zbar(t.size());
+    int n = 0;
+    for (size_t w = 0; w < t.size(); ++w) {
+      for (size_t b = 0; b < t[w].size(); ++b) {
+        tbar[w] += t[w][b] / double(t[w].size());
+        zbar[w] += z[w][b] / double(t[w].size());
+      }
+      for (size_t b = 0; b < t[w].size(); ++b) {
+        sxy += weight[w] * (t[w][b] - tbar[w]) * (z[w][b] - zbar[w]);
+        sxx += weight[w] * (t[w][b] - tbar[w]) * (t[w][b] - tbar[w]);
+        ++n;
+      }
+    }
+    const int dof = n - int(t.size()) - 1;
+    if (!(sxx > 0) || dof < 2) return s;
+    s.value = sxy / sxx;
+    double chi2 = 0;
+    for (size_t w = 0; w < t.size(); ++w)
+      for (size_t b = 0; b < t[w].size(); ++b) {
+        const double r = z[w][b] - zbar[w] - s.value * (t[w][b] - tbar[w]);
+        chi2 += weight[w] * r * r;
+      }
+    const double red = chi2 / dof;
+    s.sigma = std::sqrt((empirical ? red : std::max(1.0, red)) / sxx);
+    s.blocks = n;
+    return s;
+  }
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// ---- sample-level checks -------------------------------------------------------------------
+
+void check_lost(const std::string& ch, const double* x, const TimeSeries& s,
+                const DataQualityOptions& o, std::vector<DataFault>* out) {
+  DataFault f;
+  int64_t lost = 0, mended = 0;
+  const int64_t max_gap = int64_t(std::llround(o.max_gap_s * s.sample_rate_hz));
+  for (int64_t k = 0; k < s.n_samples;) {
+    if (!std::isnan(x[k])) {
+      ++k;
+      continue;
+    }
+    int64_t e = k;
+    while (e + 1 < s.n_samples && std::isnan(x[e + 1])) ++e;
+    lost += e - k + 1;
+    if (e - k + 1 <= max_gap) {
+      f.spans.emplace_back(s.start_sample + k, s.start_sample + e);
+      mended += e - k + 1;
+    }
+    if (lost == e - k + 1) f.from_s = double(s.start_sample + k) / s.sample_rate_hz;
+    f.to_s = double(s.start_sample + e + 1) / s.sample_rate_hz;
+    k = e + 1;
+  }
+  if (lost == 0) return;
+  f.channel = ch;
+  f.kind = DataFaultKind::kLost;
+  f.size = double(lost) / double(s.n_samples);
+  f.level = double(mended);
+  f.mended = mended > 0;
+  f.text = std::to_string(lost) + " samples of " + ch + " are missing (" + fmt(100 * f.size) +
+           " % of the run)";
+  f.action = mended == lost
+                 ? "interpolated between the samples either side"
+                 : std::to_string(mended) + " interpolated (gaps up to " + fmt(o.max_gap_s) +
+                       " s); the windows holding longer gaps give invalid points";
+  out->push_back(std::move(f));
+}
+
+// Clipping at the largest and the smallest value; returns them (held runs there are clipping).
+std::pair<double, double> check_clipping(const std::string& ch, const double* x,
+                                         const TimeSeries& s, std::vector<DataFault>* out) {
+  double hi = -INFINITY, lo = INFINITY;
+  for (int64_t k = 0; k < s.n_samples; ++k)
+    if (std::isfinite(x[k])) hi = std::max(hi, x[k]), lo = std::min(lo, x[k]);
+  if (!(hi > lo)) return {hi, lo};
+  for (int side = 0; side < 2; ++side) {
+    const double level = side == 0 ? hi : lo;
+    // The next value inside: how many share it (a quantised channel's neighbour level).
+    double next = side == 0 ? -INFINITY : INFINITY;
+    int64_t at = 0, first = -1, last = -1;
+    for (int64_t k = 0; k < s.n_samples; ++k) {
+      if (!std::isfinite(x[k])) continue;
+      if (x[k] == level) {
+        ++at;
+        if (first < 0) first = k;
+        last = k;
+      } else if (side == 0 ? x[k] > next : x[k] < next) {
+        next = x[k];
+      }
+    }
+    int64_t at_next = 0;
+    for (int64_t k = 0; k < s.n_samples; ++k) at_next += x[k] == next;
+    if (at < std::max<int64_t>(5, 3 * at_next + 3)) continue;
+    DataFault f;
+    f.channel = ch;
+    f.kind = DataFaultKind::kClipping;
+    f.size = double(at) / double(s.n_samples);
+    f.level = level;
+    f.from_s = double(s.start_sample + first) / s.sample_rate_hz;
+    f.to_s = double(s.start_sample + last + 1) / s.sample_rate_hz;
+    f.text = ch + " sits at its " + (side == 0 ? "largest" : "smallest") + " value " + fmt(level) +
+             " in " + std::to_string(at) + " samples (" + fmt(100 * f.size) +
+             " % of the run): a transducer or converter at its range";
+    f.action =
+        "not mended (a clipped peak is not known): the points it touches are biased; "
+        "measure again with a wider range or a smaller amplitude";
+    out->push_back(std::move(f));
+  }
+  return {hi, lo};
+}
+
+void check_held(const std::string& ch, const double* x, const TimeSeries& s, double hi, double lo,
+                const DataQualityOptions& o, std::vector<DataFault>* out) {
+  const int64_t N = s.n_samples;
+  std::vector<double> d;
+  double q = INFINITY;
+  for (int64_t k = 1; k < N; ++k) {
+    if (!std::isfinite(x[k]) || !std::isfinite(x[k - 1])) continue;
+    const double v = x[k] - x[k - 1];
+    d.push_back(v);
+    if (v != 0) q = std::min(q, std::abs(v));
+  }
+  if (d.size() < 10 || !std::isfinite(q)) return;
+  // A quantised channel's steps are whole multiples of its resolution q; a continuous one's
+  // smallest step is no resolution at all (repeats then have probability 0).
+  int64_t multiples = 0;
+  for (double v : d) {
+    const double r = std::abs(v) / q;
+    multiples += std::abs(r - std::round(r)) < 1e-6 * std::max(1.0, r);
+  }
+  if (double(multiples) < 0.9 * double(d.size())) q = 0;
+  const double med = median(d);
+  for (double& v : d) v = std::abs(v - med);
+  const double sd = 1.4826 * median(d);
+  if (!(sd > 0)) return;
+  const double p = std::min(1.0, q / (sd * std::sqrt(2 * kPi)));
+  // The shortest run of repeats a clean channel of this resolution holds fewer than 0.01 times.
+  int Lmin = 1;
+  while (Lmin < 1000 && double(N) * std::pow(p, Lmin) >= 0.01) ++Lmin;
+  if (Lmin >= 1000) return;  // so coarse a channel repeats by itself
+  DataFault f;
+  int64_t held = 0;
+  const int64_t max_gap = int64_t(std::llround(o.max_gap_s * s.sample_rate_hz));
+  for (int64_t k = 1; k < N;) {
+    if (!(x[k] == x[k - 1]) || x[k] == hi || x[k] == lo) {
+      ++k;
+      continue;
+    }
+    int64_t e = k;
+    while (e + 1 < N && x[e + 1] == x[k]) ++e;
+    const int64_t L = e - k + 1;
+    if (L >= Lmin) {
+      held += L;
+      if (L <= max_gap) f.spans.emplace_back(s.start_sample + k, s.start_sample + e);
+      if (held == L) f.from_s = double(s.start_sample + k) / s.sample_rate_hz;
+      f.to_s = double(s.start_sample + e + 1) / s.sample_rate_hz;
+    }
+    k = e + 1;
+  }
+  if (held < 3) return;
+  int64_t mended = 0;
+  for (const auto& [a, b] : f.spans) mended += b - a + 1;
+  f.channel = ch;
+  f.kind = DataFaultKind::kHeld;
+  f.size = double(held) / double(N);
+  f.level = double(mended);
+  f.mended = mended > 0;
+  f.text = std::to_string(held) + " samples of " + ch + " repeat the one before (" +
+           fmt(100 * f.size) + " % of the run; " +
+           (Lmin == 1
+                ? std::string("a continuous channel does not repeat")
+                : "its resolution makes a run of " + std::to_string(Lmin) + " repeats improbable") +
+           "): a link that held its last value";
+  f.action = "the repeated samples interpolated between the good ones either side";
+  out->push_back(std::move(f));
+}
+
+// ---- spectral checks -------------------------------------------------------------------------
+
+// |sum_n w_n x_n e^{-j 2 pi f t_n}| with a Hann window w over the series, and that sum.
+Complex hann_dft(const double* x, int64_t N, double mean, double f, double fs, int64_t start) {
+  Complex acc = 0;
+  const Complex step = std::polar(1.0, -2 * kPi * f / fs);
+  Complex rot = std::polar(1.0, -2 * kPi * f * double(start) / fs);
+  for (int64_t n = 0; n < N; ++n) {
+    const double w = 0.5 - 0.5 * std::cos(2 * kPi * double(n) / double(N));
+    acc += w * (x[n] - mean) * rot;
+    rot *= step;
+    if ((n & 1023) == 1023) rot /= std::abs(rot);
+  }
+  return acc;
+}
+
+void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
+               const std::vector<Window>& windows, const DataQualityOptions& o,
+               std::vector<DataFault>* out) {
+  const int64_t N = smooth_size(s.n_samples);
+  const double fs = s.sample_rate_hz;
+  if (N < 1024) return;
+  double mean = 0;
+  for (int64_t n = 0; n < N; ++n) mean += x[n] / double(N);
+  if (!std::isfinite(mean)) return;
+  std::vector<double> buf(static_cast<size_t>(N));
+  for (int64_t n = 0; n < N; ++n)
+    buf[size_t(n)] = (x[n] - mean) * (0.5 - 0.5 * std::cos(2 * kPi * double(n) / double(N)));
+  std::vector<Complex> X(size_t(N / 2 + 1));
+  fftw_plan plan = fftw_plan_dft_r2c_1d(int(N), buf.data(),
+                                        reinterpret_cast<fftw_complex*>(X.data()), FFTW_ESTIMATE);
+  fftw_execute(plan);
+  fftw_destroy_plan(plan);
+  const double df = fs / double(N);
+  // Bins within 3 of an excited frequency are the excitation's (a sine step's harmonics last
+  // only its step: the steadiness test below tells them from hum).
+  std::vector<bool> excluded(X.size(), false);
+  auto exclude = [&](double f) {
+    const auto c = int64_t(std::llround(f / df));
+    for (int64_t k = c - 3; k <= c + 3; ++k)
+      if (k >= 0 && k < int64_t(X.size())) excluded[size_t(k)] = true;
+  };
+  for (const Window& w : windows)
+    for (double f : w.freqs_hz) exclude(f);
+  exclude(0);
+  std::set<int64_t> found;
+  for (double mains : {50.0, 60.0}) {
+    for (int m = 1; m <= o.max_harmonic; ++m) {
+      const double fc = m * mains;
+      if (fc + 2.5 >= fs / 2) break;
+      const auto a = int64_t(std::ceil((fc - o.mains_search_hz) / df)),
+                 b = int64_t(std::floor((fc + o.mains_search_hz) / df));
+      int64_t peak = -1;
+      for (int64_t k = a; k <= b; ++k)
+        if (!excluded[size_t(k)] &&
+            (peak < 0 || std::norm(X[size_t(k)]) > std::norm(X[size_t(peak)])))
+          peak = k;
+      if (peak < 0 || found.count(peak)) continue;
+      std::vector<double> floor_bins;
+      const auto fa = int64_t(std::ceil((fc - 2.0) / df)),
+                 fb = int64_t(std::floor((fc + 2.0) / df));
+      for (int64_t k = fa; k <= fb; ++k)
+        if (!excluded[size_t(k)] && std::abs(k - peak) > 4)
+          floor_bins.push_back(std::norm(X[size_t(k)]));
+      if (floor_bins.size() < 20) continue;
+      const double noise = median(floor_bins) / std::log(2.0);
+      if (!(std::norm(X[size_t(peak)]) > o.hum_ratio * noise)) continue;
+      // A periodic excitation's distortion sits on its period's grid, on every line alike: the
+      // line must also stand above the multisine grid's non-excited lines around it.
+      bool above_grid = true;
+      for (const Window& w : windows) {
+        if (!w.multisine) continue;
+        const double g = fs / w.period;
+        std::vector<double> grid;
+        for (auto j = int64_t(std::ceil((fc - 2.0) / g)); double(j) * g <= fc + 2.0; ++j) {
+          const auto k = int64_t(std::llround(double(j) * g / df));
+          if (std::abs(k - peak) > 4 && k >= 0 && k < int64_t(X.size()) && !excluded[size_t(k)])
+            grid.push_back(std::norm(X[size_t(k)]));
+        }
+        if (grid.size() >= 5 &&
+            !(std::norm(X[size_t(peak)]) > o.hum_ratio * median(grid) / std::log(2.0)))
+          above_grid = false;
+      }
+      if (!above_grid) continue;
+      found.insert(peak);
+      // The line's frequency: where the Hann-weighted amplitude peaks, within a bin either side.
+      const double f = detail::brent_minimum(
+          [&](double ff) { return -std::abs(hann_dft(x, N, mean, ff, fs, s.start_sample)); },
+          (double(peak) - 1) * df, (double(peak) + 1) * df, 24, 40);
+      const Complex c = hann_dft(x, N, mean, f, fs, s.start_sample) * (4.0 / double(N));
+      // Mains hum lasts: it must hold in every quarter of the run (a sine step's harmonic, or a
+      // transient, holds in one).
+      bool steady = true;
+      for (int part = 0; part < 4 && steady; ++part) {
+        const int64_t a = part * N / 4, len = (part + 1) * N / 4 - a;
+        double m = 0;
+        for (int64_t n = a; n < a + len; ++n) m += x[n] / double(len);
+        const double amp =
+            std::abs(hann_dft(x + a, len, m, f, fs, s.start_sample + a)) * 4.0 / double(len);
+        steady = amp >= 0.5 * std::abs(c);
+      }
+      if (!steady) continue;
+      DataFault h;
+      h.channel = ch;
+      h.kind = DataFaultKind::kHum;
+      h.frequency_hz = f;
+      h.size = std::abs(c);
+      h.phase_deg = std::arg(c) * 180 / kPi;
+      h.from_s = double(s.start_sample) / fs;
+      h.to_s = double(s.start_sample + N) / fs;
+      h.mended = true;
+      h.text = "a line at " + fmt(f) + " Hz on " + ch + ", amplitude " + fmt(h.size) + " (" +
+               fmt(10 * std::log10(std::norm(X[size_t(peak)]) / noise)) +
+               " dB above the noise there), off every excited line: mains hum";
+      h.action = "subtracted (its frequency, amplitude and phase fitted over the run)";
+      out->push_back(std::move(h));
+    }
+  }
+}
+
+void check_drift_and_clock(const std::string& ch, const double* x, const TimeSeries& s,
+                           const std::vector<Window>& windows, const DataQualityOptions& o,
+                           std::vector<DataFault>* out) {
+  SlopeAccumulator drift;
+  std::vector<BlockValues> values;
+  for (const Window& w : windows)
+    values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
+  double t0 = INFINITY, t1 = -INFINITY;
+  // Drift: the blocks' means within each window, weighted by their scatter (pooled per window).
+  for (size_t i = 0; i < windows.size(); ++i) {
+    const BlockValues& v = values[i];
+    std::vector<double> tb, zb;
+    for (size_t b = 0; b < v.mean.size(); ++b)
+      if (std::isfinite(v.mean[b]) && !v.y[b].empty())
+        tb.push_back(v.t[b]), zb.push_back(v.mean[b]);
+    if (tb.size() >= 2) t0 = std::min(t0, tb.front()), t1 = std::max(t1, tb.back());
+    drift.add(tb, zb, 1.0);
+  }
+  // Clock: each block's delay against its window's mean, in two passes (the second on the
+  // first's residual, so that lines the first pass would wrap are used in the second).
+  auto clock_pass = [&](double eps0, double fmax) {
+    SlopeAccumulator acc;
+    for (size_t i = 0; i < windows.size(); ++i) {
+      const Window& w = windows[i];
+      const BlockValues& v = values[i];
+      std::vector<size_t> ok;
+      for (size_t b = 0; b < v.y.size(); ++b)
+        if (!v.y[b].empty()) ok.push_back(b);
+      if (ok.size() < 2) continue;
+      double tbar = 0;
+      for (size_t b : ok) tbar += v.t[b] / double(ok.size());
+      const size_t F = w.freqs_hz.size();
+      std::vector<std::vector<Complex>> y(ok.size(), std::vector<Complex>(F));
+      std::vector<Complex> mean(F, 0.0);
+      for (size_t j = 0; j < ok.size(); ++j)
+        for (size_t k = 0; k < F; ++k) {
+          const double om = 2 * kPi * w.freqs_hz[k];
+          y[j][k] = v.y[ok[j]][k] * std::polar(1.0, om * eps0 * (v.t[ok[j]] - tbar));
+          mean[k] += y[j][k] / double(ok.size());
+        }
+      std::vector<double> wk(F, 0.0);
+      double W = 0, den = 0;
+      // A block's noise power at a line: a multisine's from its non-excited lines (the phase
+      // walk itself does not enter it), a sine's from the scatter over its blocks.
+      double noise = 0;
+      if (w.multisine)
+        for (size_t b : ok) noise += v.noise[b] / double(ok.size());
+      for (size_t k = 0; k < F; ++k) {
+        if (w.freqs_hz[k] > fmax) continue;
+        double var = noise;
+        if (!w.multisine) {
+          for (size_t j = 0; j < ok.size(); ++j) var += std::norm(y[j][k] - mean[k]);
+          var /= double(ok.size() - 1);
+        }
+        if (!(std::norm(mean[k]) > 25 * var) || !(var > 0)) continue;
+        const double om = 2 * kPi * w.freqs_hz[k];
+        wk[k] = std::norm(mean[k]);
+        den += wk[k] * om * om;
+        W += 2 * om * om * std::norm(mean[k]) / var;
+      }
+      if (!(den > 0)) continue;
+      std::vector<double> tb, zb;
+      for (size_t j = 0; j < ok.size(); ++j) {
+        double num = 0;
+        for (size_t k = 0; k < F; ++k) {
+          if (wk[k] == 0) continue;
+          const double om = 2 * kPi * w.freqs_hz[k];
+          num += wk[k] * om * std::arg(y[j][k] * std::conj(mean[k]));
+        }
+        tb.push_back(v.t[ok[j]]);
+        zb.push_back(-num / den);
+      }
+      acc.add(tb, zb, W);
+    }
+    return acc.solve(false);
+  };
+  double fmax_all = 0;
+  for (const Window& w : windows)
+    for (double f : w.freqs_hz) fmax_all = std::max(fmax_all, f);
+  Slope c1 = clock_pass(0.0, fmax_all / 4);
+  if (c1.blocks == 0) c1 = clock_pass(0.0, fmax_all);
+  Slope c = c1;
+  if (c1.blocks > 0) {
+    Slope c2 = clock_pass(c1.value, fmax_all);
+    if (c2.blocks > 0) c = Slope{c1.value + c2.value, c2.sigma, c2.blocks};
+  }
+  const Slope d = drift.solve(true);
+  fprintf(stderr, "%s clock c1 %g +- %g (%d) c %g +- %g drift %g +- %g\n", ch.c_str(), c1.value,
+          c1.sigma, c1.blocks, c.value, c.sigma, d.value, d.sigma);
+  if (d.blocks > 0 && std::abs(d.value) > o.drift_sigmas * d.sigma) {
+    DataFault f;
+    f.channel = ch;
+    f.kind = DataFaultKind::kDrift;
+    f.size = d.value;
+    f.sigma = d.sigma;
+    f.from_s = t0;
+    f.to_s = t1;
+    f.mended = true;
+    f.text = ch + " drifts by " + fmt(d.value) + " units per second (+-" + fmt(d.sigma) +
+             ") within the excitation's periods: " + fmt(d.value * (t1 - t0)) + " over the run";
+    f.action = "the straight line removed before the Fourier filter";
+    out->push_back(std::move(f));
+  }
+  if (c.blocks > 0 && std::abs(c.value) > o.clock_sigmas * c.sigma &&
+      std::abs(c.value) > o.min_clock) {
+    DataFault f;
+    f.channel = ch;
+    f.kind = DataFaultKind::kClock;
+    f.size = c.value;
+    f.sigma = c.sigma;
+    f.from_s = t0;
+    f.to_s = t1;
+    f.mended = true;
+    f.text = ch + "'s phase walks with time: its samples lag " + fmt(c.value * 1e3) +
+             " ms more each second (+-" + fmt(c.sigma * 1e3) + "), a clock " +
+             fmt(std::abs(c.value) * 100) + " % " + (c.value > 0 ? "fast" : "slow") +
+             " against the excitation's";
+    f.action =
+        "resampled on the excitation's clock (taken to agree at sample 0: an offset between the "
+        "clocks is a delay the data cannot tell from the plant's)";
+    out->push_back(std::move(f));
+  }
+}
+
+void check_no_response(const std::string& ch, const double* x, const TimeSeries& s,
+                       const std::vector<Window>& windows, std::vector<DataFault>* out) {
+  // Per excitation signature, the blocks' ratio of excited-line power to the noise.
+  struct Item {
+    double t0, t1, ratio;
+    std::string sig;
+  };
+  std::vector<Item> items;
+  std::map<std::string, std::vector<double>> by_sig;
+  for (const Window& w : windows) {
+    if (!w.multisine) continue;
+    const BlockValues v = block_values(w, x, s.start_sample, s.sample_rate_hz);
+    for (size_t b = 0; b < v.y.size(); ++b) {
+      if (v.y[b].empty() || !(v.noise[b] > 0)) continue;
+      double p = 0;
+      for (const Complex& y : v.y[b]) p += std::norm(y);
+      const double r = p / double(v.y[b].size()) / v.noise[b];
+      const double t0 = double(w.block_from[b]) / s.sample_rate_hz;
+      items.push_back({t0, t0 + double(w.block_len[b]) / s.sample_rate_hz, r, w.signature});
+      by_sig[w.signature].push_back(r);
+    }
+  }
+  std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t0 < b.t0; });
+  std::map<std::string, double> typical;
+  for (auto& [sig, r] : by_sig) typical[sig] = median(r);
+  for (size_t i = 0; i < items.size();) {
+    if (!(typical[items[i].sig] > 30 && items[i].ratio < 4)) {
+      ++i;
+      continue;
+    }
+    size_t e = i;
+    while (e + 1 < items.size() && typical[items[e + 1].sig] > 30 && items[e + 1].ratio < 4) ++e;
+    DataFault f;
+    f.channel = ch;
+    f.kind = DataFaultKind::kNoResponse;
+    f.from_s = items[i].t0;
+    f.to_s = items[e].t1;
+    f.size = f.to_s - f.from_s;
+    const bool to_end = e + 1 == items.size();
+    f.text = ch + " holds no more than its noise at the excited lines from " + fmt(f.from_s) +
+             " s" + (to_end ? " to the end of the run" : " to " + fmt(f.to_s) + " s") +
+             ", where the same excitation gives " + fmt(10 * std::log10(typical[items[i].sig])) +
+             " dB elsewhere: " +
+             (to_end ? "a dead channel" : "an actuator stuck or a sensor silent for a while");
+    f.action = "not mended: the points of the windows in the span are not to be trusted";
+    out->push_back(std::move(f));
+    i = e + 1;
+  }
+}
+
+// Linear interpolation over [a, b] (sample indices into the series) from the samples either side.
+void interpolate(double* x, int64_t N, int64_t a, int64_t b) {
+  const double left = a > 0 ? x[a - 1] : (b + 1 < N ? x[b + 1] : 0.0);
+  const double right = b + 1 < N ? x[b + 1] : left;
+  for (int64_t k = a; k <= b; ++k)
+    x[k] = left + (right - left) * double(k - a + 1) / double(b - a + 2);
+}
+
+// The mending of one channel in the documented order: gaps, hum, drift, clock.
+void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFault*>& faults) {
+  const int64_t N = s.n_samples;
+  const double fs = s.sample_rate_hz;
+  for (const DataFault* f : faults) {
+    if (!f->mended || (f->kind != DataFaultKind::kLost && f->kind != DataFaultKind::kHeld))
+      continue;
+    for (const auto& [a, b] : f->spans) interpolate(x, N, a - s.start_sample, b - s.start_sample);
+  }
+  for (const DataFault* f : faults) {
+    if (!f->mended || f->kind != DataFaultKind::kHum) continue;
+    const double om = 2 * kPi * f->frequency_hz / fs, ph = f->phase_deg * kPi / 180;
+    for (int64_t n = 0; n < N; ++n)
+      x[n] -= f->size * std::cos(om * double(s.start_sample + n) + ph);
+  }
+  for (const DataFault* f : faults) {
+    if (!f->mended || f->kind != DataFaultKind::kDrift) continue;
+    const double tm = 0.5 * (f->from_s + f->to_s);
+    for (int64_t n = 0; n < N; ++n) x[n] -= f->size * (double(s.start_sample + n) / fs - tm);
+  }
+  for (const DataFault* f : faults) {
+    if (!f->mended || f->kind != DataFaultKind::kClock) continue;
+    // Sample n on the excitation's clock is the channel's sample n / (1 - eps).
+    std::vector<double> y(x, x + N);
+    for (int64_t n = 0; n < N; ++n) {
+      const double at = double(s.start_sample + n) / (1.0 - f->size) - double(s.start_sample);
+      if (at <= 0) {
+        x[n] = y[0];
+      } else if (at >= double(N - 1)) {
+        x[n] = y[size_t(N - 1)];
+      } else {
+        const auto i = int64_t(at);
+        const double a = at - double(i);
+        x[n] = (1 - a) * y[size_t(i)] + a * y[size_t(i + 1)];
+      }
+    }
+  }
+}
+
+}  // namespace
+
+const char* to_string(DataFaultKind k) { return enum_word(kKindWords, k); }
+
+void DataQualityOptions::validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v))
+      throw InputError(std::string("data quality: ") + name + " must be a positive number");
+  };
+  positive(max_gap_s, "max_gap_s");
+  positive(mains_search_hz, "mains_search_hz");
+  positive(hum_ratio, "hum_ratio");
+  positive(drift_sigmas, "drift_sigmas");
+  positive(clock_sigmas, "clock_sigmas");
+  positive(min_clock, "min_clock");
+  if (max_harmonic < 1 || max_harmonic > 20)
+    throw InputError("data quality: max_harmonic must be in 1..20");
+}
+
+bool DataQuality::any_mended() const {
+  return std::any_of(faults.begin(), faults.end(), [](const DataFault& f) { return f.mended; });
+}
+
+DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
+                               const DataQualityOptions& o) {
+  o.validate();
+  DataQuality q;
+  const std::vector<Window> windows = windows_of(schedule, s);
+  TimeSeries work = s;
+  for (size_t c = 0; c < s.channels.size(); ++c) {
+    const std::string& ch = s.channels[c];
+    if (!checked_channel(ch)) continue;
+    q.checked.push_back(ch);
+    const double* raw = s.samples.data() + c * size_t(s.n_samples);
+    double* x = work.samples.data() + c * size_t(s.n_samples);
+    std::vector<DataFault> found;
+    check_lost(ch, raw, s, o, &found);
+    const auto [hi, lo] = check_clipping(ch, raw, s, &found);
+    if (!o.noise_free) check_held(ch, raw, s, hi, lo, o, &found);
+    // The spectral checks see the gaps mended (a NaN would spoil every period it falls in).
+    std::vector<const DataFault*> so_far;
+    for (const DataFault& f : found) so_far.push_back(&f);
+    mend_channel(x, s, so_far);
+    const size_t before_hum = found.size();
+    check_hum(ch, x, s, windows, o, &found);
+    std::vector<const DataFault*> hums;
+    for (size_t i = before_hum; i < found.size(); ++i) hums.push_back(&found[i]);
+    mend_channel(x, s, hums);
+    check_drift_and_clock(ch, x, s, windows, o, &found);
+    check_no_response(ch, x, s, windows, &found);
+    for (DataFault& f : found) q.faults.push_back(std::move(f));
+  }
+  return q;
+}
+
+TimeSeries mend_series(const TimeSeries& s, const DataQuality& q) {
+  TimeSeries out = s;
+  for (size_t c = 0; c < s.channels.size(); ++c) {
+    std::vector<const DataFault*> mine;
+    for (const DataFault& f : q.faults)
+      if (f.channel == s.channels[c] && f.mended) mine.push_back(&f);
+    if (!mine.empty()) mend_channel(out.samples.data() + c * size_t(s.n_samples), s, mine);
+  }
+  return out;
+}
+
+void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q) {
+  for (Frd& c : curves) {
+    const auto [e1, e2] = split_pair(c.pair);
+    for (const DataFault& f : q.faults) {
+      if (f.kind != DataFaultKind::kClock || !f.mended || (f.channel != e1 && f.channel != e2))
+        continue;
+      for (FrdPoint& p : c.points) {
+        if (!p.valid || !(p.sigma > 0)) continue;
+        const double extra = p.mag * p.w * f.sigma * f.to_s;
+        p.sigma = std::sqrt(p.sigma * p.sigma + extra * extra);
+      }
+    }
+  }
+}
+
+Json data_quality_to_json(const DataQuality& q) {
+  Json faults = Json::array();
+  for (const DataFault& f : q.faults) {
+    faults.push_back({{"channel", f.channel},
+                      {"kind", to_string(f.kind)},
+                      {"from_s", f.from_s},
+                      {"to_s", f.to_s},
+                      {"size", f.size},
+                      {"sigma", f.sigma},
+                      {"frequency_hz", f.frequency_hz},
+                      {"phase_deg", f.phase_deg},
+                      {"level", f.level},
+                      {"mended", f.mended},
+                      {"action", f.action},
+                      {"text", f.text}});
+  }
+  return Json{{"checked", q.checked}, {"faults", faults}};
+}
+
+DataQuality data_quality_from_json(const Json& j, const JsonWhere& where) {
+  json_require_object(j, where);
+  DataQuality q;
+  const Json& checked = json_array_member(j, where, "checked");
+  for (size_t i = 0; i < checked.size(); ++i)
+    q.checked.push_back(json_string(checked[i], where / "checked" / i));
+  const Json& faults = json_array_member(j, where, "faults");
+  for (size_t i = 0; i < faults.size(); ++i) {
+    const JsonWhere w = where / "faults" / i;
+    const Json& f = faults[i];
+    json_require_object(f, w);
+    DataFault d;
+    d.channel = json_string_member(f, w, "channel");
+    const std::string kind = json_string_member(f, w, "kind");
+    const auto k = enum_from_word(kKindWords, kind);
+    if (!k) json_fail(w / "kind", "unknown data fault kind \"" + kind + "\"");
+    d.kind = *k;
+    d.from_s = json_number_member(f, w, "from_s");
+    d.to_s = json_number_member(f, w, "to_s");
+    d.size = json_number_member(f, w, "size");
+    d.sigma = json_number_member(f, w, "sigma", 0.0);
+    d.frequency_hz = json_number_member(f, w, "frequency_hz", 0.0);
+    d.phase_deg = json_number_member(f, w, "phase_deg", 0.0);
+    d.level = json_number_member(f, w, "level", 0.0);
+    d.mended = f.contains("mended") && json_bool(f["mended"], w / "mended");
+    d.action = f.contains("action") ? json_string(f["action"], w / "action") : "";
+    d.text = f.contains("text") ? json_string(f["text"], w / "text") : "";
+    q.faults.push_back(std::move(d));
+  }
+  return q;
+}
+
+}  // namespace fralab

@@ -1,0 +1,31 @@
+// A recorded run's data checked before its curves are trusted (exchange/data_quality.h), where the
+// lab reads a tape: at the end of `fralab measure` and in `fralab analyze`. The tape is never
+// changed; when a fault was mended, the run's pairs are analysed again from the mended series.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fralab/core/frd.h"
+#include "fralab/exchange/data_quality.h"
+
+namespace fralab {
+
+struct CheckedTape {
+  DataQuality quality;
+  /// The pairs' curves from the mended series, in the order asked; nullopt when nothing was
+  /// mended (the tape's own analysis stands).
+  std::optional<std::vector<Frd>> mended_curves;
+};
+
+/// Reads run `run_id` of `tape` ("" its first run), checks it, and when a fault is mended analyses
+/// `pairs` from the mended series (re-cut into blocks of the tape's own size). A tape whose run
+/// has a missing block is refused (InputError naming it): the caller's analysis names the gap.
+CheckedTape check_tape(const std::string& tape, const std::string& run_id,
+                       const std::vector<std::string>& pairs, const DataQualityOptions& o = {});
+
+/// One line per fault, "fralab: data quality: TEXT; ACTION", on stderr.
+void print_data_quality(const DataQuality& q);
+
+}  // namespace fralab

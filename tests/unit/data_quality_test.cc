@@ -1,0 +1,234 @@
+// The data-quality checks on runs of the emulator with a known fault put into one channel
+// (plant/faults.h): each fault found on its channel with its size, nothing found on the clean
+// run, and the mended series analysing to the clean run's curve.
+#include "fralab/exchange/data_quality.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "fralab/exchange/tape_series.h"
+#include "test_util.h"
+
+using namespace fralab;
+using fralab::testing::analyse_run;
+using fralab::testing::random_phase_multisine;
+using fralab::testing::simulate_campaign;
+
+namespace {
+
+// Input X (full scale 10), outputs Y = 2 / (1 + s/5) (dc 100) and Z = 1 / (1 + s/20), white
+// noise 0.002 on both; `faults` on Y or Z.
+Model plant(const Json& y_faults, const Json& z_faults = nullptr) {
+  Json y{{"name", "Y"}, {"units", "-"}, {"noise_rms", 0.002}};
+  Json z{{"name", "Z"}, {"units", "-"}, {"noise_rms", 0.002}};
+  if (!y_faults.is_null()) y["faults"] = y_faults;
+  if (!z_faults.is_null()) z["faults"] = z_faults;
+  Json doc{
+      {"format", "fralab-model/1"},
+      {"name", "dq"},
+      {"operating_point", {{"speed_pct", 0}, {"steady_state", {{"Y", 100.0}}}}},
+      {"inputs", {{{"name", "X"}, {"units", "-"}, {"full_scale", 10.0}}}},
+      {"outputs", {y, z}},
+      {"paths",
+       {{{"output", "Y"}, {"input", "X"}, {"tf", {{"gain", 2.0}, {"poles", {{{"real", -5.0}}}}}}},
+        {{"output", "Z"},
+         {"input", "X"},
+         {"tf", {{"gain", 1.0}, {"poles", {{{"real", -20.0}}}}}}}}}};
+  return parse_model(doc, "dq.json");
+}
+
+// A random-phase multisine over 0.2-20 Hz, 6 periods of 5 s per realisation, two realisations
+// (a minute of samples).
+struct Recording {
+  TimeSeries series;
+  Schedule schedule;
+};
+Recording record(const Model& m, uint64_t seed = 1) {
+  AcquireOptions o = random_phase_multisine("0.2:20", 5, 5.0, 2);
+  o.min_cycles = 6;
+  const auto r = simulate_campaign(m, o, true, seed);
+  return {blocks_to_series(r.blocks, "test"), Schedule{1000.0, "test", r.events}};
+}
+
+const DataFault* find(const DataQuality& q, const std::string& ch, DataFaultKind k) {
+  for (const DataFault& f : q.faults)
+    if (f.channel == ch && f.kind == k) return &f;
+  return nullptr;
+}
+
+std::string listed(const DataQuality& q) {
+  std::string s;
+  for (const DataFault& f : q.faults)
+    s += f.channel + " " + to_string(f.kind) + ": " + f.text + "\n";
+  return s;
+}
+
+// The curve of pair X:O from a series (its blocks re-cut from the series, as an import does).
+Frd curve(const Recording& r, const TimeSeries& s, const std::string& pair) {
+  fralab::testing::TapeRun t;
+  t.events = r.schedule.events;
+  t.blocks = series_to_blocks(s, r.schedule, 100);
+  return analyse_run(t, {pair}).front();
+}
+
+// Largest |ln(a/b)| over the points (nepers and radians).
+double worst_log_error(const Frd& a, const Frd& b) {
+  double worst = 0;
+  for (size_t i = 0; i < a.points.size() && i < b.points.size(); ++i) {
+    const auto l = std::log(a.points[i].value() / b.points[i].value());
+    worst = std::max(worst, std::abs(std::complex<double>(
+                                l.real(), std::remainder(l.imag(), 2 * std::numbers::pi))));
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST(DataQuality, CleanRunsFlagNothing) {
+  for (uint64_t seed : {1, 2, 3}) {
+    const Recording r = record(plant(nullptr), seed);
+    const DataQuality q = check_data_quality(r.series, r.schedule);
+    EXPECT_THAT(q.checked, ::testing::ElementsAre("X", "Y", "Z"));
+    EXPECT_TRUE(q.faults.empty()) << "seed " << seed << ":\n" << listed(q);
+  }
+}
+
+TEST(DataQuality, MainsHumIsFoundSizedAndSubtracted) {
+  const Json hum{
+      {"kind", "hum"}, {"frequency_hz", 50.0}, {"amplitude", 0.02}, {"harmonics", {1, 3}}};
+  const Recording r = record(plant(Json::array({hum})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  int found = 0;
+  for (const DataFault& f : q.faults) {
+    ASSERT_EQ(f.channel, "Y") << listed(q);
+    ASSERT_EQ(f.kind, DataFaultKind::kHum) << listed(q);
+    EXPECT_TRUE(std::abs(f.frequency_hz - 50) < 0.01 || std::abs(f.frequency_hz - 150) < 0.01)
+        << f.frequency_hz;
+    EXPECT_NEAR(f.size, 0.02, 0.002) << "amplitude within 10 %";
+    ++found;
+  }
+  EXPECT_EQ(found, 2) << listed(q);
+  // Mended, the channel is the clean one within its noise.
+  const Recording clean = record(plant(nullptr));
+  const TimeSeries m = mend_series(r.series, q);
+  const int y = m.channel_index("Y");
+  double worst = 0;
+  for (int64_t k = 0; k < m.n_samples; ++k)
+    worst = std::max(worst, std::abs(m.at(y, k) - clean.series.at(y, k)));
+  EXPECT_LT(worst, 0.002) << "hum left after subtraction (amplitude 0.02)";
+}
+
+TEST(DataQuality, AClockErrorIsEstimatedAndItsPhaseWalkUndone) {
+  // Z's clock 0.05 % fast: by the end of the minute its samples lag 30 ms, 3.8 rad at 20 Hz.
+  const Json clock{{"kind", "clock"}, {"rate_error", 5e-4}};
+  const Recording r = record(plant(nullptr, Json::array({clock})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* f = find(q, "Z", DataFaultKind::kClock);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->size, 5e-4 / (1 + 5e-4), 0.05 * 5e-4) << "rate error within 5 %";
+  EXPECT_EQ(q.faults.size(), 1u) << listed(q);
+  const Recording clean = record(plant(nullptr));
+  const Frd truth = curve(clean, clean.series, "X:Z");
+  const double raw = worst_log_error(curve(r, r.series, "X:Z"), truth);
+  const double mended = worst_log_error(curve(r, mend_series(r.series, q), "X:Z"), truth);
+  EXPECT_GT(raw, 0.3) << "the fault is visible in the curve";
+  EXPECT_LT(mended, 0.03) << "after resampling the curve is the clean one (" << raw << " before)";
+}
+
+TEST(DataQuality, ClippingIsNamedWithItsLevelAndShare) {
+  // Y's clean swing is about 100 +- 0.5 here: clip at 100.3.
+  const Recording clean = record(plant(nullptr));
+  const int y = clean.series.channel_index("Y");
+  int64_t above = 0;
+  for (int64_t k = 0; k < clean.series.n_samples; ++k) above += clean.series.at(y, k) >= 100.3;
+  ASSERT_GT(above, 100) << "the clip level must be inside the swing";
+  const Recording r = record(plant(Json::array({{{"kind", "clip"}, {"max", 100.3}}})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* f = find(q, "Y", DataFaultKind::kClipping);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_EQ(f->level, 100.3);
+  EXPECT_NEAR(f->size, double(above) / double(clean.series.n_samples), 1e-9);
+  EXPECT_FALSE(f->mended);
+}
+
+TEST(DataQuality, HeldAndLostSamplesAreFoundAndInterpolated) {
+  const Json held{{"kind", "dropouts"}, {"rate_hz", 2.0}, {"length", 5}, {"mode", "held"}};
+  const Json lost{{"kind", "dropouts"}, {"rate_hz", 1.0}, {"length", 3}, {"mode", "lost"}};
+  const Recording r = record(plant(Json::array({held}), Json::array({lost})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* h = find(q, "Y", DataFaultKind::kHeld);
+  const DataFault* l = find(q, "Z", DataFaultKind::kLost);
+  ASSERT_NE(h, nullptr) << listed(q);
+  ASSERT_NE(l, nullptr) << listed(q);
+  EXPECT_EQ(q.faults.size(), 2u) << listed(q);
+  // The counts: every held sample repeats the one before (the emulator's dropouts).
+  const int yc = r.series.channel_index("Y"), zc = r.series.channel_index("Z");
+  int64_t repeats = 0, nans = 0;
+  for (int64_t k = 1; k < r.series.n_samples; ++k)
+    repeats += r.series.at(yc, k) == r.series.at(yc, k - 1);
+  for (int64_t k = 0; k < r.series.n_samples; ++k) nans += std::isnan(r.series.at(zc, k));
+  EXPECT_NEAR(h->size * double(r.series.n_samples), double(repeats), 0.5);
+  EXPECT_NEAR(l->size * double(r.series.n_samples), double(nans), 0.5);
+  // Mended, both curves are the clean ones within a few of their sigmas.
+  const Recording clean = record(plant(nullptr));
+  const TimeSeries m = mend_series(r.series, q);
+  for (const std::string pair : {"X:Y", "X:Z"}) {
+    const Frd truth = curve(clean, clean.series, pair), got = curve(r, m, pair);
+    ASSERT_EQ(got.points.size(), truth.points.size());
+    for (size_t i = 0; i < got.points.size(); ++i) {
+      ASSERT_TRUE(got.points[i].valid) << pair << " " << got.points[i].note;
+      EXPECT_LT(std::abs(got.points[i].value() - truth.points[i].value()),
+                0.01 * std::abs(truth.points[i].value()) + 5 * truth.points[i].sigma)
+          << pair << " at " << got.points[i].w;
+    }
+  }
+}
+
+TEST(DataQuality, ADriftIsSizedAndRemoved) {
+  const Recording r = record(plant(nullptr, Json::array({{{"kind", "drift"}, {"rate", 0.002}}})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* f = find(q, "Z", DataFaultKind::kDrift);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->size, 0.002, 0.0002) << "rate within 10 %";
+  EXPECT_EQ(q.faults.size(), 1u) << listed(q);
+}
+
+TEST(DataQuality, ADeadChannelIsSaidFromWhenItDied) {
+  const Recording r = record(plant(Json::array({{{"kind", "dead"}, {"from_s", 40.0}}})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* f = find(q, "Y", DataFaultKind::kNoResponse);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->from_s, 40.0, 5.0) << "within a period of when it died";
+  EXPECT_NEAR(f->to_s, double(r.series.start_sample + r.series.n_samples) / 1000.0, 5.0);
+}
+
+TEST(DataQuality, TheSectionRoundTripsThroughJson) {
+  const Json hum{{"kind", "hum"}, {"frequency_hz", 60.0}, {"amplitude", 0.02}};
+  const Recording r = record(plant(Json::array({hum})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  ASSERT_FALSE(q.faults.empty());
+  const Json j = data_quality_to_json(q);
+  EXPECT_EQ(data_quality_to_json(data_quality_from_json(j, JsonWhere{"dq", ""})), j);
+  Json bad = j;
+  bad["faults"][0]["kind"] = "gremlins";
+  EXPECT_THROW(data_quality_from_json(bad, JsonWhere{"dq", ""}), InputError);
+}
+
+TEST(DataQuality, AClockErrorIsFoundInASteppedSineToo) {
+  const Json clock{{"kind", "clock"}, {"rate_error", 5e-4}};
+  AcquireOptions o;
+  o.band = "0.2:20";
+  o.points_per_decade = 5;
+  o.amplitude_pct = 5.0;
+  const auto r = simulate_campaign(plant(nullptr, Json::array({clock})), o, true, 1);
+  const TimeSeries s = blocks_to_series(r.blocks, "test");
+  const DataQuality q = check_data_quality(s, Schedule{1000.0, "test", r.events});
+  const DataFault* f = find(q, "Z", DataFaultKind::kClock);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->size, 5e-4 / (1 + 5e-4), 0.05 * 5e-4)
+      << "rate error within 5 %, sigma " << f->sigma;
+  EXPECT_EQ(q.faults.size(), 1u) << listed(q);
+}
