@@ -78,7 +78,8 @@ bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
 }
 
 void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
-                            const std::string& data_name, bool plots, const std::string& dir) {
+                            const std::string& data_name, bool plots, const std::string& dir,
+                            const DataNotes& data) {
   std::ofstream md(dir + "/report.md");
   md << "# Diagnosis: " << sim_name << "\n\nMeasured data: " << data_name << "\n\n";
   md << "Error (" << d.metric << "): simulation **" << std::setprecision(3) << d.error_before
@@ -97,7 +98,18 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
   } else {
     md << "ideal (none recorded)";
   }
-  md << ".\n\n## Findings\n\n";
+  md << ".\n\n## Data quality\n\n";
+  if (!data.checked) {
+    md << "The recordings were not checked (measured before fralab checked them): look at "
+          "them before trusting a finding.\n";
+  } else if (data.faults.empty()) {
+    md << "Every recorded channel checked (clipping, held and lost samples, mains hum, drift, "
+          "clock, response): nothing found.\n";
+  }
+  for (const std::string& l : data.faults) md << "- " << l << "\n";
+  for (const DataAlternative& a : data.alternatives)
+    if (a.finding < 0) md << "- " << a.text << ".\n";
+  md << "\n## Findings\n\n";
   if (d.findings.empty())
     md << "None: every measured response agrees with the simulation within its uncertainty.\n";
   for (const auto& f : d.findings) {
@@ -113,6 +125,9 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
        << " over ";
     for (size_t i = 0; i < f.pairs.size(); ++i) md << (i ? ", " : "") << f.pairs[i];
     md << ".\n";
+    for (const DataAlternative& a : data.alternatives)
+      if (a.finding == int(&f - d.findings.data()))
+        md << "  - Data alternative: " << a.text << ".\n";
   }
   if (!d.dropped.empty()) {
     md << "\n## Dropped (fitted, but did not earn their place)\n\n";

@@ -316,7 +316,7 @@ void check_held(const std::string& ch, const double* x, const TimeSeries& s, dou
   int64_t multiples = 0;
   for (double v : d) {
     const double r = std::abs(v) / q;
-    multiples += std::abs(r - std::round(r)) < 1e-6 * std::max(1.0, r);
+    multiples += r <= 1e4 && std::abs(r - std::round(r)) < 0.01;
   }
   if (double(multiples) < 0.9 * double(d.size())) q = 0;
   const double med = median(d);
@@ -572,8 +572,6 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
     if (c2.blocks > 0) c = Slope{c1.value + c2.value, c2.sigma, c2.blocks};
   }
   const Slope d = drift.solve(true);
-  fprintf(stderr, "%s clock c1 %g +- %g (%d) c %g +- %g drift %g +- %g\n", ch.c_str(), c1.value,
-          c1.sigma, c1.blocks, c.value, c.sigma, d.value, d.sigma);
   if (d.blocks > 0 && std::abs(d.value) > o.drift_sigmas * d.sigma) {
     DataFault f;
     f.channel = ch;

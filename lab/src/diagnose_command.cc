@@ -4,12 +4,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/baseline.h"
 #include "fralab/diagnose/report.h"
+#include "fralab/exchange/data_quality.h"
 #include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lcm/tape_file.h"
@@ -47,6 +49,29 @@ MeasuredFolder read_measured_folder(const std::string& dir) {
     }
   }
   return f;
+}
+
+Json recorded_data_quality(const std::string& dir, DataNotes* notes) {
+  Json runs = Json::array();
+  std::function<void(const MeasureDir&)> visit = [&](const MeasureDir& m) {
+    if (fs::exists(m.run_json())) {
+      const Json run = json_load_file(m.run_json());
+      if (run.contains("data_quality")) {
+        const DataQuality q =
+            data_quality_from_json(run["data_quality"], {m.run_json(), "/data_quality"});
+        Json r = data_quality_to_json(q);
+        r["folder"] = m.root;
+        runs.push_back(std::move(r));
+        notes->checked = true;
+        for (const DataFault& f : q.faults)
+          notes->faults.push_back(m.root + ": " + f.text + "; " + f.action + ".");
+      }
+    }
+    for (const MeasureDir& sub : {m.multisine(), m.sine(), m.validation()})
+      if (fs::exists(sub.run_json())) visit(sub);
+  };
+  visit(MeasureDir(dir));
+  return runs;
 }
 
 namespace {
@@ -147,6 +172,16 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   }
   Diagnosis d = diagnose(sim, data, opt);
   Json dj = diagnosis_to_json(d);
+  DataNotes notes;
+  notes.alternatives = data_alternatives(d, sim, data, opt);
+  Json runs = recorded_data_quality(data_dir, &notes);
+  if (!c.baseline.empty()) {
+    for (Json& r : recorded_data_quality(c.baseline, &notes)) runs.push_back(std::move(r));
+  }
+  for (const std::string& l : c.levels)
+    for (Json& r : recorded_data_quality(l, &notes)) runs.push_back(std::move(r));
+  dj["data_quality"] = {{"runs", runs},
+                        {"alternatives", data_alternatives_to_json(notes.alternatives)}};
   if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
   if (!levels_json.is_null()) dj["levels"] = levels_json;
   json_save_file(c.out + "/diagnosis.json", dj);
@@ -157,7 +192,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   load_model(c.out +
              "/extended_model.json");  // it must be a valid fralab-model/1 the plant can run
   const bool plots = c.plots && render_diagnosis_plots(d, c.out);
-  write_diagnosis_report(d, sim.name, data_name, plots, c.out);
+  write_diagnosis_report(d, sim.name, data_name, plots, c.out, notes);
   write_report_html(c.out, "Diagnosis: " + sim.name);
   res.summary = diagnosis_summary(d, c.out);
   return res;

@@ -232,3 +232,19 @@ TEST(DataQuality, AClockErrorIsFoundInASteppedSineToo) {
       << "rate error within 5 %, sigma " << f->sigma;
   EXPECT_EQ(q.faults.size(), 1u) << listed(q);
 }
+
+TEST(DataQuality, AQuantisedChannelsOwnRepeatsAreNotHeldSamples) {
+  // Y rounded to 0.001 with noise 0.002: a repeat has probability about 0.14 per sample, runs of
+  // 8 are improbable over the run; a held stretch of 40 samples is not.
+  Recording r = record(plant(nullptr));
+  const int y = r.series.channel_index("Y");
+  double* x = r.series.samples.data() + size_t(y) * size_t(r.series.n_samples);
+  for (int64_t k = 0; k < r.series.n_samples; ++k) x[k] = std::round(x[k] * 1000) / 1000;
+  DataQuality q = check_data_quality(r.series, r.schedule);
+  EXPECT_EQ(find(q, "Y", DataFaultKind::kHeld), nullptr) << listed(q);
+  for (int64_t k = 30001; k < 30041; ++k) x[k] = x[30000];
+  q = check_data_quality(r.series, r.schedule);
+  const DataFault* h = find(q, "Y", DataFaultKind::kHeld);
+  ASSERT_NE(h, nullptr) << listed(q);
+  EXPECT_EQ(h->level, 40.0) << "the 40 samples after the good one, mended";
+}

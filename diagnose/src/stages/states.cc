@@ -10,7 +10,7 @@
 // Brent's method between the scan's neighbours; on each pair the factor G_moved / G_sim of its
 // path (the actuator's own pair: 1). Greedy, at most kMaxEntries, while the best lowers chi2 by
 // more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
-// and lowers the error of the pairs; then, kBackfitRounds times, each accepted entry is fitted
+// and lowers the error of the pairs; then, kStateBackfitRounds times, each accepted entry is fitted
 // again with the others in place and replaced by another entry that fits better there. The
 // accepted entries' factor stays on the pairs, so the stages after it fit what they leave.
 #include <algorithm>
@@ -27,8 +27,8 @@ namespace {
 constexpr int kScan = 41;
 constexpr double kSpan = 4;
 constexpr int kMaxEntries = 3;
-constexpr int kBrentBits = 30;
-constexpr int kBackfitRounds = 2;
+constexpr int kStateBrentBits = 30;
+constexpr int kStateBackfitRounds = 2;
 
 using Paths = std::vector<std::vector<std::optional<Tf>>>;
 
@@ -66,7 +66,7 @@ std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss,
   return path_ratio(r, ss, base, *moved);
 }
 
-double chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
+double state_chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
   double c = 0;
   for (size_t k = 0; k < r.pairs.size(); ++k) {
     const PairFit& p = r.pairs[k];
@@ -79,7 +79,7 @@ double chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
 }
 
 // rms |ln(model / measured)| over every prepared pair with F on top of their factors.
-double error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
+double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
   double s = 0;
   size_t n = 0;
   for (size_t k = 0; k < r.pairs.size(); ++k) {
@@ -111,7 +111,7 @@ Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
   const double hi = rate ? std::log(std::abs(v0) * kSpan) : v0 + kSpan * std::abs(v0);
   auto chi2_at = [&](double x) {
     const auto F = factors(r, ss, base, e, value(x));
-    return F.empty() ? INFINITY : chi2_with(r, F);
+    return F.empty() ? INFINITY : state_chi2_with(r, F);
   };
   std::vector<double> xs(kScan), cs(kScan);
   size_t best = 0;
@@ -124,10 +124,10 @@ Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
   f.e = e;
   if (!std::isfinite(cs[best])) return f;
   const double a = xs[best > 0 ? best - 1 : 0], b = xs[std::min(best + 1, xs.size() - 1)];
-  const double x = detail::brent_minimum(chi2_at, a, b, kBrentBits);
+  const double x = detail::brent_minimum(chi2_at, a, b, kStateBrentBits);
   f.value = value(x);
   f.F = factors(r, ss, base, e, f.value);
-  f.chi2 = f.F.empty() ? INFINITY : chi2_with(r, f.F);
+  f.chi2 = f.F.empty() ? INFINITY : state_chi2_with(r, f.F);
   return f;
 }
 
@@ -203,16 +203,16 @@ void states(DiagnosisRun& r) {
   };
   for (int round = 0; round < kMaxEntries; ++round) {
     const StateSpace ss = set_factors(taken.size());
-    const double c0 = chi2_with(r, {}), e0 = error_with(r, {});
+    const double c0 = state_chi2_with(r, {}), e0 = state_error_with(r, {});
     Fitted best = best_entry(r, ss, entries_but(taken.size()));
     if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n, 1) <= 0 ||
-        !(error_with(r, best.F) < e0))
+        !(state_error_with(r, best.F) < e0))
       break;
     taken.push_back(std::move(best));
   }
   // Each accepted entry taken out and the best entry put in its place, the others as they are:
   // a first pick that stood in for two changed entries gives way to the entries that changed.
-  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round) {
+  for (int round = 0; round < kStateBackfitRounds && taken.size() > 1; ++round) {
     bool swapped = false;
     for (size_t j = 0; j < taken.size(); ++j) {
       const StateSpace ss = set_factors(j);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/diagnose/data_faults.h"
 #include "fralab/diagnose/diagnose.h"
 
 namespace fralab {
@@ -19,9 +20,19 @@ std::vector<MeasuredPair> read_measured_dir(const std::string& dir);
 /// false when gnuplot is missing or failed (the report then has no figures).
 bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir);
 
-/// DIR/report.md: errors, findings with their explanation, the per-pair table, the figures.
+/// What the report says of the data (docs/method/data-quality.md): one line per fault the
+/// recordings' checks found (with its run folder), and the findings' data alternatives.
+struct DataNotes {
+  bool checked = false;             // the recordings were checked (else the section says so)
+  std::vector<std::string> faults;  // one line each
+  std::vector<DataAlternative> alternatives;
+};
+
+/// DIR/report.md: errors, what to look at in the data before trusting a finding, findings with
+/// their explanation (and their data alternatives), the per-pair table, the figures.
 void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
-                            const std::string& data_name, bool plots, const std::string& dir);
+                            const std::string& data_name, bool plots, const std::string& dir,
+                            const DataNotes& data = {});
 
 /// DIR/report.html beside DIR/report.md (written first): the same report rendered from its
 /// markdown by cmark-gfm, one self-contained file: each figure's SVG (plots/STEM.svg) inline in

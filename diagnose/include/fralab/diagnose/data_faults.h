@@ -1,0 +1,44 @@
+// Findings a fault of the recording would explain as well (docs/method/data-quality.md): what the
+// data alone cannot tell from a model difference is reported beside the finding as an
+// alternative the user must check, never silently as either.
+//   wiring_sign  a sign_error at an output (its sensor) or an input: the channel wired with the
+//                wrong sign gives the same curves.
+//   units        a gain_mismatch at an output or input whose factor |k| (or 1/|k|) is within 1 %
+//                of a units factor (psi/kPa 6.894757, bar/psi 14.50377, degF/degC 1.8, in/mm
+//                25.4, lb/kg 2.204623, lbf/N 4.448222, rpm/(rad/s) 9.549297, deg/rad 57.29578,
+//                %/fraction 100, ...): the channel recorded in one unit and read as the other.
+//   swap         two outputs A, B whose measured curves match the simulation's with the two
+//                exchanged: with e(A, B) = rms |ln(measured A / simulated B)| over every
+//                input's points, e(A,B) + e(B,A) < 0.35 (e(A,A) + e(B,B)) and each exchanged
+//                error below half the smaller straight one (the simulation's own misfit stays
+//                in both): the two channels swapped in the wiring or the channel list.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fralab/core/json_util.h"
+#include "fralab/diagnose/diagnose.h"
+
+namespace fralab {
+
+struct DataAlternative {
+  enum class Kind { kWiringSign, kUnits, kSwap };
+  Kind kind = Kind::kWiringSign;
+  std::string channel;  // the channel to check
+  std::string other;    // swap: the channel it looks exchanged with
+  int finding = -1;     // the finding (index in Diagnosis::findings) it is the alternative of
+  double factor = 0;    // units: the units factor matched
+  std::string text;     // one sentence, what to check
+};
+const char* to_string(DataAlternative::Kind k);  // "wiring_sign", "units", "swap"
+
+/// The alternatives of diagnosis `d` of `data` against `sim` (its chain in opt).
+std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
+                                               const std::vector<MeasuredPair>& data,
+                                               const DiagnoseOptions& opt = {});
+
+/// [{"kind", "channel", "other", "finding", "factor", "text"}], "finding" null when none.
+Json data_alternatives_to_json(const std::vector<DataAlternative>& a);
+
+}  // namespace fralab

@@ -1,0 +1,102 @@
+// The diagnosis' data alternatives: a sign or a gain a recording fault explains as well, and two
+// outputs exchanged, on known answers.
+#include "fralab/diagnose/data_faults.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace fralab;
+using ::testing::HasSubstr;
+
+namespace {
+
+// Input X; outputs A = 2 / (1 + s/3) and B = -0.5 / (1 + s/40): shapes and gains apart.
+Model sim() {
+  Json doc{
+      {"format", "fralab-model/1"},
+      {"name", "two outputs"},
+      {"operating_point", {{"speed_pct", 0}, {"steady_state", Json::object()}}},
+      {"inputs", {{{"name", "X"}, {"units", "-"}, {"full_scale", 1.0}}}},
+      {"outputs", {{{"name", "A"}, {"units", "-"}}, {{"name", "B"}, {"units", "-"}}}},
+      {"paths",
+       {{{"output", "A"}, {"input", "X"}, {"tf", {{"gain", 2.0}, {"poles", {{{"real", -3.0}}}}}}},
+        {{"output", "B"},
+         {"input", "X"},
+         {"tf", {{"gain", -0.5}, {"poles", {{{"real", -40.0}}}}}}}}}};
+  return parse_model(doc, "sim.json");
+}
+
+// Measured X:A and X:B: the simulation's `read_as_a` and `read_as_b` at 30 frequencies, 1 % off.
+std::vector<MeasuredPair> measured(const Model& m, const std::string& read_as_a,
+                                   const std::string& read_as_b) {
+  std::vector<MeasuredPair> out;
+  for (const auto& [name, from] : {std::pair{"A", read_as_a}, std::pair{"B", read_as_b}}) {
+    MeasuredPair mp;
+    mp.pair = std::string("X:") + name;
+    mp.frd.pair = mp.pair;
+    for (int k = 0; k < 30; ++k) {
+      FrdPoint p;
+      p.w = 0.1 * std::pow(10.0, k / 10.0);
+      const auto v = *model_pair_response(m, "X:" + from, p.w) * 1.01;
+      p.mag = std::abs(v);
+      p.phase_deg = std::arg(v) * 180 / std::numbers::pi;
+      p.sigma = 0.01 * p.mag;
+      mp.frd.points.push_back(p);
+    }
+    out.push_back(std::move(mp));
+  }
+  return out;
+}
+
+Finding at_output(CauseKind c, const std::string& o, std::map<std::string, double> params) {
+  Finding f;
+  f.cause = c;
+  f.scope = Scope::kOutput;
+  f.output = o;
+  f.parameters = std::move(params);
+  return f;
+}
+
+}  // namespace
+
+TEST(DataAlternatives, ASignAtAnOutputMayBeItsWiring) {
+  Diagnosis d;
+  d.findings = {at_output(CauseKind::kSignError, "B", {{"sign", -1.0}})};
+  const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"));
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kWiringSign);
+  EXPECT_EQ(a[0].channel, "B");
+  EXPECT_EQ(a[0].finding, 0);
+}
+
+TEST(DataAlternatives, AGainThatIsAUnitsFactorNamesTheUnits) {
+  Diagnosis d;
+  d.findings = {at_output(CauseKind::kGainMismatch, "A", {{"gain_db", 20 * std::log10(6.894757)}}),
+                at_output(CauseKind::kGainMismatch, "B", {{"gain_db", 20 * std::log10(1.3)}}),
+                at_output(CauseKind::kGainMismatch, "B", {{"gain_db", -20 * std::log10(1.8)}})};
+  const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"));
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kUnits);
+  EXPECT_EQ(a[0].finding, 0);
+  EXPECT_NEAR(a[0].factor, 6.894757, 1e-9);
+  EXPECT_THAT(a[0].text, HasSubstr("psi and kPa"));
+  EXPECT_EQ(a[1].finding, 2) << "1/1.8: degF read as degC the other way";
+  EXPECT_NEAR(a[1].factor, 1 / 1.8, 1e-9);
+}
+
+TEST(DataAlternatives, TwoOutputsExchangedAreNamedAndStraightOnesAreNot) {
+  const Model m = sim();
+  EXPECT_TRUE(data_alternatives({}, m, measured(m, "A", "B")).empty());
+  const auto a = data_alternatives({}, m, measured(m, "B", "A"));
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kSwap);
+  EXPECT_EQ(a[0].channel, "A");
+  EXPECT_EQ(a[0].other, "B");
+  EXPECT_EQ(a[0].finding, -1);
+  const Json j = data_alternatives_to_json(a);
+  EXPECT_EQ(j[0]["kind"], "swap");
+  EXPECT_TRUE(j[0]["finding"].is_null());
+}
