@@ -196,8 +196,9 @@ struct SlopeAccumulator {
         ++n;
       }
     }
+    // The residuals' scale needs degrees of freedom; the weights' alone need one.
     const int dof = n - int(t.size()) - 1;
-    if (!(sxx > 0) || dof < 2) return s;
+    if (!(sxx > 0) || dof < (empirical ? 4 : 1)) return s;
     s.value = sxy / sxx;
     double chi2 = 0;
     for (size_t w = 0; w < t.size(); ++w)
@@ -280,7 +281,8 @@ std::pair<double, double> check_clipping(const std::string& ch, const double* x,
     }
     int64_t at_next = 0;
     for (int64_t k = 0; k < s.n_samples; ++k) at_next += x[k] == next;
-    if (at < std::max<int64_t>(5, 3 * at_next + 3)) continue;
+    if (at < std::max<int64_t>(20, 3 * at_next + 3) || double(at) < 1e-4 * double(s.n_samples))
+      continue;
     DataFault f;
     f.channel = ch;
     f.kind = DataFaultKind::kClipping;
@@ -493,15 +495,27 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
   for (const Window& w : windows)
     values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
   double t0 = INFINITY, t1 = -INFINITY;
-  // Drift: the blocks' means within each window, weighted by their scatter (pooled per window).
+  // Drift: the means of each eighth of a multisine's period (a sine's blocks), compared across
+  // the periods of one window: each eighth's own level is its group's offset, a drift the slope
+  // they share (eighths give the residuals enough degrees of freedom in a window of few periods).
   for (size_t i = 0; i < windows.size(); ++i) {
+    const Window& w = windows[i];
     const BlockValues& v = values[i];
-    std::vector<double> tb, zb;
-    for (size_t b = 0; b < v.mean.size(); ++b)
-      if (std::isfinite(v.mean[b]) && !v.y[b].empty())
-        tb.push_back(v.t[b]), zb.push_back(v.mean[b]);
-    if (tb.size() >= 2) t0 = std::min(t0, tb.front()), t1 = std::max(t1, tb.back());
-    drift.add(tb, zb, 1.0);
+    const int J = w.multisine ? 8 : 1;
+    for (int j = 0; j < J; ++j) {
+      std::vector<double> tb, zb;
+      for (size_t b = 0; b < v.mean.size(); ++b) {
+        if (!std::isfinite(v.mean[b]) || v.y[b].empty()) continue;
+        const int64_t a = w.block_len[b] * j / J, z = w.block_len[b] * (j + 1) / J;
+        const double* xb = x + (w.block_from[b] - s.start_sample);
+        double m = 0;
+        for (int64_t n = a; n < z; ++n) m += xb[n] / double(z - a);
+        tb.push_back((double(w.block_from[b]) + 0.5 * double(a + z)) / s.sample_rate_hz);
+        zb.push_back(m);
+      }
+      if (tb.size() >= 2) t0 = std::min(t0, tb.front()), t1 = std::max(t1, tb.back());
+      drift.add(tb, zb, 1.0);
+    }
   }
   // Clock: each block's delay against its window's mean, in two passes (the second on the
   // first's residual, so that lines the first pass would wrap are used in the second).
@@ -631,7 +645,10 @@ void check_no_response(const std::string& ch, const double* x, const TimeSeries&
   }
   std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t0 < b.t0; });
   std::map<std::string, double> typical;
-  for (auto& [sig, r] : by_sig) typical[sig] = median(r);
+  for (auto& [sig, r] : by_sig) {  // the upper quartile: a channel dead for most of a run too
+    std::sort(r.begin(), r.end());
+    typical[sig] = r[r.size() * 3 / 4];
+  }
   for (size_t i = 0; i < items.size();) {
     if (!(typical[items[i].sig] > 30 && items[i].ratio < 4)) {
       ++i;

@@ -6,7 +6,9 @@
 #include <memory>
 
 #include "commands.h"
+#include "fralab/exchange/data_quality.h"
 #include "fralab/exchange/tape_series.h"
+#include "fralab/lab/data_check.h"
 #include "fralab/lcm/tape_file.h"
 
 namespace fralab {
@@ -36,6 +38,9 @@ void run(const ImportCommand& c) {
                 c.reference.phase_channel.c_str());
   }
   if (!c.schedule_out.empty()) json_save_file(c.schedule_out, schedule_to_json(schedule));
+  // The recording goes on the tape as it is; what its data show is said now (`fralab analyze`
+  // mends it and writes the section beside the curves).
+  print_data_quality(check_data_quality(s, schedule));
   const std::vector<Block> blocks = series_to_blocks(s, schedule, c.block);
   write_tape_file(c.out, blocks, schedule.events);
   std::printf(

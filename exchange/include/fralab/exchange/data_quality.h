@@ -14,8 +14,9 @@
 //             improbable: repeats are expected with probability q / (sigma_d sqrt(2 pi)) per
 //             sample (q the smallest nonzero step, sigma_d the robust spread of the steps);
 //             flagged when runs of two or more exceed 5 sqrt(expected) + 3. Mended as lost.
-//   clipping  samples equal to the channel's largest (smallest) value, when more than
-//             max(5, 3 m2 + 3) of them (m2: how many share the next value inside): a transducer
+//   clipping  samples equal to the channel's largest (smallest) value, when at least
+//             max(20, 3 m2 + 3) of them and 0.01 % of the run (m2: how many share the next
+//             value inside; a handful at an actuator's own stop is no range): a transducer
 //             or converter at its range. Not mended (a clipped peak is not known); the share of
 //             samples and the level are reported.
 //   hum       lines at multiples m = 1..max_harmonic of 50 and 60 Hz (within mains_search_hz),
@@ -27,10 +28,10 @@
 //             (a sine step's harmonic holds in one). The frequency is refined (Brent on the
 //             line's amplitude), its amplitude A and phase fitted over the channel, and the
 //             sinusoid subtracted.
-//   drift     the means of the excitation's whole periods (a multisine's; a sine window's
-//             blocks of whole cycles) regressed on time: a slope beyond drift_sigmas times its
-//             sigma (from the means' scatter about the line) and beyond min_drift, the
-//             channel's units per second. Mended by subtracting rate (t - t_mid).
+//   drift     the means of each eighth of a multisine's period (a sine window's blocks of whole
+//             cycles) regressed on time within each window, each eighth its own offset: a slope
+//             beyond drift_sigmas times its sigma (from the means' scatter about the lines).
+//             Mended by subtracting rate (t - t_mid).
 //   clock     the channel's own clock runs at another rate than the excitation's: within each
 //             integration window, the phase of each block (a multisine period; a sine's block of
 //             whole cycles) at the excited frequencies against the window's mean gives the delay
@@ -43,7 +44,7 @@
 //             tell from the plant's).
 //   no response  a multisine period whose excited lines hold no more than the noise (power
 //             below 4 times that of the non-excited lines) while the same excitation gives more
-//             than 30 times elsewhere in the run: a dead channel (to the end of the run) or an
+//             than 30 times in a quarter of the run's periods: a dead channel (to the end) or an
 //             actuator stuck or its sensor silent (a span). Not mended; the span is reported.
 // Faults the data alone cannot tell (a wiring sign, a units factor, two channels swapped) are
 // the diagnosis' to name beside its findings (diagnose/data_faults.h).
