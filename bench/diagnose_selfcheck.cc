@@ -12,6 +12,11 @@
 // measured in-process: each path's exact response on a grid dense enough for its lightest mode,
 // with noise of known sigma, and a validation measurement; the diagnosis runs in this process.
 // --plants state (tests/util/random_state.h: state models, entries changed) likewise.
+// --faults (machine plants): 0-2 recording faults per case (tests/util/random_faults.h) put into
+// the engine's channels; the summary adds the faults named in diagnosis.json's data_quality (any
+// run of the measurement), those sized within 10 %, those named but not put in, and precision and
+// recall over the cases with faults and over those without apart (a finding a fault caused is a
+// false finding of a case with faults).
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
 #include <sys/wait.h>
 
@@ -20,10 +25,13 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "fralab/exchange/tape_series.h"
+#include "random_faults.h"
 #include "random_machine.h"
 #include "random_modal.h"
 #include "random_plant.h"
 #include "random_state.h"
+#include "test_util.h"
 
 using namespace fralab;
 using namespace fralab::testing;
@@ -37,6 +45,37 @@ std::vector<Finding> read_findings(const std::string& file) {
   for (size_t k = 0; k < fs.size(); ++k)
     v.push_back(finding_from_json(fs[k], JsonWhere{file, "/findings/" + std::to_string(k)}));
   return v;
+}
+
+// Every fault the data-quality checks named in diagnosis.json, once per channel and kind.
+std::vector<DataFault> named_faults(const std::string& file) {
+  const Json j = json_load_file(file);
+  std::vector<DataFault> out;
+  if (!j.contains("data_quality")) return out;
+  for (const Json& r : j["data_quality"]["runs"]) {
+    const DataQuality q = data_quality_from_json(r, JsonWhere{file, "/data_quality/runs"});
+    for (const DataFault& f : q.faults) {
+      bool seen = false;
+      for (const DataFault& o : out) seen |= o.channel == f.channel && o.kind == f.kind;
+      if (!seen) out.push_back(f);
+    }
+  }
+  return out;
+}
+
+// Recording faults for case `i` of `seed`: 0, 1 or 2 (a third of the cases each), sized from a
+// clean multisine recording of the engine made in-process; added to `engine`.
+std::vector<InjectedFault> add_faults(Model& engine, uint64_t seed, int i) {
+  std::mt19937_64 g(seed * 104729 + uint64_t(i));
+  const int n = std::uniform_int_distribution<int>(0, 2)(g);
+  std::vector<InjectedFault> out;
+  if (n == 0) return out;
+  AcquireOptions o = random_phase_multisine("0.05:20", 5, -1, 1);
+  o.min_cycles = 3;
+  const TimeSeries clean =
+      blocks_to_series(simulate_campaign(engine, o, true, seed + uint64_t(i)).blocks, "clean");
+  for (int k = 0; k < n; ++k) out.push_back(add_random_fault(engine, clean, g));
+  return out;
 }
 
 // Scores one case, adds it to the totals and prints its line (and what failed).
@@ -87,19 +126,29 @@ int main(int argc, char** argv) {
          "state models with changed entries, measured in-process)")
       ->check(CLI::IsMember({"random", "machine", "modal", "state"}))
       ->capture_default_str();
+  bool faults = false;
+  app.add_flag("--faults", faults, "machine plants: 0-2 recording faults per case");
   CLI11_PARSE(app, argc, argv);
+  if (faults && plants != "machine") throw InputError("--faults needs --plants machine");
+  FaultScore fault_total;
+  Score with_faults, without_faults;
   const std::string bin =
       std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
   Score total;
   int failing = 0, complete = 0, partial = 0, failed = 0;
   for (int i = first; i < first + cases; ++i) {
-    const RandomCase c = plants == "machine" ? random_machine_case(seed, i)
-                         : plants == "modal" ? random_modal_case(seed, i)
-                         : plants == "state" ? random_state_case(seed, i)
-                                             : random_case(seed, i);
+    RandomCase c = plants == "machine" ? random_machine_case(seed, i)
+                   : plants == "modal" ? random_modal_case(seed, i)
+                   : plants == "state" ? random_state_case(seed, i)
+                                       : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);
+    const std::vector<InjectedFault> injected =
+        faults ? add_faults(c.engine, seed, i) : std::vector<InjectedFault>{};
+    for (const InjectedFault& f : injected)
+      std::printf("%s: recording fault on %s: %s\n", c.name.c_str(), f.channel.c_str(),
+                  f.text.c_str());
     save_model(dir + "/engine.json", c.engine);
     if (plants == "state") {
       Diagnosis d;
@@ -142,7 +191,29 @@ int main(int argc, char** argv) {
       total.findings += 1;  // a failed run counts against precision too
       continue;
     }
-    report(c, read_findings(dir + "/diagnosis/diagnosis.json"), total, failing);
+    const std::string dj = dir + "/diagnosis/diagnosis.json";
+    report(c, read_findings(dj), total, failing);
+    if (faults) {
+      const FaultScore fs = score_faults(injected, named_faults(dj));
+      fault_total.add(fs);
+      for (const std::string& l : fs.lines) std::printf("    fault %s\n", l.c_str());
+      Score& part = injected.empty() ? without_faults : with_faults;
+      const Score sc = score(c, read_findings(dj));
+      part.findings += sc.findings, part.true_findings += sc.true_findings;
+      part.hidden += sc.hidden, part.found += sc.found;
+    }
+  }
+  if (faults) {
+    auto share = [](int a, int b) { return b ? double(a) / b : 1.0; };
+    std::printf(
+        "faults: named %d / %d (%.3f), sized within 10 %% %d / %d, named but not put in %d; "
+        "cases with faults: precision %.3f recall %.3f; without: precision %.3f recall %.3f\n",
+        fault_total.named, fault_total.put, share(fault_total.named, fault_total.put),
+        fault_total.sized, fault_total.to_size, fault_total.false_named,
+        share(with_faults.true_findings, with_faults.findings),
+        share(with_faults.found, with_faults.hidden),
+        share(without_faults.true_findings, without_faults.findings),
+        share(without_faults.found, without_faults.hidden));
   }
   const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
   const double recall = total.hidden ? double(total.found) / total.hidden : 1.0;

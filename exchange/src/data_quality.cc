@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -668,7 +669,14 @@ void check_no_response(const std::string& ch, const double* x, const TimeSeries&
              ", where the same excitation gives " + fmt(10 * std::log10(typical[items[i].sig])) +
              " dB elsewhere: " +
              (to_end ? "a dead channel" : "an actuator stuck or a sensor silent for a while");
-    f.action = "not mended: the points of the windows in the span are not to be trusted";
+    // The span set aside, with the period either side (the fault began or ended within it): the
+    // windows holding them give invalid points, naming the samples.
+    const double a = i > 0 ? items[i - 1].t0 : f.from_s, z = to_end ? f.to_s : items[e + 1].t1;
+    f.spans.emplace_back(int64_t(std::llround(a * s.sample_rate_hz)),
+                         int64_t(std::llround(z * s.sample_rate_hz)) - 1);
+    f.mended = true;
+    f.action = "set aside from " + fmt(a) + " to " + fmt(z) +
+               " s (a period either side): the windows holding it give no points";
     out->push_back(std::move(f));
     i = e + 1;
   }
@@ -682,7 +690,8 @@ void interpolate(double* x, int64_t N, int64_t a, int64_t b) {
     x[k] = left + (right - left) * double(k - a + 1) / double(b - a + 2);
 }
 
-// The mending of one channel in the documented order: gaps, hum, drift, clock.
+// The mending of one channel in the documented order: gaps, hum, drift, clock, spans without
+// response.
 void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFault*>& faults) {
   const int64_t N = s.n_samples;
   const double fs = s.sample_rate_hz;
@@ -718,6 +727,13 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
         x[n] = (1 - a) * y[size_t(i)] + a * y[size_t(i + 1)];
       }
     }
+  }
+  // Spans without response last: NaN, which the analyser refuses in any window.
+  for (const DataFault* f : faults) {
+    if (!f->mended || f->kind != DataFaultKind::kNoResponse) continue;
+    for (const auto& [a, b] : f->spans)
+      for (int64_t n = std::max(a, s.start_sample); n <= std::min(b, s.start_sample + N - 1); ++n)
+        x[n - s.start_sample] = std::numeric_limits<double>::quiet_NaN();
   }
 }
 

@@ -203,6 +203,23 @@ TEST(DataQuality, ADeadChannelIsSaidFromWhenItDied) {
   ASSERT_NE(f, nullptr) << listed(q);
   EXPECT_NEAR(f->from_s, 40.0, 5.0) << "within a period of when it died";
   EXPECT_NEAR(f->to_s, double(r.series.start_sample + r.series.n_samples) / 1000.0, 5.0);
+  // Set aside, the dead stretch gives no points; the points left are the clean run's.
+  const Recording clean = record(plant(nullptr));
+  const Frd truth = curve(clean, clean.series, "X:Y");
+  const Frd raw = curve(r, r.series, "X:Y"), mended = curve(r, mend_series(r.series, q), "X:Y");
+  EXPECT_GT(worst_log_error(raw, truth), 0.3) << "the dead stretch spoils the curve";
+  // (One realisation's points against the clean two's mean: sqrt(2) their sigma.)
+  int valid = 0;
+  for (const FrdPoint& p : mended.points) {
+    if (!p.valid) continue;
+    ++valid;
+    for (const FrdPoint& t : truth.points) {
+      if (std::abs(t.w - p.w) < 1e-9 * p.w) {
+        EXPECT_LT(std::abs(p.value() - t.value()), 0.01 * std::abs(t.value()) + 7 * t.sigma) << p.w;
+      }
+    }
+  }
+  EXPECT_GT(valid, 0) << "the realisation before the channel died is kept";
 }
 
 TEST(DataQuality, TheSectionRoundTripsThroughJson) {

@@ -45,7 +45,8 @@
 //   no response  a multisine period whose excited lines hold no more than the noise (power
 //             below 4 times that of the non-excited lines) while the same excitation gives more
 //             than 30 times in a quarter of the run's periods: a dead channel (to the end) or an
-//             actuator stuck or its sensor silent (a span). Not mended; the span is reported.
+//             actuator stuck or its sensor silent (a span). Set aside with the period either
+//             side (NaN in the mended series): the windows holding it give invalid points.
 // Faults the data alone cannot tell (a wiring sign, a units factor, two channels swapped) are
 // the diagnosis' to name beside its findings (diagnose/data_faults.h).
 #pragma once
