@@ -135,6 +135,23 @@ int main(int argc, char** argv) {
   "paths": [{"output": "P3", "input": "Wf",
     "tf": {"gain": 0.03, "zeros": [{"real": 192}], "poles": [{"real": -2.8}], "delay_s": 0.011}}]}
 )";
+  // A model whose channels carry one recording fault of each kind (plant/faults.h).
+  std::ofstream(d + "/model/seed_faults.json") << R"({"format": "fralab-model/1", "name": "faults",
+  "operating_point": {"speed_pct": 95, "steady_state": {"P3": 70, "N": 15000}},
+  "inputs": [{"name": "Wf", "units": "lb/hr", "full_scale": 3000,
+    "faults": [{"kind": "stuck", "from_s": 0.5, "for_s": 0.3}, {"kind": "hum", "amplitude": 1}]}],
+  "outputs": [{"name": "P3", "units": "psi", "noise_rms": 0.01,
+    "faults": [{"kind": "clock", "rate_error": 0.001, "offset_s": 0.01},
+               {"kind": "hum", "frequency_hz": 60, "amplitude": 0.1, "harmonics": [1, 3]},
+               {"kind": "drift", "rate": 0.01, "from_s": 0.2}, {"kind": "clip", "max": 70.01},
+               {"kind": "sign"}, {"kind": "scale", "factor": 6.894757},
+               {"kind": "dropouts", "rate_hz": 20, "length": 3, "mode": "lost"},
+               {"kind": "swap", "with": "N"}]},
+              {"name": "N", "units": "rpm", "noise_rms": 1,
+    "faults": [{"kind": "dead", "from_s": 1}, {"kind": "dropouts", "rate_hz": 5, "length": 2}]}],
+  "paths": [{"output": "P3", "input": "Wf", "tf": {"gain": 0.03, "poles": [{"real": -2.8}]}},
+            {"output": "N", "input": "Wf", "tf": {"gain": 2, "poles": [{"real": -1}]}}]}
+)";
   // A state model (fralab-ss/1): two states, one input, two outputs, delays of each kind.
   std::ofstream(d + "/model/seed_ss.json") << R"({"format": "fralab-ss/1", "name": "seed",
  "states": [{"name": "N"}, {"name": "T4"}],

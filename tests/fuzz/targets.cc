@@ -13,6 +13,7 @@
 #include "fralab/identify/state_model.h"
 #include "fralab/identify/transfer_matrix.h"
 #include "fralab/plant/model.h"
+#include "fralab/plant/simulator.h"
 #include "random_shapes.h"
 #include "tape_analysis.h"
 
@@ -47,8 +48,17 @@ int run(const std::string& reader, const uint8_t* data, size_t size) {
           path, [](const TapeEvent&) {}, &warning);
       AnalyzerOptions o;
       analyze_tape_file(path, {"u_Wf:Wf", "Wf:P3"}, o);
-    } else if (reader == "model") {
-      load_model(path);
+    } else if (reader == "model") {  // read, then run: its recording faults act at the clock
+      const Model m = load_model(path);
+      SimulatorOptions so;
+      so.sample_rate_hz = 100;
+      Simulator sim(m, so);
+      std::vector<double> u(m.inputs.size()), y(sim.n_channels());
+      for (size_t i = 0; i < u.size(); ++i) u[i] = m.dc(m.inputs[i].name);
+      for (int k = 0; k < 200; ++k) {
+        if (!u.empty()) u[0] += (k % 20 < 10 ? 1e-3 : -1e-3) * m.inputs[0].full_scale;
+        sim.step(u.data(), y.data());
+      }
     } else if (reader == "frd") {
       load_frd(path);
     } else if (reader == "csv") {

@@ -178,3 +178,23 @@ TEST(ChannelFaults, BadFaultsAreRefusedNamingWhere) {
   EXPECT_THAT(refused(nullptr, Json::array({{{"kind", "dropouts"}, {"mode", "gone"}}})),
               HasSubstr("mode must be \"held\" or \"lost\""));
 }
+
+TEST(ChannelFaults, EveryKindTogetherRunsAsTheFuzzSeedHasThem) {
+  // The fuzz corpus' model: one fault of each kind; it reads, runs, and each shows.
+  const Model m = load_model(FRALAB_SOURCE_DIR "/tests/fuzz/corpus/model/seed_faults.json");
+  SimulatorOptions o;
+  o.sample_rate_hz = 100;
+  Simulator sim(m, o);
+  std::vector<double> u{m.dc("Wf")}, y(sim.n_channels());
+  int lost = 0;
+  for (int k = 0; k < 300; ++k) {
+    u[0] = m.dc("Wf") + 10 * std::sin(0.3 * k);
+    sim.step(u.data(), y.data());
+    // Swapped: channel 1 (P3) records N's signal and channel 2 N's the faulty P3.
+    lost += std::isnan(y[2]);
+    if (k >= 100 && !std::isnan(y[1])) {
+      EXPECT_NEAR(y[1], 15000, 5) << "N dead from 1 s (its noise left), recorded as P3: " << k;
+    }
+  }
+  EXPECT_GT(lost, 0) << "P3's lost dropouts";
+}
