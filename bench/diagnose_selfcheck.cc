@@ -64,14 +64,19 @@ std::vector<DataFault> named_faults(const std::string& file) {
 }
 
 // Recording faults for case `i` of `seed`: 0, 1 or 2 (a third of the cases each), sized from a
-// clean multisine recording of the engine made in-process; added to `engine`.
-std::vector<InjectedFault> add_faults(Model& engine, uint64_t seed, int i) {
+// clean recording of the engine made in-process by the multisine the lab runs first (the same
+// band, density and periods: a fault's time falls inside the run); added to `engine`.
+std::vector<InjectedFault> add_faults(Model& engine, uint64_t seed, int i, const std::string& band,
+                                      int ppd) {
   std::mt19937_64 g(seed * 104729 + uint64_t(i));
   const int n = std::uniform_int_distribution<int>(0, 2)(g);
   std::vector<InjectedFault> out;
   if (n == 0) return out;
-  AcquireOptions o = random_phase_multisine("0.05:20", 5, -1, 1);
-  o.min_cycles = 3;
+  AcquireOptions o;
+  o.band = band;
+  o.points_per_decade = ppd;
+  o.excitation = Excitation::kMultisine;
+  o.min_cycles = 2;  // the auto campaign's periods per experiment
   const TimeSeries clean =
       blocks_to_series(simulate_campaign(engine, o, true, seed + uint64_t(i)).blocks, "clean");
   for (int k = 0; k < n; ++k) out.push_back(add_random_fault(engine, clean, g));
@@ -145,7 +150,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(dir);
     save_model(dir + "/simulation.json", c.simulation);
     const std::vector<InjectedFault> injected =
-        faults ? add_faults(c.engine, seed, i) : std::vector<InjectedFault>{};
+        faults ? add_faults(c.engine, seed, i, band, ppd) : std::vector<InjectedFault>{};
     for (const InjectedFault& f : injected)
       std::printf("%s: recording fault on %s: %s\n", c.name.c_str(), f.channel.c_str(),
                   f.text.c_str());

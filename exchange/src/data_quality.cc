@@ -197,9 +197,10 @@ struct SlopeAccumulator {
         ++n;
       }
     }
-    // The residuals' scale needs degrees of freedom; the weights' alone need one.
+    // The residuals' scale needs degrees of freedom; the weights alone need none (one window of
+    // two periods: a single-input multisine).
     const int dof = n - int(t.size()) - 1;
-    if (!(sxx > 0) || dof < (empirical ? 4 : 1)) return s;
+    if (!(sxx > 0) || dof < (empirical ? 4 : 0)) return s;
     s.value = sxy / sxx;
     double chi2 = 0;
     for (size_t w = 0; w < t.size(); ++w)
@@ -207,7 +208,7 @@ struct SlopeAccumulator {
         const double r = z[w][b] - zbar[w] - s.value * (t[w][b] - tbar[w]);
         chi2 += weight[w] * r * r;
       }
-    const double red = chi2 / dof;
+    const double red = dof > 0 ? chi2 / dof : 1.0;
     s.sigma = std::sqrt((empirical ? red : std::max(1.0, red)) / sxx);
     s.blocks = n;
     return s;
@@ -221,6 +222,28 @@ double median(std::vector<double> v) {
 }
 
 // ---- sample-level checks -------------------------------------------------------------------
+
+// Whether the channel carries noise: white noise's 4th differences are anticorrelated from one
+// sample to the next (lag-1 correlation -56/70 = -0.8), a smooth signal's follow each other
+// (near +1); below -0.4, noise dominates them. A noise-free channel (a simulation's position
+// without sensor noise) holds a value exactly where the plant does (a backlash's dwell, an
+// actuator at its stop): repeats and flat tops are then the plant's.
+bool noisy(const double* x, int64_t N) {
+  std::vector<double> d4;
+  for (int64_t k = 4; k < N; ++k) {
+    const double v = x[k] - 4 * x[k - 1] + 6 * x[k - 2] - 4 * x[k - 3] + x[k - 4];
+    if (std::isfinite(v)) d4.push_back(v);
+  }
+  if (d4.size() < 10) return false;
+  double m = 0;
+  for (double v : d4) m += v / double(d4.size());
+  double c0 = 0, c1 = 0;
+  for (size_t k = 0; k < d4.size(); ++k) {
+    c0 += (d4[k] - m) * (d4[k] - m);
+    if (k > 0) c1 += (d4[k] - m) * (d4[k - 1] - m);
+  }
+  return c0 > 0 && c1 / c0 < -0.4;
+}
 
 void check_lost(const std::string& ch, const double* x, const TimeSeries& s,
                 const DataQualityOptions& o, std::vector<DataFault>* out) {
@@ -295,8 +318,8 @@ std::pair<double, double> check_clipping(const std::string& ch, const double* x,
              " in " + std::to_string(at) + " samples (" + fmt(100 * f.size) +
              " % of the run): a transducer or converter at its range";
     f.action =
-        "not mended (a clipped peak is not known): the points it touches are biased; "
-        "measure again with a wider range or a smaller amplitude";
+        "not mended (a clipped peak is not known): the sigmas of its pairs' points widened by "
+        "the share clipped; measure again with a wider range or a smaller amplitude";
     out->push_back(std::move(f));
   }
   return {hi, lo};
@@ -390,9 +413,13 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
   const int64_t N = smooth_size(s.n_samples);
   const double fs = s.sample_rate_hz;
   if (N < 1024) return;
-  double mean = 0;
-  for (int64_t n = 0; n < N; ++n) mean += x[n] / double(N);
+  double mean = 0, range_lo = INFINITY, range_hi = -INFINITY;
+  for (int64_t n = 0; n < N; ++n) {
+    mean += x[n] / double(N);
+    range_lo = std::min(range_lo, x[n]), range_hi = std::max(range_hi, x[n]);
+  }
   if (!std::isfinite(mean)) return;
+  const double range = range_hi - range_lo;
   std::vector<double> buf(static_cast<size_t>(N));
   for (int64_t n = 0; n < N; ++n)
     buf[size_t(n)] = (x[n] - mean) * (0.5 - 0.5 * std::cos(2 * kPi * double(n) / double(N)));
@@ -458,6 +485,8 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
           [&](double ff) { return -std::abs(hann_dft(x, N, mean, ff, fs, s.start_sample)); },
           (double(peak) - 1) * df, (double(peak) + 1) * df, 24, 40);
       const Complex c = hann_dft(x, N, mean, f, fs, s.start_sample) * (4.0 / double(N));
+      // Rounding's own lines in a noise-free channel are no hum.
+      if (!(std::abs(c) > 1e-9 * range)) continue;
       // Mains hum lasts: it must hold in every quarter of the run (a sine step's harmonic, or a
       // transient, holds in one).
       bool steady = true;
@@ -756,6 +785,12 @@ void DataQualityOptions::validate() const {
     throw InputError("data quality: max_harmonic must be in 1..20");
 }
 
+bool DataQuality::changes_curves() const {
+  return any_mended() || std::any_of(faults.begin(), faults.end(), [](const DataFault& f) {
+           return f.kind == DataFaultKind::kClipping;
+         });
+}
+
 bool DataQuality::any_mended() const {
   return std::any_of(faults.begin(), faults.end(), [](const DataFault& f) { return f.mended; });
 }
@@ -774,8 +809,11 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     double* x = work.samples.data() + c * size_t(s.n_samples);
     std::vector<DataFault> found;
     check_lost(ch, raw, s, o, &found);
-    const auto [hi, lo] = check_clipping(ch, raw, s, &found);
-    if (!o.noise_free) check_held(ch, raw, s, hi, lo, o, &found);
+    // Repeats and flat tops are faults only where noise makes them improbable.
+    if (!o.noise_free && noisy(raw, s.n_samples)) {
+      const auto [hi, lo] = check_clipping(ch, raw, s, &found);
+      check_held(ch, raw, s, hi, lo, o, &found);
+    }
     // The spectral checks see the gaps mended (a NaN would spoil every period it falls in).
     std::vector<const DataFault*> so_far;
     for (const DataFault& f : found) so_far.push_back(&f);
@@ -807,11 +845,12 @@ void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q) {
   for (Frd& c : curves) {
     const auto [e1, e2] = split_pair(c.pair);
     for (const DataFault& f : q.faults) {
-      if (f.kind != DataFaultKind::kClock || !f.mended || (f.channel != e1 && f.channel != e2))
-        continue;
+      if (f.channel != e1 && f.channel != e2) continue;
       for (FrdPoint& p : c.points) {
         if (!p.valid || !(p.sigma > 0)) continue;
-        const double extra = p.mag * p.w * f.sigma * f.to_s;
+        double extra = 0;
+        if (f.kind == DataFaultKind::kClock && f.mended) extra = p.mag * p.w * f.sigma * f.to_s;
+        if (f.kind == DataFaultKind::kClipping) extra = p.mag * f.size;
         p.sigma = std::sqrt(p.sigma * p.sigma + extra * extra);
       }
     }

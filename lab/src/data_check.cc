@@ -15,7 +15,7 @@ CheckedTape check_tape(const std::string& tape, const std::string& run_id,
   const Schedule schedule{series.sample_rate_hz, run.run_id, run.events};
   CheckedTape out;
   out.quality = check_data_quality(series, schedule, o);
-  if (!out.quality.any_mended()) return out;
+  if (!out.quality.changes_curves()) return out;
   const std::vector<Block> blocks =
       series_to_blocks(mend_series(series, out.quality), schedule, run.blocks.front().n_samples);
   out.mended_curves = analyse_run_in_memory(schedule.events, blocks, pairs);

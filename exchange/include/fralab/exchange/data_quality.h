@@ -14,6 +14,10 @@
 //             improbable: repeats are expected with probability q / (sigma_d sqrt(2 pi)) per
 //             sample (q the smallest nonzero step, sigma_d the robust spread of the steps);
 //             flagged when runs of two or more exceed 5 sqrt(expected) + 3. Mended as lost.
+//   (held samples and clipping are looked for only on a channel with noise: its 4th differences
+//   anticorrelated from sample to sample, lag-1 correlation below -0.4, as white noise's are
+//   (-0.8) and a smooth signal's are not; a noise-free channel holds a value exactly where the
+//   plant does, a backlash's dwell or an actuator at its stop)
 //   clipping  samples equal to the channel's largest (smallest) value, when at least
 //             max(20, 3 m2 + 3) of them and 0.01 % of the run (m2: how many share the next
 //             value inside; a handful at an actuator's own stop is no range): a transducer
@@ -25,7 +29,8 @@
 //             median over +-2 Hz, excited lines and the candidate excluded, over ln 2) and as
 //             far above a multisine's non-excited grid lines there (where its distortion sits),
 //             and lasting: in each quarter of the run at least half its amplitude over the run
-//             (a sine step's harmonic holds in one). The frequency is refined (Brent on the
+//             (a sine step's harmonic holds in one), and above 1e-9 of the channel's range (a
+//             noise-free channel's rounding). The frequency is refined (Brent on the
 //             line's amplitude), its amplitude A and phase fitted over the channel, and the
 //             sinusoid subtracted.
 //   drift     the means of each eighth of a multisine's period (a sine window's blocks of whole
@@ -105,6 +110,9 @@ struct DataQuality {
   std::vector<std::string> checked;  // channels checked
   std::vector<DataFault> faults;     // in channel order, then kind
   bool any_mended() const;
+  /// A fault mended, or one that widens the curves' sigmas (widen_for_mending): the run's curves
+  /// are then analysed again.
+  bool changes_curves() const;
 };
 
 /// The checks above on `s`, with the excitation of `schedule` (its integrate windows).
@@ -113,9 +121,11 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
 /// `s` with every fault of `q` marked mended undone (the tape itself is not touched).
 TimeSeries mend_series(const TimeSeries& s, const DataQuality& q);
 
-/// The curves of a mended series with the mending's own uncertainty added to each point's sigma:
-/// a clock error's, sigma_eps, is a delay error up to sigma_eps to_s at the run's end, so a point
-/// of a pair with that channel (as E1 or E2) gets sigma^2 + (|G| w sigma_eps to_s)^2.
+/// The curves of a mended series with the uncertainty the faults leave added to each point's
+/// sigma, for a pair with the fault's channel as E1 or E2: a mended clock error's sigma_eps is a
+/// delay error up to sigma_eps to_s at the run's end, sigma^2 + (|G| w sigma_eps to_s)^2; a
+/// clipping's share p of the samples biases the gain by about that much (a saturation's
+/// describing function over a multisine's rare peaks), sigma^2 + (p |G|)^2.
 void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q);
 
 /// docs/formats.md §13 "data_quality": {"checked": [...], "faults": [{"channel", "kind",

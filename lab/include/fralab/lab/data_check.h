@@ -14,14 +14,16 @@ namespace fralab {
 
 struct CheckedTape {
   DataQuality quality;
-  /// The pairs' curves from the mended series, in the order asked; nullopt when nothing was
-  /// mended (the tape's own analysis stands).
+  /// The pairs' curves from the mended series, with the faults' uncertainty in their sigmas
+  /// (widen_for_mending), in the order asked; nullopt when no fault changes them (the tape's own
+  /// analysis stands).
   std::optional<std::vector<Frd>> mended_curves;
 };
 
-/// Reads run `run_id` of `tape` ("" its first run), checks it, and when a fault is mended analyses
-/// `pairs` from the mended series (re-cut into blocks of the tape's own size). A tape whose run
-/// has a missing block is refused (InputError naming it): the caller's analysis names the gap.
+/// Reads run `run_id` of `tape` ("" its first run), checks it, and when a fault changes the curves
+/// analyses `pairs` from the mended series (re-cut into blocks of the tape's own size). A tape
+/// whose run has a missing block is refused (InputError naming it): the caller's analysis names the
+/// gap.
 CheckedTape check_tape(const std::string& tape, const std::string& run_id,
                        const std::vector<std::string>& pairs, const DataQualityOptions& o = {});
 
