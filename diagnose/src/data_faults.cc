@@ -13,7 +13,8 @@ namespace {
 constexpr std::pair<DataAlternative::Kind, const char*> kKindWords[] = {
     {DataAlternative::Kind::kWiringSign, "wiring_sign"},
     {DataAlternative::Kind::kUnits, "units"},
-    {DataAlternative::Kind::kSwap, "swap"}};
+    {DataAlternative::Kind::kSwap, "swap"},
+    {DataAlternative::Kind::kClipping, "clipping"}};
 
 struct UnitsFactor {
   double factor;
@@ -77,10 +78,23 @@ const char* to_string(DataAlternative::Kind k) { return enum_word(kKindWords, k)
 
 std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
                                                const std::vector<MeasuredPair>& data,
-                                               const DiagnoseOptions& opt) {
+                                               const DiagnoseOptions& opt,
+                                               const std::map<std::string, double>& clipped) {
   std::vector<DataAlternative> out;
   for (size_t i = 0; i < d.findings.size(); ++i) {
     const Finding& f = d.findings[i];
+    for (const std::string& at : {f.output, f.input}) {
+      const auto c = clipped.find(at);
+      if (at.empty() || c == clipped.end()) continue;
+      DataAlternative a;
+      a.kind = DataAlternative::Kind::kClipping;
+      a.channel = at;
+      a.finding = int(i);
+      a.text = "or the clipping of " + at + " (" + significant(100 * c->second, 3) +
+               " % of its samples at its range) distorts its curves: measure again within range "
+               "before changing the model";
+      out.push_back(std::move(a));
+    }
     const std::string ch = channel_of(f);
     if (ch.empty()) continue;
     if (f.cause == CauseKind::kSignError) {

@@ -223,26 +223,28 @@ double median(std::vector<double> v) {
 
 // ---- sample-level checks -------------------------------------------------------------------
 
-// Whether the channel carries noise: white noise's 4th differences are anticorrelated from one
-// sample to the next (lag-1 correlation -56/70 = -0.8), a smooth signal's follow each other
-// (near +1); below -0.4, noise dominates them. A noise-free channel (a simulation's position
-// without sensor noise) holds a value exactly where the plant does (a backlash's dwell, an
-// actuator at its stop): repeats and flat tops are then the plant's.
+// Whether the channel carries noise: white noise's 4th differences change sign from one sample
+// to the next four times in five (their lag-1 correlation is -56/70), a smooth signal's keep
+// theirs; more than three in five sign changes over the nonzero ones, noise dominates. Counting
+// signs, a noise-free channel's rare kinks (a backlash's reversals) do not decide. A noise-free
+// channel (a simulation's position without sensor noise) holds a value exactly where the plant
+// does (a backlash's dwell, an actuator at its stop): repeats and flat tops are then the plant's.
 bool noisy(const double* x, int64_t N) {
-  std::vector<double> d4;
+  int64_t pairs = 0, changes = 0;
+  double prev = 0;
   for (int64_t k = 4; k < N; ++k) {
     const double v = x[k] - 4 * x[k - 1] + 6 * x[k - 2] - 4 * x[k - 3] + x[k - 4];
-    if (std::isfinite(v)) d4.push_back(v);
+    if (!std::isfinite(v) || v == 0) {
+      prev = 0;
+      continue;
+    }
+    if (prev != 0) {
+      ++pairs;
+      changes += (v > 0) != (prev > 0);
+    }
+    prev = v;
   }
-  if (d4.size() < 10) return false;
-  double m = 0;
-  for (double v : d4) m += v / double(d4.size());
-  double c0 = 0, c1 = 0;
-  for (size_t k = 0; k < d4.size(); ++k) {
-    c0 += (d4[k] - m) * (d4[k] - m);
-    if (k > 0) c1 += (d4[k] - m) * (d4[k - 1] - m);
-  }
-  return c0 > 0 && c1 / c0 < -0.4;
+  return pairs >= 10 && double(changes) > 0.6 * double(pairs);
 }
 
 void check_lost(const std::string& ch, const double* x, const TimeSeries& s,
@@ -486,7 +488,7 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
           (double(peak) - 1) * df, (double(peak) + 1) * df, 24, 40);
       const Complex c = hann_dft(x, N, mean, f, fs, s.start_sample) * (4.0 / double(N));
       // Rounding's own lines in a noise-free channel are no hum.
-      if (!(std::abs(c) > 1e-9 * range)) continue;
+      if (!(std::abs(c) > 1e-9 * std::max(range, std::abs(mean)))) continue;
       // Mains hum lasts: it must hold in every quarter of the run (a sine step's harmonic, or a
       // transient, holds in one).
       bool steady = true;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "fralab/core/measure_dir.h"
@@ -173,13 +174,20 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   Diagnosis d = diagnose(sim, data, opt);
   Json dj = diagnosis_to_json(d);
   DataNotes notes;
-  notes.alternatives = data_alternatives(d, sim, data, opt);
   Json runs = recorded_data_quality(data_dir, &notes);
   if (!c.baseline.empty()) {
     for (Json& r : recorded_data_quality(c.baseline, &notes)) runs.push_back(std::move(r));
   }
   for (const std::string& l : c.levels)
     for (Json& r : recorded_data_quality(l, &notes)) runs.push_back(std::move(r));
+  std::map<std::string, double> clipped;  // per channel, the largest share over the runs
+  for (const Json& r : runs)
+    for (const Json& f : r["faults"])
+      if (f["kind"] == "clipping") {
+        double& share = clipped[f["channel"].get<std::string>()];
+        share = std::max(share, f["size"].get<double>());
+      }
+  notes.alternatives = data_alternatives(d, sim, data, opt, clipped);
   dj["data_quality"] = {{"runs", runs},
                         {"alternatives", data_alternatives_to_json(notes.alternatives)}};
   if (!baseline_json.is_null()) dj["baseline"] = baseline_json;

@@ -100,3 +100,17 @@ TEST(DataAlternatives, TwoOutputsExchangedAreNamedAndStraightOnesAreNot) {
   EXPECT_EQ(j[0]["kind"], "swap");
   EXPECT_TRUE(j[0]["finding"].is_null());
 }
+
+TEST(DataAlternatives, AFindingAtAClippedChannelMayBeTheClipping) {
+  Diagnosis d;
+  Finding lag = at_output(CauseKind::kMissingLag, "B", {{"corner_rad_s", 20.0}});
+  lag.scope = Scope::kPath;
+  lag.input = "X";
+  d.findings = {at_output(CauseKind::kGainMismatch, "A", {{"gain_db", -0.3}}), lag};
+  const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"), {}, {{"B", 0.037}});
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kClipping);
+  EXPECT_EQ(a[0].finding, 1);
+  EXPECT_EQ(a[0].channel, "B");
+  EXPECT_THAT(a[0].text, HasSubstr("3.7 % of its samples"));
+}

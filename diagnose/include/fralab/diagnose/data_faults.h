@@ -7,6 +7,10 @@
 //                of a units factor (psi/kPa 6.894757, bar/psi 14.50377, degF/degC 1.8, in/mm
 //                25.4, lb/kg 2.204623, lbf/N 4.448222, rpm/(rad/s) 9.549297, deg/rad 57.29578,
 //                %/fraction 100, ...): the channel recorded in one unit and read as the other.
+//   clipping     any finding at a clipped channel (its output, or its input's position), given
+//                the share of its samples the recordings' checks found at its range: the
+//                clipping lowers the channel's gain and distorts its curves as a model
+//                difference would.
 //   swap         two outputs A, B whose measured curves match the simulation's with the two
 //                exchanged: with e(A, B) = rms |ln(measured A / simulated B)| over every
 //                input's points, e(A,B) + e(B,A) < 0.35 (e(A,A) + e(B,B)) and each exchanged
@@ -14,6 +18,7 @@
 //                in both): the two channels swapped in the wiring or the channel list.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,7 +28,7 @@
 namespace fralab {
 
 struct DataAlternative {
-  enum class Kind { kWiringSign, kUnits, kSwap };
+  enum class Kind { kWiringSign, kUnits, kSwap, kClipping };
   Kind kind = Kind::kWiringSign;
   std::string channel;  // the channel to check
   std::string other;    // swap: the channel it looks exchanged with
@@ -31,12 +36,15 @@ struct DataAlternative {
   double factor = 0;    // units: the units factor matched
   std::string text;     // one sentence, what to check
 };
-const char* to_string(DataAlternative::Kind k);  // "wiring_sign", "units", "swap"
+/// "wiring_sign", "units", "swap", "clipping".
+const char* to_string(DataAlternative::Kind k);
 
-/// The alternatives of diagnosis `d` of `data` against `sim` (its chain in opt).
+/// The alternatives of diagnosis `d` of `data` against `sim` (its chain in opt); `clipped`: per
+/// channel the largest share of its samples a recording of the measurement held at its range.
 std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
                                                const std::vector<MeasuredPair>& data,
-                                               const DiagnoseOptions& opt = {});
+                                               const DiagnoseOptions& opt = {},
+                                               const std::map<std::string, double>& clipped = {});
 
 /// [{"kind", "channel", "other", "finding", "factor", "text"}], "finding" null when none.
 Json data_alternatives_to_json(const std::vector<DataAlternative>& a);

@@ -14,10 +14,10 @@
 //             improbable: repeats are expected with probability q / (sigma_d sqrt(2 pi)) per
 //             sample (q the smallest nonzero step, sigma_d the robust spread of the steps);
 //             flagged when runs of two or more exceed 5 sqrt(expected) + 3. Mended as lost.
-//   (held samples and clipping are looked for only on a channel with noise: its 4th differences
-//   anticorrelated from sample to sample, lag-1 correlation below -0.4, as white noise's are
-//   (-0.8) and a smooth signal's are not; a noise-free channel holds a value exactly where the
-//   plant does, a backlash's dwell or an actuator at its stop)
+//   (held samples and clipping are looked for only on a channel with noise: its nonzero 4th
+//   differences changing sign from one sample to the next in more than 3 of 5 pairs, as white
+//   noise's do in 4 of 5 and a smooth signal's do not; a noise-free channel holds a value exactly
+//   where the plant does, a backlash's dwell or an actuator at its stop)
 //   clipping  samples equal to the channel's largest (smallest) value, when at least
 //             max(20, 3 m2 + 3) of them and 0.01 % of the run (m2: how many share the next
 //             value inside; a handful at an actuator's own stop is no range): a transducer
@@ -29,8 +29,8 @@
 //             median over +-2 Hz, excited lines and the candidate excluded, over ln 2) and as
 //             far above a multisine's non-excited grid lines there (where its distortion sits),
 //             and lasting: in each quarter of the run at least half its amplitude over the run
-//             (a sine step's harmonic holds in one), and above 1e-9 of the channel's range (a
-//             noise-free channel's rounding). The frequency is refined (Brent on the
+//             (a sine step's harmonic holds in one), and above 1e-9 of the channel's range or
+//             level (a noise-free channel's rounding). The frequency is refined (Brent on the
 //             line's amplitude), its amplitude A and phase fitted over the channel, and the
 //             sinusoid subtracted.
 //   drift     the means of each eighth of a multisine's period (a sine window's blocks of whole
