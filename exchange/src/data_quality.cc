@@ -617,16 +617,21 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
     Slope c2 = clock_pass(c1.value, fmax_all);
     if (c2.blocks > 0) c = Slope{c1.value + c2.value, c2.sigma, c2.blocks};
   }
-  const Slope d = drift.solve(true);
-  if (d.blocks > 0 && std::abs(d.value) > o.drift_sigmas * d.sigma) {
+  // A fault sized by a slope over [t0, t1], mended.
+  auto sloped = [&](DataFaultKind kind, const Slope& sl) {
     DataFault f;
     f.channel = ch;
-    f.kind = DataFaultKind::kDrift;
-    f.size = d.value;
-    f.sigma = d.sigma;
+    f.kind = kind;
+    f.size = sl.value;
+    f.sigma = sl.sigma;
     f.from_s = t0;
     f.to_s = t1;
     f.mended = true;
+    return f;
+  };
+  const Slope d = drift.solve(true);
+  if (d.blocks > 0 && std::abs(d.value) > o.drift_sigmas * d.sigma) {
+    DataFault f = sloped(DataFaultKind::kDrift, d);
     f.text = ch + " drifts by " + fmt(d.value) + " units per second (+-" + fmt(d.sigma) +
              ") within the excitation's periods: " + fmt(d.value * (t1 - t0)) + " over the run";
     f.action = "the straight line removed before the Fourier filter";
@@ -634,14 +639,7 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
   }
   if (c.blocks > 0 && std::abs(c.value) > o.clock_sigmas * c.sigma &&
       std::abs(c.value) > o.min_clock) {
-    DataFault f;
-    f.channel = ch;
-    f.kind = DataFaultKind::kClock;
-    f.size = c.value;
-    f.sigma = c.sigma;
-    f.from_s = t0;
-    f.to_s = t1;
-    f.mended = true;
+    DataFault f = sloped(DataFaultKind::kClock, c);
     f.text = ch + "'s phase walks with time: its samples lag " + fmt(c.value * 1e3) +
              " ms more each second (+-" + fmt(c.sigma * 1e3) + "), a clock " +
              fmt(std::abs(c.value) * 100) + " % " + (c.value > 0 ? "fast" : "slow") +
