@@ -1,5 +1,6 @@
 #include "fralab/lab/data_check.h"
 
+#include <filesystem>
 #include <iostream>
 
 #include "fralab/analyze/pair_analyzer.h"
@@ -10,6 +11,11 @@ namespace fralab {
 
 CheckedTape check_tape(const std::string& tape, const std::string& run_id,
                        const std::vector<std::string>& pairs, const DataQualityOptions& o) {
+  // The run, its series and a mended copy are held in memory together.
+  if (const auto bytes = std::filesystem::file_size(tape); bytes > kMaxCheckedTapeBytes)
+    throw InputError(tape + ": " + std::to_string(bytes / 1000000) +
+                     " MB, more than the data-quality checks hold in memory (" +
+                     std::to_string(kMaxCheckedTapeBytes / 1000000) + " MB)");
   const TapeRun run = read_tape_run(tape, run_id);
   const TimeSeries series = blocks_to_series(run.blocks, tape);
   const Schedule schedule{series.sample_rate_hz, run.run_id, run.events};

@@ -292,7 +292,14 @@ void MeasureRun::verify_tape() {
 void MeasureRun::check_data() {
   DataQualityOptions dq;
   dq.noise_free = o_.no_noise;
-  CheckedTape checked = check_tape(dir_.tape(), r_.run_id, r_.pairs, dq);
+  // The measurement is whole whatever the checks say: a tape they cannot read is said, not fatal.
+  CheckedTape checked;
+  try {
+    checked = check_tape(dir_.tape(), r_.run_id, r_.pairs, dq);
+  } catch (const InputError& e) {
+    std::cerr << "fralab: data quality not checked: " << e.what() << "\n";
+    return;
+  }
   print_data_quality(checked.quality);
   run_.data_quality = std::move(checked.quality);
   mended_curves_ = std::move(checked.mended_curves);

@@ -3,6 +3,7 @@
 // changed; when a fault was mended, the run's pairs are analysed again from the mended series.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,10 +21,14 @@ struct CheckedTape {
   std::optional<std::vector<Frd>> mended_curves;
 };
 
+/// Largest tape the checks read (its run, series and mended copy are held in memory).
+inline constexpr uintmax_t kMaxCheckedTapeBytes = 400'000'000;
+
 /// Reads run `run_id` of `tape` ("" its first run), checks it, and when a fault changes the curves
 /// analyses `pairs` from the mended series (re-cut into blocks of the tape's own size). A tape
-/// whose run has a missing block is refused (InputError naming it): the caller's analysis names the
-/// gap.
+/// whose run has a missing block or whose channels change, and one larger than
+/// kMaxCheckedTapeBytes, are refused (InputError naming it): the caller says so and analyses the
+/// tape as it is.
 CheckedTape check_tape(const std::string& tape, const std::string& run_id,
                        const std::vector<std::string>& pairs, const DataQualityOptions& o = {});
 
