@@ -12,7 +12,10 @@ namespace fralab {
 CheckedTape check_tape(const std::string& tape, const std::string& run_id,
                        const std::vector<std::string>& pairs, const DataQualityOptions& o) {
   // The run, its series and a mended copy are held in memory together.
-  if (const auto bytes = std::filesystem::file_size(tape); bytes > kMaxCheckedTapeBytes)
+  std::error_code ec;
+  const uintmax_t bytes = std::filesystem::file_size(tape, ec);
+  if (ec) throw InputError(tape + ": cannot be read: " + ec.message());
+  if (bytes > kMaxCheckedTapeBytes)
     throw InputError(tape + ": " + std::to_string(bytes / 1000000) +
                      " MB, more than the data-quality checks hold in memory (" +
                      std::to_string(kMaxCheckedTapeBytes / 1000000) + " MB)");

@@ -54,20 +54,23 @@ MeasuredFolder read_measured_folder(const std::string& dir) {
 
 Json recorded_data_quality(const std::string& dir, DataNotes* notes) {
   Json runs = Json::array();
+  auto take = [&](const DataQuality& q, const std::string& folder) {
+    Json r = data_quality_to_json(q);
+    r["folder"] = folder;
+    runs.push_back(std::move(r));
+    notes->checked = true;
+    for (const DataFault& f : q.faults)
+      notes->faults.push_back(folder + ": " + f.text + "; " + f.action + ".");
+  };
   std::function<void(const MeasureDir&)> visit = [&](const MeasureDir& m) {
     if (fs::exists(m.run_json())) {
       const Json run = json_load_file(m.run_json());
-      if (run.contains("data_quality")) {
-        const DataQuality q =
-            data_quality_from_json(run["data_quality"], {m.run_json(), "/data_quality"});
-        Json r = data_quality_to_json(q);
-        r["folder"] = m.root;
-        runs.push_back(std::move(r));
-        notes->checked = true;
-        for (const DataFault& f : q.faults)
-          notes->faults.push_back(m.root + ": " + f.text + "; " + f.action + ".");
-      }
+      if (run.contains("data_quality"))
+        take(data_quality_from_json(run["data_quality"], {m.run_json(), "/data_quality"}), m.root);
     }
+    // A folder `fralab analyze --log` wrote (a tape from elsewhere): its section beside the curves.
+    if (const std::string f = m.root + "/data_quality.json"; fs::exists(f))
+      take(data_quality_from_json(json_load_file(f), {f, ""}), m.root);
     for (const MeasureDir& sub : {m.multisine(), m.sine(), m.validation()})
       if (fs::exists(sub.run_json())) visit(sub);
   };

@@ -53,9 +53,10 @@ struct MeasuredFolder {
 MeasuredFolder read_measured_folder(const std::string& dir);
 
 /// Every run's "data_quality" (exchange/data_quality.h) under a measure folder: the folder's own
-/// run.json, an auto campaign's multisine/ and sine/, and validation/ (each a section as run.json
-/// holds it, plus "folder"); the faults' lines and whether any was checked added to `notes`.
-/// diagnosis.json's data_quality.runs. InputError naming the file for a malformed section.
+/// run.json (or the data_quality.json `fralab analyze` writes), an auto campaign's multisine/ and
+/// sine/, and validation/ (each a section as run.json holds it, plus "folder"); the faults' lines
+/// and whether any was checked added to `notes`. diagnosis.json's data_quality.runs. InputError
+/// naming the file for a malformed section.
 Json recorded_data_quality(const std::string& dir, DataNotes* notes);
 
 /// Runs the diagnosis.
