@@ -171,7 +171,6 @@ struct Slope {
   int blocks = 0;
 };
 struct SlopeAccumulator {
-  double sxy = 0, sxx = 0, info = 0;
   std::vector<std::vector<double>> t, z;
   std::vector<double> weight;
   void add(std::vector<double> tb, std::vector<double> zb, double W) {
@@ -519,13 +518,12 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
   }
 }
 
+// `values`: block_values of each of `windows` on x.
 void check_drift_and_clock(const std::string& ch, const double* x, const TimeSeries& s,
-                           const std::vector<Window>& windows, const DataQualityOptions& o,
+                           const std::vector<Window>& windows,
+                           const std::vector<BlockValues>& values, const DataQualityOptions& o,
                            std::vector<DataFault>* out) {
   SlopeAccumulator drift;
-  std::vector<BlockValues> values;
-  for (const Window& w : windows)
-    values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
   double t0 = INFINITY, t1 = -INFINITY;
   // Drift: the means of each eighth of a multisine's period (a sine's blocks), compared across
   // the periods of one window: each eighth's own level is its group's offset, a drift the slope
@@ -651,8 +649,9 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
   }
 }
 
-void check_no_response(const std::string& ch, const double* x, const TimeSeries& s,
-                       const std::vector<Window>& windows, std::vector<DataFault>* out) {
+void check_no_response(const std::string& ch, const TimeSeries& s,
+                       const std::vector<Window>& windows, const std::vector<BlockValues>& values,
+                       std::vector<DataFault>* out) {
   // Per excitation signature, the blocks' ratio of excited-line power to the noise.
   struct Item {
     double t0, t1, ratio;
@@ -660,9 +659,10 @@ void check_no_response(const std::string& ch, const double* x, const TimeSeries&
   };
   std::vector<Item> items;
   std::map<std::string, std::vector<double>> by_sig;
-  for (const Window& w : windows) {
+  for (size_t i = 0; i < windows.size(); ++i) {
+    const Window& w = windows[i];
     if (!w.multisine) continue;
-    const BlockValues v = block_values(w, x, s.start_sample, s.sample_rate_hz);
+    const BlockValues& v = values[i];
     for (size_t b = 0; b < v.y.size(); ++b) {
       if (v.y[b].empty() || !(v.noise[b] > 0)) continue;
       double p = 0;
@@ -823,8 +823,12 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     std::vector<const DataFault*> hums;
     for (size_t i = before_hum; i < found.size(); ++i) hums.push_back(&found[i]);
     mend_channel(x, s, hums);
-    check_drift_and_clock(ch, x, s, windows, o, &found);
-    check_no_response(ch, x, s, windows, &found);
+    // Each window's blocks, transformed once for the tests that compare periods.
+    std::vector<BlockValues> values;
+    for (const Window& w : windows)
+      values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
+    check_drift_and_clock(ch, x, s, windows, values, o, &found);
+    check_no_response(ch, s, windows, values, &found);
     for (DataFault& f : found) q.faults.push_back(std::move(f));
   }
   return q;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fralab/core/text.h"
+
 namespace fralab {
 
 void SimulatorOptions::validate() const {
@@ -67,18 +69,13 @@ Simulator::Simulator(const Model& model, const SimulatorOptions& options)
                       static_cast<uint32_t>(c), 0x6672616cU};
     rng_.emplace_back(seq);
   }
-  auto channel_index = [&](const std::string& n) {
-    for (size_t c = 0; c < names_.size(); ++c)
-      if (names_[c] == n) return int(c);
-    return -1;
-  };
   for (size_t c = 0; c < names_.size(); ++c) {
     const bool is_input = c < model_.inputs.size();
     const auto& faults =
         is_input ? model_.inputs[c].faults : model_.outputs[c - model_.inputs.size()].faults;
     std::vector<ChannelFault> own;
     for (const ChannelFault& f : faults) {
-      if (f.kind == ChannelFaultKind::kSwap) swaps_.emplace_back(int(c), channel_index(f.with));
+      if (f.kind == ChannelFaultKind::kSwap) swaps_.emplace_back(int(c), index_of(names_, f.with));
       if (f.kind != ChannelFaultKind::kSwap && f.kind != ChannelFaultKind::kStuck) own.push_back(f);
     }
     faulty_.emplace_back(std::move(own), model_.dc(names_[c]), opt_.sample_rate_hz, opt_.seed,
