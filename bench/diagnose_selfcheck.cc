@@ -12,6 +12,8 @@
 // measured in-process: each path's exact response on a grid dense enough for its lightest mode,
 // with noise of known sigma, and a validation measurement; the diagnosis runs in this process.
 // --plants state (tests/util/random_state.h: state models, entries changed) likewise.
+// --through-lab measures modal plants through the processes instead (outputs given noise:
+// random_modal.h, set_lab_noise); --lab-flags passes more flags to `fralab diagnose` (the zoom's).
 // --faults (machine plants): 0-2 recording faults per case (tests/util/random_faults.h) put into
 // the engine's channels; the summary adds the faults named in diagnosis.json's data_quality (any
 // run of the measurement), those sized within 10 %, those named but not put in, and precision and
@@ -133,8 +135,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bool faults = false;
   app.add_flag("--faults", faults, "machine plants: 0-2 recording faults per case");
+  bool through_lab = false;
+  app.add_flag("--through-lab", through_lab,
+               "modal plants: measured through the lab's processes as the others are (outputs "
+               "with noise 0.2 % of their strongest response), not in-process");
+  std::string lab_flags;
+  app.add_option("--lab-flags", lab_flags,
+                 "more flags for `fralab diagnose` (e.g. \"--zoom-period-factor 4\", "
+                 "\"--no-zoom\")");
   CLI11_PARSE(app, argc, argv);
   if (faults && plants != "machine") throw InputError("--faults needs --plants machine");
+  if (through_lab && plants != "modal") throw InputError("--through-lab needs --plants modal");
   FaultScore fault_total;
   Score with_faults, without_faults;
   const std::string bin =
@@ -148,6 +159,7 @@ int main(int argc, char** argv) {
                                        : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
+    if (through_lab) set_lab_noise(c);
     save_model(dir + "/simulation.json", c.simulation);
     const std::vector<InjectedFault> injected =
         faults ? add_faults(c.engine, seed, i, band, ppd) : std::vector<InjectedFault>{};
@@ -171,7 +183,7 @@ int main(int argc, char** argv) {
       report(c, d.findings, total, failing);
       continue;
     }
-    if (plants == "modal") {
+    if (plants == "modal" && !through_lab) {
       const Diagnosis d = diagnose(c.simulation, modal_measurement(c, seed + uint64_t(i)));
       json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
       ++complete;
@@ -181,7 +193,8 @@ int main(int argc, char** argv) {
     const std::string cmd = bin + " diagnose --simulation " + dir + "/simulation.json --engine " +
                             dir + "/engine.json --out " + dir + "/diagnosis --no-plots --band " +
                             band + " --points-per-decade " + std::to_string(ppd) +
-                            " --excitation " + excitation + " --seed 5 > " + dir + "/log.txt 2>&1";
+                            " --excitation " + excitation + " --seed 5 " + lab_flags + " > " + dir +
+                            "/log.txt 2>&1";
     const int st = std::system(cmd.c_str());
     const int status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     complete += status == 0, partial += status == 3;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <set>
+#include <stdexcept>
 #include <type_traits>
 
 #include "fralab/core/text.h"
@@ -130,6 +131,61 @@ AcquireField excitation_field() {
   return f;
 }
 
+// --zoom WN:ZETA[,WN:ZETA...] (rad/s and the damping ratio): in JSON an array of {"wn_rad_s",
+// "zeta"}.
+std::vector<ZoomMode> parse_zoom(const std::string& text) {
+  std::vector<ZoomMode> modes;
+  for (const std::string& item : split_list(text)) {
+    const size_t colon = item.find(':');
+    ZoomMode z;
+    try {
+      if (colon == std::string::npos) throw std::invalid_argument(item);
+      size_t used = 0;
+      z.wn_rad_s = std::stod(item.substr(0, colon), &used);
+      if (used != colon) throw std::invalid_argument(item);
+      const std::string zeta = item.substr(colon + 1);
+      z.zeta = std::stod(zeta, &used);
+      if (used != zeta.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError("--zoom \"" + item + "\": expected WN_RAD_S:ZETA, e.g. 31.4:0.02");
+    }
+    modes.push_back(z);
+  }
+  return modes;
+}
+
+AcquireField zoom_field() {
+  AcquireField f{"--zoom", "/zoom", Written::kIfZoom, nullptr, nullptr, nullptr, nullptr};
+  f.bind = [](CLI::App* app, AcquireOptions& o, bool*) {
+    app->add_option_function<std::string>(
+        "--zoom", [&o](const std::string& text) { o.zoom = parse_zoom(text); },
+        "multisine: lightly damped modes WN_RAD_S:ZETA[,...] to resolve (lines around each, "
+        "the period longer within --zoom-period-factor)");
+  };
+  f.words = [](const AcquireOptions& o) {
+    std::string text;
+    for (const ZoomMode& z : o.zoom)
+      text += (text.empty() ? "" : ",") + lossless(z.wn_rad_s) + ":" + lossless(z.zeta);
+    return std::vector<std::string>{text};
+  };
+  f.to_json = [](const AcquireOptions& o) {
+    Json a = Json::array();
+    for (const ZoomMode& z : o.zoom) a.push_back({{"wn_rad_s", z.wn_rad_s}, {"zeta", z.zeta}});
+    return a;
+  };
+  f.from_json = [](AcquireOptions& o, const Json& v, const JsonWhere& where) {
+    if (!v.is_array()) json_fail(where, "expected an array of {\"wn_rad_s\", \"zeta\"}");
+    o.zoom.clear();
+    for (size_t j = 0; j < v.size(); ++j) {
+      const JsonWhere at = where / j;
+      json_require_object(v[j], at);
+      o.zoom.push_back(
+          {json_number_member(v[j], at, "wn_rad_s"), json_number_member(v[j], at, "zeta")});
+    }
+  };
+  return f;
+}
+
 std::vector<AcquireField> make_acquire_fields() {
   const bool kShow = true, kHide = false;
   return {
@@ -223,6 +279,12 @@ std::vector<AcquireField> make_acquire_fields() {
           "--adaptive-decided", "/adaptive_decided",
           "adaptive, resume: the extensions taken before, STEP*CYCLES,... (from the tape)", kHide,
           Written::kIfAdaptiveDecided, [](auto& o) -> auto& { return o.adaptive_decided; }),
+      zoom_field(),
+      value_field(
+          "--zoom-period-factor", "/zoom_period_factor",
+          "multisine zoom: the period may grow to this many times 1 / the band's low end for a "
+          "zoomed mode's resolution (1: it does not)",
+          kShow, Written::kIfZoom, [](auto& o) -> auto& { return o.zoom_period_factor; }),
   };
 }
 
@@ -247,6 +309,8 @@ bool written_for(Written w, const AcquireOptions& o) {
       return o.adaptive.enabled();
     case Written::kIfAdaptiveDecided:
       return o.adaptive.enabled() && !o.adaptive_decided.empty();
+    case Written::kIfZoom:
+      return !o.zoom.empty();
   }
   return false;
 }
@@ -257,8 +321,9 @@ void add_acquire_flags(CLI::App* c, AcquireOptions& o, bool* auto_campaign) {
 
 std::vector<std::string> acquire_flags(const AcquireOptions& o) {
   std::vector<std::string> argv;
-  for (Written w : {Written::kAlways, Written::kIfOddLines, Written::kIfFreeRunning,
-                    Written::kIfInputs, Written::kIfAdaptive, Written::kIfAdaptiveDecided}) {
+  for (Written w :
+       {Written::kAlways, Written::kIfOddLines, Written::kIfFreeRunning, Written::kIfInputs,
+        Written::kIfAdaptive, Written::kIfAdaptiveDecided, Written::kIfZoom}) {
     if (!written_for(w, o)) continue;
     for (const AcquireField& f : acquire_fields()) {
       if (f.written != w) continue;

@@ -50,6 +50,12 @@ void AcquireOptions::validate() const {
   if (!adaptive.enabled() && !adaptive_decided.empty())
     throw InputError("--adaptive-decided without --sigma-target");
   parse_decisions(adaptive_decided);
+  if (!zoom.empty() && excitation != Excitation::kMultisine)
+    throw InputError("--zoom places a multisine's lines: it needs --excitation multisine or auto");
+  MultisineOptions zoomed;  // the zoom's own checks, on the defaults' band
+  zoomed.zoom = zoom;
+  zoomed.zoom_period_factor = zoom_period_factor;
+  zoomed.validate();
 }
 
 SteppedSineOptions stepped_sine_options(const Model& model, const AcquireOptions& o) {
@@ -82,22 +88,35 @@ std::unique_ptr<Campaign> make_campaign(const Model& model, const AcquireOptions
                                                    so.sample_rate_hz, run_id);
     case Excitation::kSweep:
       return std::make_unique<SweepCampaign>(cin, excite, so, run_id);
-    case Excitation::kMultisine: {
-      MultisineOptions mo;
-      mo.f_lo_hz = so.f_lo_hz;
-      mo.f_hi_hz = so.f_hi_hz;
-      mo.points_per_decade = so.points_per_decade;
-      mo.periods = std::max(2, so.min_cycles);
-      mo.slowest_time_constant_s = so.slowest_time_constant_s;
-      mo.sample_rate_hz = so.sample_rate_hz;
-      mo.odd_lines = o.odd_lines;
-      mo.phases = o.multisine_phases;
-      mo.design = o.multisine_design;
-      mo.realisations = o.realisations;
-      return std::make_unique<MultisineCampaign>(cin, excite, mo, run_id);
-    }
+    case Excitation::kMultisine:
+      return std::make_unique<MultisineCampaign>(cin, excite, multisine_options(model, o), run_id);
   }
   throw InputError("unknown excitation");
+}
+
+MultisineOptions multisine_options(const Model& model, const AcquireOptions& o) {
+  const SteppedSineOptions so = stepped_sine_options(model, o);
+  MultisineOptions mo;
+  mo.f_lo_hz = so.f_lo_hz;
+  mo.f_hi_hz = so.f_hi_hz;
+  mo.points_per_decade = so.points_per_decade;
+  mo.periods = std::max(2, so.min_cycles);
+  mo.slowest_time_constant_s = so.slowest_time_constant_s;
+  mo.sample_rate_hz = so.sample_rate_hz;
+  mo.odd_lines = o.odd_lines;
+  mo.phases = o.multisine_phases;
+  mo.design = o.multisine_design;
+  mo.realisations = o.realisations;
+  mo.zoom = o.zoom;
+  mo.zoom_period_factor = o.zoom_period_factor;
+  return mo;
+}
+
+std::vector<ZoomPlacement> zoom_placement(const Model& model, const AcquireOptions& o) {
+  if (o.excitation != Excitation::kMultisine || o.zoom.empty()) return {};
+  const MultisineOptions mo = multisine_options(model, o);
+  const int P = multisine_period_samples(mo);
+  return zoom_placement(mo, P, multisine_lines(mo, P));
 }
 
 std::unique_ptr<AutoIntegrator> make_auto_integrator(Campaign& c, const Model& m,

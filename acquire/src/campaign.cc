@@ -241,6 +241,95 @@ void MultisineOptions::validate() const {
     throw InputError("multisine level \"" + level + "\": peak or rms");
   if (!(settle_time_constants >= 0) || !(slowest_time_constant_s >= 0))
     throw InputError("multisine settling times must be >= 0");
+  for (size_t j = 0; j < zoom.size(); ++j)
+    if (!(zoom[j].wn_rad_s > 0) || !std::isfinite(zoom[j].wn_rad_s) || !(zoom[j].zeta > 0) ||
+        !(zoom[j].zeta < 1))
+      throw InputError("--zoom mode " + std::to_string(j + 1) +
+                       ": wn must be finite and > 0 rad/s, zeta in (0, 1)");
+  if (!(zoom_period_factor >= 1) || !(zoom_period_factor <= 64))
+    throw InputError("--zoom-period-factor must be 1..64");
+}
+
+namespace {
+
+// The period, samples, that puts kZoomLinesInBand lines in mode z's half-power band 2 zeta f.
+double period_for(const ZoomMode& z, double fs) {
+  const double f = z.wn_rad_s / (2 * std::numbers::pi);
+  return std::ceil(fs * kZoomLinesInBand / (2 * z.zeta * f) - 1e-9);
+}
+
+bool in_band(const ZoomMode& z, const MultisineOptions& o) {
+  const double f = z.wn_rad_s / (2 * std::numbers::pi);
+  return f >= o.f_lo_hz && f <= o.f_hi_hz;
+}
+
+}  // namespace
+
+int multisine_period_samples(const MultisineOptions& o) {
+  const double p0 = double(std::llround(o.sample_rate_hz / o.f_lo_hz));
+  const double most = std::floor(o.zoom_period_factor * p0);
+  double p = p0;
+  for (const ZoomMode& z : o.zoom)
+    if (in_band(z, o) && period_for(z, o.sample_rate_hz) <= most)
+      p = std::max(p, period_for(z, o.sample_rate_hz));
+  return int(p);
+}
+
+namespace {
+
+// The zoom's lines (MultisineOptions::zoom) among harmonics 1..k_hi of fs / P: per mode inside the
+// band that the period resolves (P >= period_for), k0 + j step for |j step| df <= reach f, k0 the
+// harmonic nearest f, step the harmonics in zeta f / 2 (at least one).
+std::vector<int> zoom_lines(const MultisineOptions& o, int P, int k_hi) {
+  const double df = o.sample_rate_hz / P;
+  std::vector<int> lines;
+  for (const ZoomMode& z : o.zoom) {
+    const double f = z.wn_rad_s / (2 * std::numbers::pi);
+    if (!in_band(z, o) || period_for(z, o.sample_rate_hz) > P) continue;
+    const double reach = std::max(kZoomReachZetas * z.zeta, kZoomReach);
+    const int step = std::max(1, int(std::floor(z.zeta * f / 2 / df + 1e-9)));
+    const int k0 = int(std::llround(f / df));
+    const int span = int(std::floor(reach * f / df / step + 1e-9));
+    for (int j = -span; j <= span; ++j) {
+      int k = k0 + j * step;
+      if (o.odd_lines && k % 2 == 0) ++k;
+      if (k >= 1 && k <= k_hi && k < P / 2) lines.push_back(k);
+    }
+  }
+  return lines;
+}
+
+// `lines` with `more` sorted in, each once.
+std::vector<int> merged(std::vector<int> lines, const std::vector<int>& more) {
+  lines.insert(lines.end(), more.begin(), more.end());
+  std::sort(lines.begin(), lines.end());
+  lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
+  return lines;
+}
+
+}  // namespace
+
+std::vector<ZoomPlacement> zoom_placement(const MultisineOptions& o, int P,
+                                          const std::vector<int>& lines) {
+  const double df = o.sample_rate_hz / P;
+  std::vector<ZoomPlacement> out;
+  for (const ZoomMode& z : o.zoom) {
+    const double f = z.wn_rad_s / (2 * std::numbers::pi);
+    if (!in_band(z, o)) continue;
+    ZoomPlacement zp;
+    zp.mode = z;
+    zp.resolution_hz = df;
+    zp.zoomed = period_for(z, o.sample_rate_hz) <= P;
+    zp.period_needed_s = period_for(z, o.sample_rate_hz) / o.sample_rate_hz;
+    const double reach = std::max(kZoomReachZetas * z.zeta, kZoomReach);
+    for (int k : lines) {
+      const double off = std::abs(k * df - f) / f;
+      zp.lines_in_band += off <= z.zeta;
+      zp.lines_in_reach += off <= reach;
+    }
+    out.push_back(zp);
+  }
+  return out;
 }
 
 const char* to_string(MultisineOptions::Design d) {
@@ -264,7 +353,7 @@ std::vector<int> multisine_lines(const MultisineOptions& o, int P) {
       lines.push_back(k);
       k = odd_up(std::max(k + 1, int(std::floor(k * r))));
     }
-    return lines;
+    return o.zoom.empty() ? lines : merged(lines, zoom_lines(o, P, k_hi));
   }
   const int n_targets =
       int(std::round(std::log10(o.f_hi_hz / o.f_lo_hz) * o.points_per_decade)) + 1;
@@ -274,7 +363,8 @@ std::vector<int> multisine_lines(const MultisineOptions& o, int P) {
     if (k < 1 || k >= P / 2) continue;
     if (lines.empty() || k > lines.back()) lines.push_back(k);
   }
-  return lines;
+  if (o.zoom.empty()) return lines;
+  return merged(lines, zoom_lines(o, P, int(std::floor(o.f_hi_hz / df * (1 + 1e-12)))));
 }
 
 namespace {
@@ -345,7 +435,7 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   if (excite.empty()) throw InputError("campaign: no input to excite");
   for (int i : excite)
     if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
-  P_ = int(std::llround(fs_ / o.f_lo_hz));
+  P_ = multisine_period_samples(o);
   const double df = fs_ / P_;
   const bool ortho = o.design == MultisineOptions::Design::kOrthogonal;
   const std::vector<int> lines = multisine_lines(o, P_);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "fralab/core/text.h"
 
@@ -36,6 +37,35 @@ double slowest_time_constant_s(const Model& m) {
     if (out.sensor) scan(*out.sensor);
   for (const auto& p : m.paths) scan(p.tf);
   return t;
+}
+
+std::vector<ZoomMode> light_modes(const Model& m, double f_lo_hz, double f_hi_hz, double max_zeta) {
+  std::vector<ZoomMode> all;
+  auto scan = [&](const Tf& tf) {
+    for (const Root& p : tf.poles) {
+      const double f = p.wn / (2 * std::numbers::pi);
+      if (p.pair && p.zeta > 0 && p.zeta < max_zeta && f >= f_lo_hz && f <= f_hi_hz)
+        all.push_back({p.wn, p.zeta});
+    }
+  };
+  for (const auto& in : m.inputs)
+    if (in.actuator) scan(*in.actuator);
+  for (const auto& out : m.outputs)
+    if (out.sensor) scan(*out.sensor);
+  for (const auto& p : m.paths) scan(p.tf);
+  std::sort(all.begin(), all.end(),
+            [](const ZoomMode& a, const ZoomMode& b) { return a.wn_rad_s < b.wn_rad_s; });
+  std::vector<ZoomMode> modes;
+  double first_wn = 0;  // the lowest wn of the mode being gathered
+  for (const ZoomMode& z : all) {
+    if (!modes.empty() && z.wn_rad_s <= 1.01 * first_wn) {
+      modes.back().zeta = std::min(modes.back().zeta, z.zeta);
+      continue;
+    }
+    modes.push_back(z);
+    first_wn = z.wn_rad_s;
+  }
+  return modes;
 }
 
 std::vector<int> select_inputs(const Model& m, const std::string& csv) {

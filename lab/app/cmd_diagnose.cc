@@ -37,6 +37,9 @@ void add_diagnose_command(CLI::App& app) {
   c->add_flag("!--no-validation", dc->validation,
               "with --engine: no second measurement to validate on (each finding earns its place "
               "on the fitting data; half the engine time)");
+  c->add_flag("!--no-zoom", dc->zoom,
+              "with --engine by multisine: no zoom on the simulation's light modes (the grid "
+              "alone)");
   add_measure_flags(c, dc->measure);
   auto op = std::make_shared<std::string>();
   add_operating_point_flag(c, *op);

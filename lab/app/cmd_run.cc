@@ -22,6 +22,7 @@ struct RunCommand {
   MeasureOptions measure;
   std::string simulation;
   std::string operating_point;
+  bool zoom = true;  // the multisine's zoom on the simulation's light modes
 };
 
 void run(RunCommand c) {
@@ -55,6 +56,7 @@ void run(RunCommand c) {
   d.engine = c.measure.engine;
   d.out = c.measure.out;
   d.measure = c.measure;
+  d.zoom = c.zoom;
   std::printf("fralab: measuring %s and diagnosing %s ...\n", c.measure.engine.c_str(),
               sim.c_str());
   const DiagnoseResult res = run_diagnose(d);
@@ -108,6 +110,8 @@ void add_run_command(CLI::App& app) {
   c->add_option(
       "--simulation", rc->simulation,
       "diagnose against this simulation (default: the engine's _sim model when embedded)");
+  c->add_flag("!--no-zoom", rc->zoom,
+              "by multisine: no zoom on the simulation's light modes (the grid alone)");
   add_measure_flags(c, rc->measure);
   add_operating_point_flag(c, rc->operating_point);
   c->callback([rc] { run(*rc); });

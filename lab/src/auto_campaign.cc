@@ -95,6 +95,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
     s.acquire.min_integrate_s = 0;
     s.acquire.settle_cycles = a.sine_settle_cycles;
     s.acquire.slowest_time_constant_s = act_tc;
+    s.acquire.zoom.clear();    // the zoom places multisine lines
     s.seed = opt.seed + 1000;  // its own noise
     s.out = opt.out + "/sine";
     const MeasureResult sr = run_measure(s);

@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "fralab/acquire/model_info.h"
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/baseline.h"
 #include "fralab/diagnose/report.h"
@@ -135,6 +136,11 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     if (m.acquire.inputs.empty()) {
       for (const auto& in : sim.inputs)
         m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
+    }
+    if (m.auto_campaign) m.acquire.excitation = Excitation::kMultisine;  // its first run's
+    if (c.zoom && m.acquire.excitation == Excitation::kMultisine && m.acquire.zoom.empty()) {
+      const auto [lo, hi] = parse_band(m.acquire.band);
+      m.acquire.zoom = light_modes(sim, lo, hi);
     }
     m.out = c.out + "/measure";
     if (const MeasureResult r = measure(m); r.partial())

@@ -232,6 +232,7 @@ void MeasureRun::start_record() {
   run_.options.acquire_flags = acquire_flags(o_.acquire);
   // The lab's measurement chain: recorded here and, through the acquisition, on the tape.
   run_.measurement_chain = emulator_chain(model_, o_.acquire.sample_rate_hz);
+  run_.zoom = zoom_placement(model_, o_.acquire);
 }
 
 void MeasureRun::prepare_supervision() {

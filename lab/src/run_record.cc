@@ -152,6 +152,17 @@ Json run_record_to_json(const RunRecord& r) {
   if (r.items_retransmitted) j["items_retransmitted"] = *r.items_retransmitted;
   if (r.adaptive) j["adaptive"] = *r.adaptive;
   if (r.data_quality) j["data_quality"] = data_quality_to_json(*r.data_quality);
+  if (!r.zoom.empty()) {
+    Json& z = j["zoom"] = Json::array();
+    for (const ZoomPlacement& p : r.zoom)
+      z.push_back({{"wn_rad_s", p.mode.wn_rad_s},
+                   {"zeta", p.mode.zeta},
+                   {"lines_in_band", p.lines_in_band},
+                   {"lines_in_reach", p.lines_in_reach},
+                   {"resolution_hz", p.resolution_hz},
+                   {"zoomed", p.zoomed},
+                   {"period_needed_s", p.period_needed_s}});
+  }
   put_back_unknown_members(j, r.unknown);
   return j;
 }
@@ -191,6 +202,20 @@ RunRecord run_record_from_json(const Json& j, const std::string& file) {
   }
   if (in.has("data_quality"))
     r.data_quality = data_quality_from_json(in.member("data_quality"), in.at("data_quality"));
+  if (in.has("zoom")) {
+    const Json& a = json_array_member(j, {file, ""}, "zoom");
+    for (size_t i = 0; i < a.size(); ++i) {
+      const RecordReader z(a[i], in.at("zoom") / i);
+      ZoomPlacement p;
+      p.mode = {z.number("wn_rad_s"), z.number("zeta")};
+      p.lines_in_band = z.count("lines_in_band");
+      p.lines_in_reach = z.count("lines_in_reach");
+      p.resolution_hz = z.number("resolution_hz");
+      p.zoomed = z.boolean("zoomed");
+      p.period_needed_s = z.number("period_needed_s");
+      r.zoom.push_back(p);
+    }
+  }
   collect_unknown_members(j, run_record_to_json(r), Json::json_pointer(), r.unknown);
   return r;
 }

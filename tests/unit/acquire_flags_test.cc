@@ -89,6 +89,15 @@ const std::map<std::string, std::function<void(AcquireOptions&)>>& changes() {
          o.adaptive.sigma_target = 0.02;
          o.adaptive_decided = "3*4,7*8";
        }},
+      {"--zoom",
+       [](AcquireOptions& o) {
+         o.zoom = {{31.4, 0.02}, {200.0 / 3.0, 1.0 / 300}};
+       }},
+      {"--zoom-period-factor",
+       [](AcquireOptions& o) {
+         o.zoom = {{10, 0.05}};
+         o.zoom_period_factor = 2.0 / 3.0 + 2;
+       }},
   };
   return c;
 }
@@ -225,10 +234,11 @@ TEST(AcquireFlags, TheArgvKeepsItsOrder) {
   for (const auto& [flag, change] : changes()) change(all);
   const std::vector<std::string> argv = acquire_flags(all);
   ASSERT_GE(argv.size(), 32u);
-  EXPECT_THAT(std::vector<std::string>(argv.begin() + 32, argv.end()),
-              ElementsAre("--odd-lines", "--free-running", "--lead", "4", "--max-repeats", "1",
-                          "--input", "Wf,A8", "--sigma-target", "0.01", "--pilot-cycles", "6",
-                          "--adaptive-decided", "3*4,7*8"));
+  EXPECT_THAT(
+      std::vector<std::string>(argv.begin() + 32, argv.end()),
+      ElementsAre("--odd-lines", "--free-running", "--lead", "4", "--max-repeats", "1", "--input",
+                  "Wf,A8", "--sigma-target", "0.01", "--pilot-cycles", "6", "--adaptive-decided",
+                  "3*4,7*8", "--zoom", "10:0.05", "--zoom-period-factor", lossless(2.0 / 3.0 + 2)));
   // A group that is off leaves its fields out: they do nothing then.
   AcquireOptions lockstep;
   lockstep.lead = 4;
@@ -253,7 +263,7 @@ TEST(AcquireFlags, TheJsonFormHasEveryKey) {
             R"("multisine_design":"orthogonal","multisine_phases":"low-crest",)"
             R"("odd_lines":false,"points_per_decade":10,"realisations":1,)"
             R"("sample_rate_hz":1000.0,"settle_cycles":1.0,"slowest_time_constant_s":-1.0,)"
-            R"("speed":0.0,"window":2})");
+            R"("speed":0.0,"window":2,"zoom":[],"zoom_period_factor":1.0})");
 }
 
 TEST(AcquireFlags, BadJsonIsRefusedNamingTheKey) {
@@ -277,6 +287,9 @@ TEST(AcquireFlags, BadJsonIsRefusedNamingTheKey) {
   EXPECT_THAT(error(R"({"adaptive": 0.1})"),
               HasSubstr("/acquire/adaptive: expected a JSON object"));
   EXPECT_THAT(error(R"([1])"), HasSubstr("opts.json: /acquire: expected a JSON object"));
+  EXPECT_THAT(error(R"({"zoom": 3})"), HasSubstr("/acquire/zoom: expected an array"));
+  EXPECT_THAT(error(R"({"zoom": [{"wn_rad_s": 3}]})"), HasSubstr("/acquire/zoom/0"));
+  EXPECT_THAT(error(R"({"zoom": [{"wn_rad_s": 3}]})"), HasSubstr("zeta"));
 }
 
 }  // namespace

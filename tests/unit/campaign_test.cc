@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -319,4 +320,91 @@ TEST(Multisine, SlewRespectsTheActuatorsRateLimit) {
   EXPECT_GT(slew(a[0]), 0.9 * 2000.0);  // and the level is lowered no more than needed
   EXPECT_LT(limited.events()[1].amplitudes[0], unlimited.events()[1].amplitudes[0]);
   EXPECT_EQ(limited.events()[1].amplitudes[2], unlimited.events()[1].amplitudes[2]);  // BLD
+}
+
+// The zoom: a 2 % mode at 5.5 Hz on the lab's grid (0.1-20 Hz, 10 lines a decade: 5.0 and 6.2 Hz
+// there) has no line in its half-power band 5.39-5.61 Hz. Four lines there need 0.055 Hz apart
+// (18182 samples): at factor 1 the mode is left to the grid, at factor 4 the period grows and it
+// gets them, lines out to +- 6 % (three half-widths) around it, the grid's lines kept.
+TEST(Multisine, ZoomPutsLinesInsideALightModesHalfPowerBand) {
+  MultisineOptions o;
+  o.f_lo_hz = 0.1;
+  o.f_hi_hz = 20;
+  o.points_per_decade = 10;
+  const double f = 5.5, zeta = 0.02;
+  auto near_f = [&](const std::vector<int>& lines, int P, double half) {
+    int n = 0;
+    for (int k : lines) n += std::abs(k * 1000.0 / P - f) <= half * f + 1e-12;
+    return n;
+  };
+  const int P0 = multisine_period_samples(o);
+  ASSERT_EQ(P0, 10000);
+  const std::vector<int> grid = multisine_lines(o, P0);
+  EXPECT_EQ(near_f(grid, P0, zeta), 0);
+
+  o.zoom = {{2 * std::numbers::pi * f, zeta}};
+  EXPECT_EQ(multisine_period_samples(o), P0);
+  EXPECT_EQ(multisine_lines(o, P0), grid);
+  std::vector<ZoomPlacement> zp = zoom_placement(o, P0, grid);
+  ASSERT_EQ(zp.size(), 1u);
+  EXPECT_FALSE(zp[0].zoomed);
+  EXPECT_DOUBLE_EQ(zp[0].period_needed_s, 18.182);
+  EXPECT_EQ(zp[0].lines_in_band, 0);
+
+  o.zoom_period_factor = 4;
+  const int P = multisine_period_samples(o);
+  EXPECT_EQ(P, 18182);
+  const std::vector<int> fine = multisine_lines(o, P);
+  EXPECT_GE(near_f(fine, P, zeta), kZoomLinesInBand);
+  EXPECT_GE(near_f(fine, P, 3 * zeta), 2 * int(0.06 * f * P / 1000.0));  // every harmonic
+  EXPECT_TRUE(std::is_sorted(fine.begin(), fine.end()));
+  EXPECT_EQ(std::set<int>(fine.begin(), fine.end()).size(), fine.size());
+  MultisineOptions no_zoom = o;
+  no_zoom.zoom.clear();
+  for (int k : multisine_lines(no_zoom, P))
+    EXPECT_TRUE(std::count(fine.begin(), fine.end(), k)) << "grid line " << k << " kept";
+  zp = zoom_placement(o, P, fine);
+  ASSERT_EQ(zp.size(), 1u);
+  EXPECT_TRUE(zp[0].zoomed);
+  EXPECT_EQ(zp[0].lines_in_band, near_f(fine, P, zeta));
+  EXPECT_EQ(zp[0].lines_in_reach, near_f(fine, P, 3 * zeta));
+  EXPECT_DOUBLE_EQ(zp[0].resolution_hz, 1000.0 / P);
+
+  // A 5 % mode needs no longer period (7273 samples): zoomed at factor 1, lines 0.1 Hz apart out
+  // to +- 15 %.
+  o.zoom_period_factor = 1;
+  o.zoom = {{2 * std::numbers::pi * f, 0.05}};
+  EXPECT_EQ(multisine_period_samples(o), P0);
+  const std::vector<int> wide = multisine_lines(o, P0);
+  EXPECT_EQ(near_f(wide, P0, 0.05), 5);   // 5.3 ... 5.7 Hz
+  EXPECT_EQ(near_f(wide, P0, 0.15), 17);  // 4.7 ... 6.3 Hz
+  // One mode lighter than the factor allows beside one it allows: the period is the second's.
+  o.zoom_period_factor = 4;
+  o.zoom = {{2 * std::numbers::pi * f, 0.001}, {2 * std::numbers::pi * f, zeta}};
+  EXPECT_EQ(multisine_period_samples(o), 18182);
+  // Outside the band: nothing changes.
+  o.zoom = {{2 * std::numbers::pi * 40, 0.02}};
+  EXPECT_EQ(multisine_period_samples(o), P0);
+  EXPECT_EQ(multisine_lines(o, P0), grid);
+  EXPECT_TRUE(zoom_placement(o, P0, grid).empty());
+  o.zoom = {{-1, 0.02}};
+  EXPECT_THROW(o.validate(), InputError);
+  o.zoom = {{10, 1.5}};
+  EXPECT_THROW(o.validate(), InputError);
+  o.zoom = {{10, 0.02}};
+  o.zoom_period_factor = 0.5;
+  EXPECT_THROW(o.validate(), InputError);
+}
+
+// The light modes a simulation gives the zoom: pole pairs under zeta 0.1 in the band, pairs
+// within 1 % one mode of the lightest damping; well damped and real poles are not modes.
+TEST(ModelInfo, LightModesAreTheLightlyDampedPolePairsInTheBand) {
+  Model m = load_model(fralab::testing::source_path("models/j85_95_sim.json"));
+  // Wf:P3 has 49.6 rad/s at zeta 0.021, Wf:DPP3 49.7 at 0.0044: one mode.
+  const std::vector<ZoomMode> modes = light_modes(m, 0.04, 100);
+  ASSERT_EQ(modes.size(), 1u);
+  EXPECT_DOUBLE_EQ(modes[0].wn_rad_s, 49.6);
+  EXPECT_DOUBLE_EQ(modes[0].zeta, 0.0044);
+  EXPECT_TRUE(light_modes(m, 10, 100).empty());  // 7.9 Hz is below the band
+  EXPECT_TRUE(light_modes(m, 0.04, 100, 0.004).empty());
 }

@@ -80,8 +80,18 @@ TEST(RunRecord, EveryOptionalKeyRoundTrips) {
   j["options"]["fit"] = false;  // an auto campaign's run: it measures, the campaign fits
   j["adaptive"] = {{"steps", Json::array({{{"input", "Wf"}, {"step", 0}, {"state", "met"}}})},
                    {"met", 1}};
+  j["zoom"] = Json::array({{{"wn_rad_s", 49.6},
+                            {"zeta", 0.0044},
+                            {"lines_in_band", 0},
+                            {"lines_in_reach", 0},
+                            {"resolution_hz", 0.04},
+                            {"zoomed", false},
+                            {"period_needed_s", 57.5}}});
   const RunRecord r = run_record_from_json(j, "run.json");
   EXPECT_EQ(run_record_to_json(r), j);
+  ASSERT_EQ(r.zoom.size(), 1u);
+  EXPECT_EQ(r.zoom[0].mode, (ZoomMode{49.6, 0.0044}));
+  EXPECT_DOUBLE_EQ(r.zoom[0].period_needed_s, 57.5);
   EXPECT_EQ(r.failed_step, (FailedStep{"identify", "identify was killed by signal 9"}));
   EXPECT_EQ(r.resumed, 2);
   EXPECT_EQ(r.options.fit, false);
@@ -169,6 +179,9 @@ TEST(RunRecord, AMalformedRecordIsRefusedNamingTheFileAndKey) {
   j["failed_step"] = {{"step", "identify"}};
   EXPECT_THAT(refusal(j), HasSubstr("DIR/run.json: /failed_step: missing required key \"error\""));
   EXPECT_THAT(refusal(Json::array()), HasSubstr("DIR/run.json: /: expected a JSON object"));
+  j = run;
+  j["zoom"] = Json::array({{{"wn_rad_s", 49.6}, {"zeta", 0.0044}}});
+  EXPECT_THAT(refusal(j), HasSubstr("DIR/run.json: /zoom/0: missing required key"));
 
   const Json campaign = json_load_file(kData + "/auto_run.json");
   j = campaign;

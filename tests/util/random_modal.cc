@@ -129,6 +129,20 @@ RandomCase random_modal_case(uint64_t seed, int index, int n_hidden) {
   return c;
 }
 
+void set_lab_noise(RandomCase& c, double rel) {
+  for (ModelOutput& out : c.engine.outputs) {
+    double strongest = 0;
+    for (const ModelPath& p : c.engine.paths) {
+      if (p.output != out.name) continue;
+      const double amplitude =
+          0.02 * c.engine.inputs[size_t(c.engine.input_index(p.input))].full_scale;
+      for (const Root& r : p.tf.poles)
+        if (r.pair) strongest = std::max(strongest, std::abs(p.tf.at(r.wn)) * amplitude);
+    }
+    out.noise_rms = rel * strongest;
+  }
+}
+
 std::vector<MeasuredPair> modal_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
   double lo = INFINITY, hi = 0, zmin = 1;
   for (const ModelPath& p : c.engine.paths)

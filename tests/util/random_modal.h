@@ -22,6 +22,11 @@ namespace fralab::testing {
 /// Case `index` of the sequence drawn from `seed`; n_hidden < 0: 0-3 at random.
 RandomCase random_modal_case(uint64_t seed, int index, int n_hidden = -1);
 
+/// For measuring c through the lab (`fralab-bench-diagnose --plants modal --through-lab`): each
+/// engine output's noise rms `rel` times its strongest response to an input at the lab's test
+/// amplitude (2 % of the full scale), the largest |G| at the engine's modes over its paths.
+void set_lab_noise(RandomCase& c, double rel = 0.002);
+
 /// Every X:O pair of c's engine measured as above (relative sigma `rel_sigma`), its validation
 /// measurement drawn with another seed; the grid spans the modes' band widened by 30 % each side.
 std::vector<MeasuredPair> modal_measurement(const RandomCase& c, uint64_t seed,

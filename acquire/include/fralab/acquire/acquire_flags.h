@@ -29,6 +29,7 @@ struct AcquireField {
     kIfInputs,           // --input: only when it names inputs ("" is every input)
     kIfAdaptive,         // --sigma-target, --pilot-cycles: the adaptive stepped sine only
     kIfAdaptiveDecided,  // --adaptive-decided: adaptive, with decisions taken
+    kIfZoom,             // --zoom, --zoom-period-factor: modes to zoom on
   };
   std::string flag;  // "--band"
   std::string key;   // JSON pointer in acquire_options_to_json's object: "/band"
@@ -53,7 +54,7 @@ bool written_for(AcquireField::Written w, const AcquireOptions& o);
 /// --realisations, --points-per-decade, --amplitude-pct, --amplitude-scale, --min-cycles,
 /// --min-integrate-s, --settle-cycles, --sample-rate, --speed, --block, --window,
 /// --settle-time-constant-s, --free-running, --lead, --max-repeats, --sigma-target,
-/// --pilot-cycles, --adaptive-decided, bound to `o`.
+/// --pilot-cycles, --adaptive-decided, --zoom, --zoom-period-factor, bound to `o`.
 /// With `auto_campaign`, --excitation also takes "auto" (the lab's campaign that decides itself,
 /// lab/auto_campaign.h), which sets *auto_campaign (and o.excitation to multisine).
 void add_acquire_flags(CLI::App* app, AcquireOptions& o, bool* auto_campaign = nullptr);

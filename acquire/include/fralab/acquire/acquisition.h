@@ -63,6 +63,10 @@ struct AcquireOptions {
   // the extensions a resumed run took before (parse_decisions' text).
   AdaptiveSineOptions adaptive;
   std::string adaptive_decided;
+  // Multisine: lightly damped modes to resolve and how far the period may grow for them
+  // (MultisineOptions::zoom, zoom_period_factor).
+  std::vector<ZoomMode> zoom;
+  double zoom_period_factor = 1.0;
   /// InputError naming the option (block, window, speed, band, excitation settings).
   void validate() const;
   /// Every field equal (the flags' and JSON form's round trips are held to it).
@@ -71,6 +75,12 @@ struct AcquireOptions {
 
 /// The stepped-sine plan's options (band, density, cycles, settle) on model `m`.
 SteppedSineOptions stepped_sine_options(const Model& m, const AcquireOptions& o);
+
+/// The multisine's options (band, density, periods, settle, design, zoom) on model `m`.
+MultisineOptions multisine_options(const Model& m, const AcquireOptions& o);
+
+/// Where a multisine's zoomed modes got their lines (empty for another excitation or no zoom).
+std::vector<ZoomPlacement> zoom_placement(const Model& m, const AcquireOptions& o);
 
 /// The campaign the options describe on model `m` (the plan of steps, sweep or multisine).
 std::unique_ptr<Campaign> make_campaign(const Model& m, const AcquireOptions& o,

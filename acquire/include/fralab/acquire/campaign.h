@@ -130,6 +130,14 @@ class SweepCampaign : public SegmentCampaign {
                 const SteppedSineOptions& opt, std::string run_id);
 };
 
+/// A lightly damped mode a multisine resolves (its zoom): natural frequency wn (rad/s) and damping
+/// ratio zeta, its half-power band wn (1 +- zeta).
+struct ZoomMode {
+  double wn_rad_s = 0;
+  double zeta = 0;
+  bool operator==(const ZoomMode&) const = default;
+};
+
 struct MultisineOptions {
   double f_lo_hz = 0.04;  // the frequency resolution: period = round(fs / f_lo) samples
   double f_hi_hz = 100.0;
@@ -157,8 +165,41 @@ struct MultisineOptions {
   /// input's rate limit (CampaignInput::max_rate), the level lowered if need be: a rate-limited
   /// actuator then moves linearly.
   std::string level = "rms";
+  /// Modes to resolve. A mode inside the band is zoomed when a period of at most
+  /// zoom_period_factor times fs / f_lo samples puts kZoomLinesInBand lines in its half-power band
+  /// 2 zeta f (f = wn / 2 pi): the period grows to the longest such mode's need, and each zoomed
+  /// mode gets lines over f (1 +- reach), reach = max(kZoomReachZetas zeta, kZoomReach) (a mode
+  /// moved a few per cent stays inside), zeta f / 2 apart or every harmonic where that is finer
+  /// than the resolution. A mode lighter than the factor allows is left to the grid (its
+  /// placement says the period it would need): lines it cannot resolve would only share the
+  /// excitation's power. Factor 1: the zoom costs no engine time. Empty: the grid alone.
+  std::vector<ZoomMode> zoom;
+  double zoom_period_factor = 1.0;
   void validate() const;
 };
+
+inline constexpr double kZoomReach = 0.05;      // +- 5 % of a zoomed mode's frequency at least
+inline constexpr double kZoomReachZetas = 3.0;  // or three half-power half-widths
+inline constexpr int kZoomLinesInBand = 4;      // lines wanted in a half-power band 2 zeta f
+
+/// The period of the multisine o describes, samples: round(fs / f_lo), lengthened for the modes
+/// of its zoom (MultisineOptions::zoom) that zoom_period_factor allows.
+int multisine_period_samples(const MultisineOptions& o);
+
+/// Where a zoomed mode's lines fell (run.json "zoom", docs/formats.md §13).
+struct ZoomPlacement {
+  ZoomMode mode;
+  int lines_in_band = 0;       // lines within its half-power band f (1 +- zeta)
+  int lines_in_reach = 0;      // lines within f (1 +- reach)
+  double resolution_hz = 0;    // the multisine's line spacing fs / P
+  bool zoomed = false;         // the period resolves it: it got the zoom's lines
+  double period_needed_s = 0;  // the period that puts kZoomLinesInBand lines in its band, s
+  bool operator==(const ZoomPlacement&) const = default;
+};
+
+/// Each mode of o.zoom inside the band, with the lines of `lines` (harmonics of fs / P) around it.
+std::vector<ZoomPlacement> zoom_placement(const MultisineOptions& o, int P,
+                                          const std::vector<int>& lines);
 
 /// "orthogonal" / "zippered" (command line) and back; InputError naming the word otherwise.
 const char* to_string(MultisineOptions::Design d);
@@ -169,7 +210,8 @@ MultisineOptions::Design multisine_design_from_string(const std::string& word);
 /// r = 10^(1 / points_per_decade), from round(f_lo P / fs) (>= 1) while k f_s / P <= f_hi: every
 /// ratio between neighbours is <= r, so every decade holds >= points_per_decade lines (all
 /// harmonics where they are sparser than that). kZippered: the harmonics nearest log-spaced
-/// targets, unique. Odd lines: only odd harmonics (k rounded up to odd).
+/// targets, unique. Odd lines: only odd harmonics (k rounded up to odd). Either design adds the
+/// zoom's lines (MultisineOptions::zoom), sorted in, each once.
 std::vector<int> multisine_lines(const MultisineOptions& o, int P);
 
 /// Crest-factor optimisation by envelope clipping (Van der Ouderaa, Schoukens and Renneboog's

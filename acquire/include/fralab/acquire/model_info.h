@@ -21,6 +21,16 @@ double slowest_time_constant_s(const Tf& tf);
 /// The same over every tf in the model (actuators, sensors, paths).
 double slowest_time_constant_s(const Model& m);
 
+/// Damping ratio below which a pole pair is a light mode the multisine zooms on.
+inline constexpr double kLightZeta = 0.1;
+
+/// The model's light modes (pole pairs of zeta < max_zeta in its actuators, sensors and paths)
+/// whose frequency wn / 2 pi lies in [f_lo_hz, f_hi_hz], sorted by wn; pairs within 1 % of each
+/// other in wn are one mode, of the lightest damping among them (a mode every path carries, or
+/// fitted path by path to slightly different values).
+std::vector<ZoomMode> light_modes(const Model& m, double f_lo_hz, double f_hi_hz,
+                                  double max_zeta = kLightZeta);
+
 /// Indices of the inputs named in a comma-separated list ("" = every input, in model order).
 /// InputError naming an unknown input and listing the known ones.
 std::vector<int> select_inputs(const Model& m, const std::string& csv);

@@ -34,6 +34,11 @@ struct DiagnoseCommand {
   /// place on the fitting data alone (its removal must raise chi2 by more than k ln 2N and raise
   /// the error: diagnose.h), and the engine time halves.
   bool validation = true;
+  /// With `engine`, measured by multisine (the auto campaign's or --excitation multisine) and no
+  /// --zoom given: the simulation's light modes in the band (acquire/model_info.h: light_modes)
+  /// get the multisine's zoom, lines enough inside each one's half-power band to size its
+  /// frequency and damping (--no-zoom: the grid alone).
+  bool zoom = true;
 };
 
 struct DiagnoseResult {

@@ -19,6 +19,7 @@
 #include <variant>
 #include <vector>
 
+#include "fralab/acquire/campaign.h"
 #include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
 #include "fralab/exchange/data_quality.h"
@@ -90,6 +91,10 @@ struct RunRecord : RunOutcome {
   /// "data_quality": the tape's checks (exchange/data_quality.h), written when the run ends;
   /// absent in runs recorded before them.
   std::optional<DataQuality> data_quality;
+  /// "zoom": where a multisine's zoomed modes (--zoom) got their lines, one object per mode in
+  /// the band: "wn_rad_s", "zeta", "lines_in_band", "lines_in_reach", "resolution_hz", "zoomed",
+  /// "period_needed_s" (acquire/campaign.h: ZoomPlacement); absent without a zoom.
+  std::vector<ZoomPlacement> zoom;
   /// Members this version does not know: JSON pointer (in the file) -> value as read.
   Json unknown = Json::object();
 };
