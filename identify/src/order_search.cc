@@ -161,10 +161,10 @@ bool OrderSearch::choose_model() {
 std::vector<Candidate> OrderSearch::delay_hypotheses() {
   std::vector<Candidate> cands;
   if (o_.delay == FitOptions::Delay::kFixed) {
-    cands.push_back(order_loop(o_.delay_s, false, 1 << 20, max_n_, 1, false));
+    cands.push_back(order_loop({.tau0 = o_.delay_s, .top_n = max_n_}));
     return cands;
   }
-  cands.push_back(order_loop(0.0, false, 1 << 20, max_n_, 1, false));
+  cands.push_back(order_loop({.tau0 = 0.0, .top_n = max_n_}));
   const ImitatedDelay rhp = imitated_delay(cands[0].tf, d_.w, o_.max_delay_s);
   // An adequate delay-free fit: a delayed model must have fewer parameters (and, replacing the
   // rational's imitation of a delay, no more poles).
@@ -180,22 +180,20 @@ std::vector<Candidate> OrderSearch::delay_hypotheses() {
     const double tau0 =
         delays_.coarse(cands[0].adequate ? 2 * rhp.tau + 3.0 / d_.w.back() : o_.max_delay_s);
     if (tau0 * d_.w.back() > 0.05) {
-      cands.push_back(order_loop(tau0, true, adequate0 ? cands[0].params : 1 << 20,
-                                 adequate0 ? cands[0].tf.den_order() : max_n_, adequate0 ? 2 : 3,
-                                 true));
+      cands.push_back(order_loop({.tau0 = tau0,
+                                  .free_delay = true,
+                                  .max_params = adequate0 ? cands[0].params : 1 << 20,
+                                  .top_n = adequate0 ? cands[0].tf.den_order() : max_n_,
+                                  .n_starts = size_t(adequate0 ? 2 : 3),
+                                  .one_more = true}));
     }
   }
   return cands;
 }
 
-// One order loop's state.
-struct OrderSearch::Loop {
-  double tau0;      // the delay hypothesis (with a free delay: where its starts are searched)
-  bool free_delay;  // the delay refined jointly with the roots
-  int max_params;   // candidates with this many parameters or more are not tried
-  int top_n;        // the highest denominator order tried
-  size_t n_starts;  // with a free delay: the delay starts per order
-  bool one_more;    // see order_loop
+// One order loop's state: its spec (max_params lowered as adequate orders are found) and what it
+// found so far.
+struct OrderSearch::Loop : LoopSpec {
   Candidate best;   // the best so far: the smallest error, or adequate
   Candidate found;  // with one_more: the first adequate order's best (then bettered)
   Candidate sel;    // without one_more: the adequate orders' best by the criterion so far
@@ -203,13 +201,7 @@ struct OrderSearch::Loop {
   int more = 0;     // orders tried after `found`
   std::vector<double> prev_rank;  // the previous order's candidates' rank by numerator order
                                   // (+inf: not tried)
-  Loop(double tau0, bool free_delay, int max_params, int top_n, size_t n_starts, bool one_more)
-      : tau0(tau0),
-        free_delay(free_delay),
-        max_params(max_params),
-        top_n(top_n),
-        n_starts(n_starts),
-        one_more(one_more) {}
+  explicit Loop(const LoopSpec& s) : LoopSpec(s) {}
   // What the loop returns when it runs out of orders.
   Candidate result() const {
     if (sel.ok) return sel;
@@ -224,12 +216,11 @@ struct OrderSearch::Loop {
 // delayed loop): past the first adequate order, two more orders are tried for an adequate candidate
 // with no more parameters and a lower criterion (a higher relative degree that the lower order
 // imitated with extra zeros and extra delay).
-Candidate OrderSearch::order_loop(double tau0, bool free_delay, int max_params, int top_n,
-                                  size_t n_starts, bool one_more) {
-  Loop l(tau0, free_delay, max_params, top_n, n_starts, one_more);
-  for (int n = std::max(o_.den_order_start, 0); n <= std::min(max_n_, top_n); ++n) {
+Candidate OrderSearch::order_loop(const LoopSpec& spec) {
+  Loop l(spec);
+  for (int n = std::max(o_.den_order_start, 0); n <= std::min(max_n_, spec.top_n); ++n) {
     if (l.found.ok) l.max_params = std::min(l.max_params, l.found.params + 1);
-    if (n + std::max(0, o_.min_num_order) + 1 + (free_delay ? 1 : 0) >= l.max_params) break;
+    if (n + std::max(0, o_.min_num_order) + 1 + (spec.free_delay ? 1 : 0) >= l.max_params) break;
     Candidate best_n = fit_order(l, n);
     if (std::optional<Candidate> r = conclude_order(l, n, best_n)) return *r;
   }

@@ -78,8 +78,16 @@ class OrderSearch {
   const std::vector<C>* vf_poles(double tau, int n);
 
   std::vector<Candidate> delay_hypotheses();
-  Candidate order_loop(double tau0, bool free_delay, int max_params, int top_n, size_t n_starts,
-                       bool one_more);
+  /// One order loop's delay hypothesis and limits (order_loop).
+  struct LoopSpec {
+    double tau0 = 0;           // the delay hypothesis (free delay: where its starts are searched)
+    bool free_delay = false;   // the delay refined jointly with the roots
+    int max_params = 1 << 20;  // candidates with this many parameters or more are not tried
+    int top_n = 0;             // the highest denominator order tried
+    size_t n_starts = 1;       // with a free delay: the delay starts per order
+    bool one_more = false;     // past the first adequate order, two more orders tried
+  };
+  Candidate order_loop(const LoopSpec& spec);
   Candidate fit_order(Loop& l, int n);
   Candidate fit_from_starts(const std::vector<double>& starts, int n, int m, bool free_delay,
                             bool vf_here, bool past_adequate);
