@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     const auto integrator = make_auto_integrator(*campaign, model, o, lo_first_block * o.block);
     lo.auto_integrator = integrator.get();
     AcquisitionNode node(lcm, ctl, camp, lo);
-    const Json sj = node.run();
+    const Json sj = acquisition_summary_to_json(node.run());
     std::cerr << "fralab-acquire: " << sj.dump() << "\n";
     if (!summary.empty()) json_save_file(summary, sj);
     return 0;

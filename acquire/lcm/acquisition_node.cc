@@ -114,7 +114,7 @@ class AcquisitionNode::Run {
         nblocks_(command_block_count(n.campaign_, n.o_.acquire.block)),
         lead_samples_(int64_t(n.o_.acquire.lead) * n.o_.acquire.block) {}
 
-  Json operator()() {
+  AcquisitionSummary operator()() {
     check_campaign_and_resume_point();
     wait_for_consumers();
     publish_start();
@@ -408,8 +408,7 @@ class AcquisitionNode::Run {
         }
         pos_ = start + rep.total_samples();
         span[step] = {start, pos_};
-        repeats_.push_back(
-            {{"step", step}, {"frequency_hz", e.frequency_hz}, {"round", round + 1}});
+        repeats_.push_back({step, e.frequency_hz, round + 1});
       }
     }
     StatusEvent done = events_.back();
@@ -431,32 +430,30 @@ class AcquisitionNode::Run {
     });
   }
 
-  Json summary() const {
+  AcquisitionSummary summary() const {
     const double wall = std::chrono::duration<double>(Clock::now() - t0_).count();
     const int64_t total = campaign_.total_samples();
+    AcquisitionSummary s;
+    s.run_id = o_.run_id;
     // Engine time of this run (a resumed run: from its first block on).
-    const double engine_s =
+    s.engine_time_s =
         double(total - std::min(total, o_.first_block * int64_t(a_.block))) / a_.sample_rate_hz;
-    const bool free = a_.free_running;
-    Json sj{{"run_id", o_.run_id},
-            {"engine_time_s", engine_s},
-            {"wall_time_s", wall},
-            {"speedup", engine_s / std::max(wall, 1e-9)},
-            {"blocks", nblocks_},
-            {"first_block", o_.first_block},
-            {"samples", total},
-            {"excitation", to_string(campaign_.events().front().excitation)},
-            {"retransmissions", flow_.retransmissions()},
-            {"items_retransmitted", flow_.items_retransmitted()},
-            {"plant_clock", free ? "free" : "lockstep"}};
-    if (o_.auto_integrator) sj["adaptive"] = adaptive_steps_json(o_.auto_integrator->results());
-    if (free) {
-      sj["held_samples"] = tape_->held.count();
-      sj["repeated_steps"] = repeats_;
-      sj["engine_time_s"] = double(tape_->played) / a_.sample_rate_hz;  // held and repeated too
-      sj["speedup"] = sj["engine_time_s"].get<double>() / std::max(wall, 1e-9);
+    s.wall_time_s = wall;
+    s.blocks = nblocks_;
+    s.first_block = o_.first_block;
+    s.samples = total;
+    s.excitation = campaign_.events().front().excitation;
+    s.retransmissions = flow_.retransmissions();
+    s.items_retransmitted = flow_.items_retransmitted();
+    s.free_running = a_.free_running;
+    if (o_.auto_integrator) s.adaptive = adaptive_steps_json(o_.auto_integrator->results());
+    if (s.free_running) {
+      s.held_samples = tape_->held.count();
+      s.repeated_steps = repeats_;
+      s.engine_time_s = double(tape_->played) / a_.sample_rate_hz;  // held and repeated too
     }
-    return sj;
+    s.speedup = s.engine_time_s / std::max(wall, 1e-9);
+    return s;
   }
 
   AcquisitionNode& n_;
@@ -475,9 +472,9 @@ class AcquisitionNode::Run {
   int64_t last_command_ = -1, last_tape_ = -1;    // what every consumer must hold at the end
   int64_t pos_ = 0, cmd_seq_ = 0;                 // free-running play-out: next sample, next seq
   double t_asked_ = -1;                           // free-running: the last resend asked for
-  Json repeats_ = Json::array();
+  std::vector<RepeatedStep> repeats_;
 };
 
-Json AcquisitionNode::run() { return Run(*this)(); }
+AcquisitionSummary AcquisitionNode::run() { return Run(*this)(); }
 
 }  // namespace fralab

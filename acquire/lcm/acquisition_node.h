@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "fralab/acquire/acquisition.h"
+#include "fralab/acquire/acquisition_summary.h"
 #include "fralab/acquire/flow_control.h"
 #include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
@@ -65,11 +66,10 @@ class AcquisitionNode {
   AcquisitionNode(const AcquisitionNode&) = delete;
   AcquisitionNode& operator=(const AcquisitionNode&) = delete;
 
-  /// Runs the campaign to its end; returns the summary (run_id, engine_time_s, wall_time_s,
-  /// speedup, blocks, samples, excitation, retransmissions, items_retransmitted). InputError
-  /// naming the consumer that never said ready or a stream that stalled (flow_control.h), or a
-  /// decoding error on the control channel.
-  Json run();
+  /// Runs the campaign to its end; returns its summary (acquire/acquisition_summary.h).
+  /// InputError naming the consumer that never said ready or a stream that stalled
+  /// (flow_control.h), or a decoding error on the control channel.
+  AcquisitionSummary run();
 
  private:
   struct Acks;

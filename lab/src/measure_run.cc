@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "fralab/acquire/acquire_flags.h"
+#include "fralab/acquire/acquisition_summary.h"
 #include "fralab/acquire/model_info.h"
 #include "fralab/lab/data_check.h"
 #include "fralab/lab/envelope.h"
@@ -340,12 +341,12 @@ MeasureResult MeasureRun::finish() {
   const auto camp = make_campaign(model_, ao, r_.run_id);
   double engine_total = double(camp->total_samples()) / ao.sample_rate_hz;
   if (fs::exists(dir_.acquire_summary())) {
-    Json acq_summary = json_load_file(dir_.acquire_summary());
+    const AcquisitionSummary acq = acquisition_summary_from_json(
+        json_load_file(dir_.acquire_summary()), {dir_.acquire_summary(), ""});
     // The adaptive campaign grew while running: its length is the summary's.
-    if (ao.adaptive.enabled())
-      engine_total = acq_summary.at("samples").get<double>() / ao.sample_rate_hz;
-    run_.retransmissions = acq_summary.value("retransmissions", int64_t(0));
-    run_.items_retransmitted = acq_summary.value("items_retransmitted", int64_t(0));
+    if (ao.adaptive.enabled()) engine_total = double(acq.samples) / ao.sample_rate_hz;
+    run_.retransmissions = acq.retransmissions;
+    run_.items_retransmitted = acq.items_retransmitted;
   }
   r_.engine_time_s = engine_total;
   if (ao.adaptive.enabled()) {  // each step as decided, from the curves (a resumed run's too)

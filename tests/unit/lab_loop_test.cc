@@ -100,8 +100,8 @@ TEST(LabLoop, AcquisitionPlantAndAnalyserOverMemqGiveTheOfflineNumbers) {
   plant.announce_ready();
   analyser.announce_ready();
   recorder.announce_ready();
-  const Json summary = acquisition.run();
-  EXPECT_EQ(summary["samples"], camp->total_samples());
+  const AcquisitionSummary summary = acquisition.run();
+  EXPECT_EQ(summary.samples, camp->total_samples());
   EXPECT_EQ(plant.error(), "");
   EXPECT_EQ(analyser.error(), "");
   EXPECT_TRUE(plant.done());
@@ -220,14 +220,14 @@ TEST(LabLoop, TheAdaptiveAcquisitionDecidesAsTheOfflineRun) {
   AcquisitionNode acquisition(bus, bus, *camp, lo);
   plant.announce_ready();
   analyser.announce_ready();
-  const Json summary = acquisition.run();
+  const AcquisitionSummary summary = acquisition.run();
   EXPECT_EQ(plant.error(), "");
   ASSERT_TRUE(analyser.done());
   const std::vector<Frd> live = analyser.finish();
 
   const auto offline = fralab::testing::simulate_campaign(m, o, true, 3);
-  EXPECT_EQ(summary["samples"], int64_t(offline.blocks.size()) * o.block);
-  EXPECT_EQ(summary["adaptive"], adaptive_steps_json(offline.adaptive));
+  EXPECT_EQ(summary.samples, int64_t(offline.blocks.size()) * o.block);
+  EXPECT_EQ(summary.adaptive, adaptive_steps_json(offline.adaptive));
   const auto want = fralab::testing::analyse_run(offline, {"u:y", "u_u:u"});
   ASSERT_EQ(live.size(), want.size());
   int extended = 0;
