@@ -98,7 +98,7 @@ std::vector<CampaignInput> campaign_inputs(const Model& m, double amplitude_pct,
       throw InputError("amplitude " + std::to_string(pct) + " % of full scale must be in (0, 50]");
     double rate = 0;
     for (const auto& nl : in.nonlinearity)
-      if (nl.type == "rate_limit" && nl.rate > 0)
+      if (nl.kind == NonlinearityKind::kRateLimit && nl.rate > 0)
         rate = rate > 0 ? std::min(rate, nl.rate) : nl.rate;
     v.push_back({in.name, m.dc(in.name), pct / 100.0 * in.full_scale, in.full_scale, rate});
   }

@@ -66,7 +66,7 @@ const MultisineBla& MultisineExcitation::bla(const NonlinearitySpec& spec,
                                              const std::vector<double>& gain) const {
   std::vector<double> a(amplitude.size());
   for (size_t j = 0; j < a.size(); ++j) a[j] = amplitude[j] * (j < gain.size() ? gain[j] : 1.0);
-  auto key = std::make_tuple(spec.type, spec.width, a);
+  auto key = std::make_tuple(spec.kind, spec.width, a);
   auto it = cache.find(key);
   if (it == cache.end()) it = cache.emplace(key, multisine_bla(spec, k, a, realisations)).first;
   return it->second;
@@ -117,7 +117,7 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
     std::vector<double> gain;
     for (double x : ms->w) gain.push_back(std::abs(m.actuator_response(i, x)));
     for (const auto& nl : in.nonlinearity)
-      if (nl.type == "hysteresis" || nl.type == "deadband") {
+      if (has_width(nl.kind)) {
         const MultisineBla& b = ms->bla(nl, gain);
         act *= b.g[line];
         for (size_t j = 0; j < gain.size(); ++j) gain[j] *= std::abs(b.g[j]);
@@ -125,9 +125,9 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   }
   for (const auto& nl : in.nonlinearity) {
     if (amplitude <= 0 || (ms && cmd)) break;
-    if (nl.type == "hysteresis")
+    if (nl.kind == NonlinearityKind::kHysteresis)
       act *= backlash_describing_function(amplitude * std::abs(act), nl.width);
-    if (nl.type == "deadband")
+    if (nl.kind == NonlinearityKind::kDeadband)
       act *= deadband_describing_function(amplitude * std::abs(act), nl.width);
   }
   const C held = chain.pair_factor(e1, w);  // the lab's hold (measurement_chain.h)

@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "fralab/core/text.h"
 #include "fralab/plant/state_space.h"
 
 namespace fralab {
@@ -70,26 +71,43 @@ static void check_name(const std::string& name, const JsonWhere& w) {
   }
 }
 
+namespace {
+constexpr std::pair<NonlinearityKind, const char*> kNonlinearityWords[] = {
+    {NonlinearityKind::kDeadband, "deadband"},
+    {NonlinearityKind::kHysteresis, "hysteresis"},
+    {NonlinearityKind::kRateLimit, "rate_limit"},
+    {NonlinearityKind::kSaturation, "saturation"},
+};
+}  // namespace
+
+const char* to_string(NonlinearityKind k) { return enum_word(kNonlinearityWords, k); }
+
+std::optional<NonlinearityKind> nonlinearity_kind_from_word(const std::string& word) {
+  return enum_from_word(kNonlinearityWords, word);
+}
+
 static NonlinearitySpec nonlinearity_from_json(const Json& j, const JsonWhere& w,
                                                std::vector<std::string>* warnings) {
   NonlinearitySpec nl;
-  nl.type = json_string_member(j, w, "type");
-  if (nl.type == "deadband" || nl.type == "hysteresis") {
+  const std::string type = json_string_member(j, w, "type");
+  const std::optional<NonlinearityKind> kind = nonlinearity_kind_from_word(type);
+  if (!kind)
+    json_fail(w / "type", "unknown nonlinearity type \"" + type +
+                              "\" (known: deadband, hysteresis, rate_limit, saturation)");
+  nl.kind = *kind;
+  if (has_width(nl.kind)) {
     json_unknown_members(j, w, {"type", "width"}, warnings);
     nl.width = json_number_member(j, w, "width");
     if (nl.width <= 0.0) json_fail(w / "width", "width must be > 0 (input units)");
-  } else if (nl.type == "rate_limit") {
+  } else if (nl.kind == NonlinearityKind::kRateLimit) {
     json_unknown_members(j, w, {"type", "rate"}, warnings);
     nl.rate = json_number_member(j, w, "rate");
     if (nl.rate <= 0.0) json_fail(w / "rate", "rate must be > 0 (input units per second)");
-  } else if (nl.type == "saturation") {
+  } else {
     json_unknown_members(j, w, {"type", "min", "max"}, warnings);
     nl.min = json_number_member(j, w, "min");
     nl.max = json_number_member(j, w, "max");
     if (!(nl.min < nl.max)) json_fail(w, "saturation needs min < max");
-  } else {
-    json_fail(w / "type", "unknown nonlinearity type \"" + nl.type +
-                              "\" (known: deadband, hysteresis, rate_limit, saturation)");
   }
   return nl;
 }
@@ -273,10 +291,10 @@ Json model_to_json(const Model& m) {
       if (!in.nonlinearity.empty()) {
         a["nonlinearity"] = Json::array();
         for (const auto& nl : in.nonlinearity) {
-          Json jn{{"type", nl.type}};
-          if (nl.type == "deadband" || nl.type == "hysteresis") jn["width"] = nl.width;
-          if (nl.type == "rate_limit") jn["rate"] = nl.rate;
-          if (nl.type == "saturation") {
+          Json jn{{"type", to_string(nl.kind)}};
+          if (has_width(nl.kind)) jn["width"] = nl.width;
+          if (nl.kind == NonlinearityKind::kRateLimit) jn["rate"] = nl.rate;
+          if (nl.kind == NonlinearityKind::kSaturation) {
             jn["min"] = nl.min;
             jn["max"] = nl.max;
           }

@@ -66,17 +66,21 @@ class Saturation : public Nonlinearity {
 }  // namespace
 
 std::unique_ptr<Nonlinearity> make_nonlinearity(const NonlinearitySpec& s, double dc, double h) {
-  if (s.type == "deadband") return std::make_unique<Deadband>(s.width);
-  if (s.type == "hysteresis") return std::make_unique<Backlash>(s.width);
-  if (s.type == "rate_limit") return std::make_unique<RateLimit>(s.rate, h);
-  if (s.type == "saturation") {
-    if (!(s.min <= dc && dc <= s.max)) {
-      throw InputError("saturation [" + std::to_string(s.min) + ", " + std::to_string(s.max) +
-                       "] excludes the operating point " + std::to_string(dc));
-    }
-    return std::make_unique<Saturation>(s.min - dc, s.max - dc);
+  switch (s.kind) {
+    case NonlinearityKind::kDeadband:
+      return std::make_unique<Deadband>(s.width);
+    case NonlinearityKind::kHysteresis:
+      return std::make_unique<Backlash>(s.width);
+    case NonlinearityKind::kRateLimit:
+      return std::make_unique<RateLimit>(s.rate, h);
+    case NonlinearityKind::kSaturation:
+      if (!(s.min <= dc && dc <= s.max)) {
+        throw InputError("saturation [" + std::to_string(s.min) + ", " + std::to_string(s.max) +
+                         "] excludes the operating point " + std::to_string(dc));
+      }
+      return std::make_unique<Saturation>(s.min - dc, s.max - dc);
   }
-  throw InputError("unknown nonlinearity type \"" + s.type + "\"");
+  throw InputError("unknown nonlinearity kind");
 }
 
 std::complex<double> backlash_describing_function(double a, double w) {
@@ -98,8 +102,8 @@ double deadband_describing_function(double a, double w) {
 
 MultisineBla multisine_bla(const NonlinearitySpec& spec, const std::vector<int>& lines,
                            const std::vector<double>& amplitudes, int realisations, uint64_t seed) {
-  if (spec.type != "hysteresis" && spec.type != "deadband")
-    throw InputError("multisine_bla: \"" + spec.type +
+  if (!has_width(spec.kind))
+    throw InputError(std::string("multisine_bla: \"") + to_string(spec.kind) +
                      "\" is not a rate-independent element (hysteresis or deadband)");
   if (lines.empty() || lines.size() != amplitudes.size())
     throw InputError("multisine_bla: " + std::to_string(lines.size()) + " lines for " +

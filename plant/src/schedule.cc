@@ -244,7 +244,8 @@ class Interpolation {
   std::vector<NonlinearitySpec> nonlinearities(const ModelInput& a, const ModelInput& b) const {
     auto kinds = [](const ModelInput& in) {
       std::string s;
-      for (const auto& n : in.nonlinearity) s += (s.empty() ? "" : ", ") + n.type;
+      for (const auto& n : in.nonlinearity)
+        s += (s.empty() ? "" : ", ") + std::string(to_string(n.kind));
       return s.empty() ? std::string("none") : s;
     };
     if (kinds(a) != kinds(b))

@@ -195,7 +195,8 @@ TEST(Diagnose, ActuatorCalibrationErrorIsReportedForItsInput) {
 
 TEST(Diagnose, HysteresisInAnActuator) {
   Model t = simulation();
-  t.inputs[0].nonlinearity.push_back({"hysteresis", 0.08});  // amplitude 0.2 (2 % of 10)
+  t.inputs[0].nonlinearity.push_back(
+      {NonlinearityKind::kHysteresis, 0.08});  // amplitude 0.2 (2 % of 10)
   Json d = diagnose("hysteresis", t);
   const Json* f = find(d, "hysteresis");
   ASSERT_TRUE(f) << d.dump(1);

@@ -297,7 +297,7 @@ TEST(Multisine, SlewRespectsTheActuatorsRateLimit) {
   o.periods = 2;
   o.slowest_time_constant_s = 0.5;
   auto free = campaign_inputs(m, 2.0);
-  m.inputs[0].nonlinearity.push_back({"rate_limit", 0, 2000.0});
+  m.inputs[0].nonlinearity.push_back({NonlinearityKind::kRateLimit, 0, 2000.0});
   auto ins = campaign_inputs(m, 2.0);
   ASSERT_EQ(ins[0].max_rate, 2000.0);
   const auto ex = select_inputs(m, "Wf,BLD");

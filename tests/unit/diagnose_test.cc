@@ -811,7 +811,7 @@ TEST(Diagnose, MissingResonanceNotch) {
 
 TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   Model truth = simulation();
-  truth.inputs[0].nonlinearity.push_back({"hysteresis", 0.012});
+  truth.inputs[0].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.012});
   const Diagnosis d = diagnose(simulation(), measure(truth, /*h3=*/0.05));
   ASSERT_FALSE(d.findings.empty());
   const Finding& f = d.findings.at(0);
@@ -834,7 +834,7 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
 Diagnosis multisine_backlash(double width, double pole) {
   Model truth = simulation();
   truth.inputs[0].actuator = tf(1.0, {Root::Real(-pole)});
-  truth.inputs[0].nonlinearity.push_back({"hysteresis", width});
+  truth.inputs[0].nonlinearity.push_back({NonlinearityKind::kHysteresis, width});
   for (auto& o : truth.outputs) o.noise_rms = 1e-4;
   const AcquireOptions o = testing::random_phase_multisine("0.1:30", 8, 4, 4);
   auto run = [&](uint64_t seed) {

@@ -43,7 +43,8 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
 TEST(Model, ContractExampleLoadsWithEveryField) {
   Model m = parse_model(Json::parse(kMinimal), "contract.json");
   ASSERT_EQ(m.inputs.size(), 1u);
-  EXPECT_EQ(m.inputs[0].nonlinearity.at(0).type, "hysteresis");
+  EXPECT_EQ(m.inputs[0].nonlinearity.at(0).kind, NonlinearityKind::kHysteresis);
+  EXPECT_STREQ(to_string(m.inputs[0].nonlinearity.at(0).kind), "hysteresis");
   EXPECT_DOUBLE_EQ(m.inputs[0].nonlinearity[0].width, 6.0);
   EXPECT_DOUBLE_EQ(m.outputs[0].noise_rms, 1.5);
   EXPECT_DOUBLE_EQ(m.dc("N"), 15279.0);

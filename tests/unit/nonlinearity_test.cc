@@ -25,7 +25,7 @@ Complex simulated_df(const NonlinearitySpec& s, double a) {
 }  // namespace
 
 TEST(Nonlinearity, BacklashMatchesItsDescribingFunction) {
-  NonlinearitySpec s{"hysteresis", 9.24};
+  NonlinearitySpec s{NonlinearityKind::kHysteresis, 9.24};
   for (double a : {5.0, 10.0, 40.0}) {
     Complex sim = simulated_df(s, a), df = backlash_describing_function(a, 9.24);
     EXPECT_NEAR(std::abs(sim - df), 0.0, 2e-3) << a;
@@ -37,7 +37,7 @@ TEST(Nonlinearity, BacklashMatchesItsDescribingFunction) {
 }
 
 TEST(Nonlinearity, DeadbandMatchesItsDescribingFunction) {
-  NonlinearitySpec s{"deadband", 2.0};
+  NonlinearitySpec s{NonlinearityKind::kDeadband, 2.0};
   for (double a : {1.5, 3.0, 20.0}) {
     Complex sim = simulated_df(s, a);
     EXPECT_NEAR(sim.real(), deadband_describing_function(a, 2.0), 2e-3) << a;
@@ -46,15 +46,15 @@ TEST(Nonlinearity, DeadbandMatchesItsDescribingFunction) {
 }
 
 TEST(Nonlinearity, RateLimitAndSaturationBound) {
-  NonlinearitySpec r{"rate_limit", 0, 2.0};
+  NonlinearitySpec r{NonlinearityKind::kRateLimit, 0, 2.0};
   auto nl = make_nonlinearity(r, 0.0, 0.01);
   EXPECT_DOUBLE_EQ(nl->apply(1.0), 0.02);
   EXPECT_DOUBLE_EQ(nl->apply(1.0), 0.04);
-  NonlinearitySpec s{"saturation", 0, 0, 100.0, 120.0};
+  NonlinearitySpec s{NonlinearityKind::kSaturation, 0, 0, 100.0, 120.0};
   auto sat = make_nonlinearity(s, 115.0, 0.01);  // absolute limits around dc = 115
   EXPECT_DOUBLE_EQ(sat->apply(10.0), 5.0);
   EXPECT_DOUBLE_EQ(sat->apply(-30.0), -15.0);
-  NonlinearitySpec bad{"saturation", 0, 0, 0.0, 1.0};
+  NonlinearitySpec bad{NonlinearityKind::kSaturation, 0, 0, 0.0, 1.0};
   EXPECT_THROW(make_nonlinearity(bad, 115.0, 0.01), InputError);
 }
 
@@ -62,7 +62,8 @@ TEST(Nonlinearity, RateLimitAndSaturationBound) {
 // shift, and a rate-independent element's BLA is then its describing function (within the
 // discretisation: 1024 samples a cycle here).
 TEST(Nonlinearity, AMultisineOfOneLineHasTheDescribingFunctionAsItsBla) {
-  const NonlinearitySpec backlash{"hysteresis", 0.5}, deadband{"deadband", 0.5};
+  const NonlinearitySpec backlash{NonlinearityKind::kHysteresis, 0.5},
+      deadband{NonlinearityKind::kDeadband, 0.5};
   const auto b = multisine_bla(backlash, {1}, {1.0}, 4);
   EXPECT_NEAR(std::abs(b.g[0] - backlash_describing_function(1.0, 0.5)), 0.0, 2e-3);
   EXPECT_LT(b.var_nl[0], 1e-6);
@@ -76,7 +77,7 @@ TEST(Nonlinearity, AMultisineOfOneLineHasTheDescribingFunctionAsItsBla) {
 // and lag (the describing function at any single amplitude has no such frequency dependence);
 // the distortion varies from one realisation to the next (var_nl > 0).
 TEST(Nonlinearity, AMultisinesBlaSpansNothingToTheIdentity) {
-  const NonlinearitySpec backlash{"hysteresis", 1.0};
+  const NonlinearitySpec backlash{NonlinearityKind::kHysteresis, 1.0};
   std::vector<int> lines;
   for (int k = 1; k <= 200; k = std::max(k + 1, int(k * 1.26))) lines.push_back(k);
   const double n = double(lines.size());
@@ -93,7 +94,7 @@ TEST(Nonlinearity, AMultisinesBlaSpansNothingToTheIdentity) {
   EXPECT_GT(std::abs(between.g[0] + between.g[1] + between.g[2]) / 3, 0.8);
   EXPECT_LT(std::abs(between.g.back()), 0.4);
   EXPECT_LT(std::arg(between.g.back()) * 180 / std::numbers::pi, -10);
-  EXPECT_THROW(multisine_bla({"rate_limit", 0, 1.0}, {1}, {1.0}), InputError);
+  EXPECT_THROW(multisine_bla({NonlinearityKind::kRateLimit, 0, 1.0}, {1}, {1.0}), InputError);
   EXPECT_THROW(multisine_bla(backlash, {0}, {1.0}), InputError);
   EXPECT_THROW(multisine_bla(backlash, {1, 2}, {1.0}), InputError);
   EXPECT_THROW(multisine_bla(backlash, {kMaxMultisineLine + 1}, {1.0}), InputError);

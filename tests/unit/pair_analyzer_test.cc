@@ -254,7 +254,7 @@ TEST(PairAnalyzer, HarmonicsRevealANonlinearity) {
   Tf unit;
   Model m = fralab::testing::siso_model(unit, &unit);
   auto clean = analyse(simulate_tape(m, {"u"}, band(1, 2, 1), false, 1), "u_u:u");
-  m.inputs[0].nonlinearity.push_back({"hysteresis", 0.01});
+  m.inputs[0].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.01});
   auto hyst = analyse(simulate_tape(m, {"u"}, band(1, 2, 1), false, 1), "u_u:u");
   EXPECT_LT(clean[0].h3_rel, 1e-9);
   EXPECT_GT(hyst[0].h3_rel, 0.05);
@@ -351,7 +351,7 @@ TEST(PairAnalyzer, ZipperedMultisinesMeasureTheWholeMatrixInOneRun) {
     }
   }
   for (double w : wa) EXPECT_EQ(wb.count(w), 0u);  // orthogonal: no line is shared
-  m.inputs[1].nonlinearity.push_back({"hysteresis", 0.004});
+  m.inputs[1].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.004});
   auto nl = simulate_tape(m, {"a", "b"}, o, false, 1, 100, 2.0, "multisine:zippered");
   double worst = 0;
   for (const auto& p : analyse(nl, "b:z")) worst = std::max(worst, p.nl_rel);
@@ -457,7 +457,7 @@ TEST(PairAnalyzer, OrthogonalMultisineSigmaCoversTheError) {
 // distortion.
 TEST(PairAnalyzer, OrthogonalMultisineSolvesADistortingInputByItsPosition) {
   Model m = two_by_two();
-  m.inputs[1].nonlinearity.push_back({"hysteresis", 0.01});
+  m.inputs[1].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.01});
   SteppedSineOptions o = band(0.1, 20, 6);
   o.min_cycles = 2;
   o.slowest_time_constant_s = 3;  // a settle of 15 s: b's small position leaves y's transient
@@ -487,7 +487,7 @@ TEST(PairAnalyzer, OrthogonalMultisineSolvesADistortingInputByItsPosition) {
 // (sigma from the pair's channels alone: 0.39 and 0.71).
 TEST(PairAnalyzer, OrthogonalMultisineSigmaCoversThePositionNoiseOfADistortingInput) {
   Model m = two_by_two();
-  m.inputs[1].nonlinearity.push_back({"hysteresis", 0.01});
+  m.inputs[1].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.01});
   m.inputs[1].noise_rms = 0.001;
   for (auto& out : m.outputs) out.noise_rms = 0.001;
   SteppedSineOptions o = band(0.2, 20, 5);
@@ -632,7 +632,7 @@ TEST(PairAnalyzer, RealisationsGiveTheBestLinearApproximationWithTheNonlinearPar
 // describing function at the multisine's peak does not.
 TEST(PairAnalyzer, TheMeasuredBlaOfABacklashIsTheModelsMultisineBla) {
   Model m = two_by_two();
-  const NonlinearitySpec backlash{"hysteresis", 0.1};
+  const NonlinearitySpec backlash{NonlinearityKind::kHysteresis, 0.1};
   m.inputs[1].nonlinearity.push_back(backlash);
   AcquireOptions o = fralab::testing::random_phase_multisine("0.1:20", 6, 10, 6);
   o.slowest_time_constant_s = 0.2;

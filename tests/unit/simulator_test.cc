@@ -76,7 +76,7 @@ TEST(Simulator, BacklashActuatorFollowsItsDescribingFunction) {
   // Identity actuator tf, backlash only: position/command = N(A) at low frequency.
   Tf unit;
   Model m = fralab::testing::siso_model(unit, &unit);
-  m.inputs[0].nonlinearity.push_back({"hysteresis", 0.8});
+  m.inputs[0].nonlinearity.push_back({NonlinearityKind::kHysteresis, 0.8});
   SimulatorOptions opt;
   opt.noise = false;
   const double f = 0.5, w = 2 * std::numbers::pi * f, h = 1e-3;

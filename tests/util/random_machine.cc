@@ -130,7 +130,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
         ModelInput& ein = c.engine.inputs[size_t(c.engine.input_index(in))];
         e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
         e.param = "width", e.value = ein.full_scale * logu(0.003, 0.008), e.tol_rel = 0.25;
-        ein.nonlinearity.push_back({"hysteresis", e.value});
+        ein.nonlinearity.push_back({NonlinearityKind::kHysteresis, e.value});
         break;
       }
       case 6: {  // the rotor's mode, moved in every path

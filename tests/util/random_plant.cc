@@ -147,7 +147,7 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
         ModelInput& ein = c.engine.inputs[c.engine.input_index(in)];
         e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
         e.param = "width", e.value = logu(0.03, 0.08), e.tol_rel = 0.25;
-        ein.nonlinearity.push_back({"hysteresis", e.value});
+        ein.nonlinearity.push_back({NonlinearityKind::kHysteresis, e.value});
         break;
       }
       case 6: {  // a lead (a real zero) the simulation lacks
@@ -245,7 +245,7 @@ bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value) {
     case CauseKind::kHysteresis:
       if (in < 0) return false;
       for (NonlinearitySpec& n : engine.inputs[size_t(in)].nonlinearity)
-        if (n.type == "hysteresis") {
+        if (n.kind == NonlinearityKind::kHysteresis) {
           n.width = value;
           return true;
         }

@@ -56,8 +56,10 @@ std::vector<C> nonlinear_factor(const PairFit& p, CauseKind kind, double width,
         gain[j] = g(hi - 1) * (1 - t) + g(hi) * t;
       }
     }
-    const MultisineBla& b =
-        p.ms->bla(NonlinearitySpec{backlash ? "hysteresis" : "deadband", width}, gain);
+    const MultisineBla& b = p.ms->bla(
+        NonlinearitySpec{backlash ? NonlinearityKind::kHysteresis : NonlinearityKind::kDeadband,
+                         width},
+        gain);
     if (var_nl) var_nl->assign(N, 0.0);
     for (size_t q = 0; q < N; ++q) {
       const size_t j = size_t(std::lower_bound(lw.begin(), lw.end(), p.w[q]) - lw.begin());
@@ -131,7 +133,10 @@ class Nonlinearity final : public CauseUnit {
   }
   IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   void apply(Model& m, const Finding& f) const override {
-    m.inputs[m.input_index(f.input)].nonlinearity.push_back({name_, f.parameters.at("width")});
+    m.inputs[m.input_index(f.input)].nonlinearity.push_back({kind_ == CauseKind::kHysteresis
+                                                                 ? NonlinearityKind::kHysteresis
+                                                                 : NonlinearityKind::kDeadband,
+                                                             f.parameters.at("width")});
   }
   std::string explain(const Finding& f) const override { return f.explanation; }
 

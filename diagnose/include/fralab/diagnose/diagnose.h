@@ -157,7 +157,7 @@ struct MultisineExcitation {
   /// The element `spec` under this multisine with each line's amplitude scaled by gain[j] (the
   /// actuator before it): the BLA per line, and one realisation's scatter (var_nl).
   const MultisineBla& bla(const NonlinearitySpec& spec, const std::vector<double>& gain) const;
-  mutable std::map<std::tuple<std::string, double, std::vector<double>>, MultisineBla> cache;
+  mutable std::map<std::tuple<NonlinearityKind, double, std::vector<double>>, MultisineBla> cache;
 };
 /// From a curve's valid points with line_amplitude > 0 (k: w over the largest w0 / m, m <= 1000,
 /// that makes every line a whole harmonic within 1e-6); nullopt for fewer than 2 such points, or

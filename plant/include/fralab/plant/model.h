@@ -32,8 +32,19 @@ namespace fralab {
 
 inline constexpr const char* kModelFormat = "fralab-model/1";
 
+/// An actuator's nonlinear element (a model file's `type`: "deadband", "hysteresis", "rate_limit",
+/// "saturation").
+enum class NonlinearityKind { kDeadband, kHysteresis, kRateLimit, kSaturation };
+/// The model file's word for `k`, and back (nullopt for a word that is none).
+const char* to_string(NonlinearityKind k);
+std::optional<NonlinearityKind> nonlinearity_kind_from_word(const std::string& word);
+/// A deadband or a hysteresis (backlash): rate-independent, sized by a width.
+inline bool has_width(NonlinearityKind k) {
+  return k == NonlinearityKind::kDeadband || k == NonlinearityKind::kHysteresis;
+}
+
 struct NonlinearitySpec {
-  std::string type;    // "deadband", "hysteresis", "rate_limit", "saturation"
+  NonlinearityKind kind = NonlinearityKind::kHysteresis;
   double width = 0.0;  // deadband/hysteresis, input units (total width)
   double rate = 0.0;   // rate_limit, input units per second
   double min = 0.0;    // saturation, absolute input units
