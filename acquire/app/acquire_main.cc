@@ -22,6 +22,7 @@
 #include "fralab/core/text.h"
 #include "fralab/lcm/lab_lcm.h"
 #include "fralab/plant/embedded_models.h"
+#include "fralab/plant/simulator.h"
 
 using namespace fralab;
 
@@ -61,9 +62,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--summary", summary, "write a JSON summary here");
   std::string chain;
-  app.add_option("--chain", chain,
-                 "the measurement chain (JSON, core/measurement_chain.h), put on the tape in the "
-                 "start event");
+  auto* chain_opt = app.add_option(
+      "--chain", chain,
+      "the measurement chain (JSON, core/measurement_chain.h), put on the tape in the start event");
+  bool emulator = false;
+  app.add_flag("--emulator-chain", emulator,
+               "put on the tape the chain of fralab's plant emulator running --engine at "
+               "--sample-rate (plant/simulator.h: emulator_chain)")
+      ->excludes(chain_opt);
   CLI11_PARSE(app, argc, argv);
   try {
     Model model = load_model_or_embedded(engine);
@@ -83,6 +89,7 @@ int main(int argc, char** argv) {
     lo.flow = flow;
     lo.first_block = lo_first_block;
     lo.first_status = lo_first_status;
+    if (emulator) lo.measurement_chain = emulator_chain(model, o.sample_rate_hz);
     if (!chain.empty()) {
       lo.measurement_chain = chain_from_json(json_parse_text(chain, "--chain"), {"--chain", ""});
     }

@@ -25,15 +25,6 @@ std::vector<std::string> pairs_for_input(const std::string& x,
   return p;
 }
 
-MeasurementChain emulator_chain(const Model& m, double sample_rate_hz) {
-  MeasurementChain c;
-  c.sample_rate_hz = sample_rate_hz;
-  c.hold = MeasurementChain::Hold::kFirstOrder;
-  for (const auto& in : m.inputs)
-    if (!in.nonlinearity.empty()) c.reheld_inputs.push_back(in.name);
-  return c;
-}
-
 void save_curves(std::vector<Frd>& curves, const std::string& dir) {
   std::sort(curves.begin(), curves.end(),
             [](const Frd& a, const Frd& b) { return a.pair < b.pair; });

@@ -19,6 +19,7 @@
 #include "fralab/lcm/lab_lcm.h"
 #include "fralab/lcm/url.h"
 #include "fralab/plant/embedded_models.h"
+#include "fralab/plant/simulator.h"
 #include "tape_analysis.h"
 #include "tape_check.h"
 

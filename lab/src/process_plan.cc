@@ -173,8 +173,7 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
                                   std::to_string(from.first_status),
                                   "--summary",
                                   dir.acquire_summary(),
-                                  "--chain",
-                                  chain_to_json(emulator_chain(model, ao.sample_rate_hz)).dump()};
+                                  "--emulator-chain"};
   for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
   start({"acquire", acq, dir.log("acquire"), host_of(o, "acquire")});
   plan.awaited.push_back("acquire");

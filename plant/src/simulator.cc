@@ -135,4 +135,13 @@ void Simulator::step(const double* commands, double* channels) {
   ++k_;
 }
 
+MeasurementChain emulator_chain(const Model& m, double sample_rate_hz) {
+  MeasurementChain c;
+  c.sample_rate_hz = sample_rate_hz;
+  c.hold = MeasurementChain::Hold::kFirstOrder;
+  for (const auto& in : m.inputs)
+    if (!in.nonlinearity.empty()) c.reheld_inputs.push_back(in.name);
+  return c;
+}
+
 }  // namespace fralab

@@ -202,8 +202,7 @@ TEST(ProcessPlan, EachProcessGetsTheRunsArguments) {
       "0",
       "--summary",
       kDir + "/acquire.json",
-      "--chain",
-      chain_to_json(emulator_chain(m, 1000)).dump()};
+      "--emulator-chain"};
   for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
   EXPECT_THAT(process(p, "acquire").argv, ElementsAreArray(acq));
   EXPECT_THAT(process(p, "acquire").argv, Contains("Wf,A8"));  // --input, by name

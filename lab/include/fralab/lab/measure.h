@@ -101,11 +101,6 @@ std::string partial_run_message(const MeasureResult& r, const std::string& dir);
 std::vector<std::string> pairs_for_input(const std::string& input,
                                          const std::vector<std::string>& outputs);
 
-/// The measurement chain of fralab's plant emulator at `sample_rate_hz`: first-order hold, and
-/// the inputs whose actuator has a nonlinearity drive their paths from held position samples
-/// (plant/simulator.h). run.json records it as "measurement_chain".
-MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
-
 /// One plain run into opt.out (or its continuation, opt.resume): the recorder, plant, analysers,
 /// identifier and acquisition started as plan_processes says (lab/process_plan.h) and supervised,
 /// the tape verified, DIR/run.json completed. InputError for an auto campaign, which measure()

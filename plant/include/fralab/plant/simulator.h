@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "fralab/core/measurement_chain.h"
 #include "fralab/plant/faults.h"
 #include "fralab/plant/lti.h"
 #include "fralab/plant/model.h"
@@ -75,5 +76,11 @@ class Simulator {
   std::vector<std::pair<int, int>> swaps_;  // channel pairs exchanged after the faults
   int64_t k_ = 0;
 };
+
+/// The measurement chain of this emulator running model `m` at `sample_rate_hz`: first-order
+/// hold, and the inputs whose actuator has a nonlinearity drive their paths from held position
+/// samples. run.json records it as "measurement_chain"; fralab-acquire --emulator-chain puts it
+/// on the tape.
+MeasurementChain emulator_chain(const Model& m, double sample_rate_hz);
 
 }  // namespace fralab
