@@ -394,6 +394,8 @@ TEST(Multisine, ZoomPutsLinesInsideALightModesHalfPowerBand) {
   o.zoom = {{10, 0.02}};
   o.zoom_period_factor = 0.5;
   EXPECT_THROW(o.validate(), InputError);
+  o.zoom_period_factor = 17;
+  EXPECT_THROW(o.validate(), InputError);
 }
 
 // The light modes a simulation gives the zoom: pole pairs under zeta 0.1 in the band, pairs
