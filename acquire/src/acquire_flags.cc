@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <limits>
 #include <set>
-#include <stdexcept>
 #include <type_traits>
 
 #include "fralab/core/text.h"
@@ -136,20 +135,10 @@ AcquireField excitation_field() {
 std::vector<ZoomMode> parse_zoom(const std::string& text) {
   std::vector<ZoomMode> modes;
   for (const std::string& item : split_list(text)) {
-    const size_t colon = item.find(':');
-    ZoomMode z;
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument(item);
-      size_t used = 0;
-      z.wn_rad_s = std::stod(item.substr(0, colon), &used);
-      if (used != colon) throw std::invalid_argument(item);
-      const std::string zeta = item.substr(colon + 1);
-      z.zeta = std::stod(zeta, &used);
-      if (used != zeta.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
+    const auto wn_zeta = number_pair(item);
+    if (!wn_zeta)
       throw InputError("--zoom \"" + item + "\": expected WN_RAD_S:ZETA, e.g. 31.4:0.02");
-    }
-    modes.push_back(z);
+    modes.push_back({wn_zeta->first, wn_zeta->second});
   }
   return modes;
 }

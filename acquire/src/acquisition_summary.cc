@@ -52,8 +52,9 @@ AcquisitionSummary acquisition_summary_from_json(const Json& j, const JsonWhere&
     s.adaptive = j.at("adaptive");
   }
   s.held_samples = integer("held_samples", 0);
-  for (size_t i = 0; i < json_array_member(j, where, "repeated_steps", true).size(); ++i) {
-    const Json& x = j.at("repeated_steps").at(i);
+  const Json& repeated = json_array_member(j, where, "repeated_steps", true);
+  for (size_t i = 0; i < repeated.size(); ++i) {
+    const Json& x = repeated[i];
     const JsonWhere at = where / "repeated_steps" / i;
     json_require_object(x, at);
     s.repeated_steps.push_back({int(json_integer(json_member(x, at, "step"), at / "step")),

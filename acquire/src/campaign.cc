@@ -253,15 +253,18 @@ void MultisineOptions::validate() const {
 
 namespace {
 
+double hz(const ZoomMode& z) { return z.wn_rad_s / (2 * std::numbers::pi); }
+
+// How far either side of f (relative) a zoomed mode's lines reach.
+double reach(const ZoomMode& z) { return std::max(kZoomReachZetas * z.zeta, kZoomReach); }
+
 // The period, samples, that puts kZoomLinesInBand lines in mode z's half-power band 2 zeta f.
 double period_for(const ZoomMode& z, double fs) {
-  const double f = z.wn_rad_s / (2 * std::numbers::pi);
-  return std::ceil(fs * kZoomLinesInBand / (2 * z.zeta * f) - 1e-9);
+  return std::ceil(fs * kZoomLinesInBand / (2 * z.zeta * hz(z)) - 1e-9);
 }
 
 bool in_band(const ZoomMode& z, const MultisineOptions& o) {
-  const double f = z.wn_rad_s / (2 * std::numbers::pi);
-  return f >= o.f_lo_hz && f <= o.f_hi_hz;
+  return hz(z) >= o.f_lo_hz && hz(z) <= o.f_hi_hz;
 }
 
 }  // namespace
@@ -285,12 +288,11 @@ std::vector<int> zoom_lines(const MultisineOptions& o, int P, int k_hi) {
   const double df = o.sample_rate_hz / P;
   std::vector<int> lines;
   for (const ZoomMode& z : o.zoom) {
-    const double f = z.wn_rad_s / (2 * std::numbers::pi);
     if (!in_band(z, o) || period_for(z, o.sample_rate_hz) > P) continue;
-    const double reach = std::max(kZoomReachZetas * z.zeta, kZoomReach);
+    const double f = hz(z);
     const int step = std::max(1, int(std::floor(z.zeta * f / 2 / df + 1e-9)));
     const int k0 = int(std::llround(f / df));
-    const int span = int(std::floor(reach * f / df / step + 1e-9));
+    const int span = int(std::floor(reach(z) * f / df / step + 1e-9));
     for (int j = -span; j <= span; ++j) {
       int k = k0 + j * step;
       if (o.odd_lines && k % 2 == 0) ++k;
@@ -315,18 +317,16 @@ std::vector<ZoomPlacement> zoom_placement(const MultisineOptions& o, int P,
   const double df = o.sample_rate_hz / P;
   std::vector<ZoomPlacement> out;
   for (const ZoomMode& z : o.zoom) {
-    const double f = z.wn_rad_s / (2 * std::numbers::pi);
     if (!in_band(z, o)) continue;
     ZoomPlacement zp;
     zp.mode = z;
     zp.resolution_hz = df;
     zp.zoomed = period_for(z, o.sample_rate_hz) <= P;
     zp.period_needed_s = period_for(z, o.sample_rate_hz) / o.sample_rate_hz;
-    const double reach = std::max(kZoomReachZetas * z.zeta, kZoomReach);
     for (int k : lines) {
-      const double off = std::abs(k * df - f) / f;
+      const double off = std::abs(k * df - hz(z)) / hz(z);
       zp.lines_in_band += off <= z.zeta;
-      zp.lines_in_reach += off <= reach;
+      zp.lines_in_reach += off <= reach(z);
     }
     out.push_back(zp);
   }

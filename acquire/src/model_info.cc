@@ -9,16 +9,8 @@
 namespace fralab {
 
 std::pair<double, double> parse_band(const std::string& band) {
-  auto c = band.find(':');
-  try {
-    if (c == std::string::npos) throw std::invalid_argument("no colon");
-    size_t p1 = 0, p2 = 0;
-    double lo = std::stod(band.substr(0, c), &p1), hi = std::stod(band.substr(c + 1), &p2);
-    if (p1 != c || p2 != band.size() - c - 1) throw std::invalid_argument("trailing");
-    return {lo, hi};
-  } catch (const std::exception&) {
-    throw InputError("--band \"" + band + "\" must be LO_HZ:HI_HZ, e.g. 0.04:100");
-  }
+  if (const auto lo_hi = number_pair(band)) return *lo_hi;
+  throw InputError("--band \"" + band + "\" must be LO_HZ:HI_HZ, e.g. 0.04:100");
 }
 
 double slowest_time_constant_s(const Tf& tf) {
@@ -28,42 +20,43 @@ double slowest_time_constant_s(const Tf& tf) {
   return t;
 }
 
-double slowest_time_constant_s(const Model& m) {
-  double t = 0.0;
-  auto scan = [&](const Tf& tf) { t = std::max(t, slowest_time_constant_s(tf)); };
+namespace {
+
+// Calls `scan` on every tf of the model: actuators, sensors, paths.
+template <class Scan>
+void for_each_tf(const Model& m, Scan scan) {
   for (const auto& in : m.inputs)
     if (in.actuator) scan(*in.actuator);
   for (const auto& out : m.outputs)
     if (out.sensor) scan(*out.sensor);
   for (const auto& p : m.paths) scan(p.tf);
+}
+
+}  // namespace
+
+double slowest_time_constant_s(const Model& m) {
+  double t = 0.0;
+  for_each_tf(m, [&](const Tf& tf) { t = std::max(t, slowest_time_constant_s(tf)); });
   return t;
 }
 
 std::vector<ZoomMode> light_modes(const Model& m, double f_lo_hz, double f_hi_hz, double max_zeta) {
   std::vector<ZoomMode> all;
-  auto scan = [&](const Tf& tf) {
+  for_each_tf(m, [&](const Tf& tf) {
     for (const Root& p : tf.poles) {
       const double f = p.wn / (2 * std::numbers::pi);
       if (p.pair && p.zeta > 0 && p.zeta < max_zeta && f >= f_lo_hz && f <= f_hi_hz)
         all.push_back({p.wn, p.zeta});
     }
-  };
-  for (const auto& in : m.inputs)
-    if (in.actuator) scan(*in.actuator);
-  for (const auto& out : m.outputs)
-    if (out.sensor) scan(*out.sensor);
-  for (const auto& p : m.paths) scan(p.tf);
+  });
   std::sort(all.begin(), all.end(),
             [](const ZoomMode& a, const ZoomMode& b) { return a.wn_rad_s < b.wn_rad_s; });
-  std::vector<ZoomMode> modes;
-  double first_wn = 0;  // the lowest wn of the mode being gathered
+  std::vector<ZoomMode> modes;  // each keeps the lowest wn of the pairs it gathers
   for (const ZoomMode& z : all) {
-    if (!modes.empty() && z.wn_rad_s <= 1.01 * first_wn) {
+    if (!modes.empty() && z.wn_rad_s <= 1.01 * modes.back().wn_rad_s)
       modes.back().zeta = std::min(modes.back().zeta, z.zeta);
-      continue;
-    }
-    modes.push_back(z);
-    first_wn = z.wn_rad_s;
+    else
+      modes.push_back(z);
   }
   return modes;
 }

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cstdio>
+#include <stdexcept>
 
 namespace fralab {
 
@@ -27,6 +28,19 @@ std::string significant(double v, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
   return buf;
+}
+
+std::optional<std::pair<double, double>> number_pair(const std::string& text, char sep) {
+  const size_t c = text.find(sep);
+  if (c == std::string::npos) return std::nullopt;
+  try {
+    size_t p1 = 0, p2 = 0;
+    const double a = std::stod(text.substr(0, c), &p1), b = std::stod(text.substr(c + 1), &p2);
+    if (p1 != c || p2 != text.size() - c - 1) return std::nullopt;
+    return std::pair{a, b};
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace fralab

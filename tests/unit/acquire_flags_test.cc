@@ -254,6 +254,19 @@ TEST(AcquireFlags, AutoIsAnExcitationOfTheLabOnly) {
   EXPECT_THROW(parsed({"--excitation", "auto"}), CLI::ValidationError);
 }
 
+TEST(AcquireFlags, AZoomThatIsNotWnColonZetaIsRefusedNamingTheItem) {
+  EXPECT_EQ(parsed({"--zoom", "31.4:0.02,62.8:0.01"}).zoom,
+            (std::vector<ZoomMode>{{31.4, 0.02}, {62.8, 0.01}}));
+  for (const char* bad : {"31.4", "31.4:", "31.4:0.02x", "wn:0.02", "31.4;0.02"}) {
+    try {
+      parsed({"--zoom", bad});
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(std::string("--zoom \"") + bad + "\"")) << bad;
+    }
+  }
+}
+
 TEST(AcquireFlags, TheJsonFormHasEveryKey) {
   EXPECT_EQ(acquire_options_to_json(AcquireOptions{}).dump(),
             R"({"adaptive":{"pilot_cycles":4,"sigma_target":0.0},"adaptive_decided":"",)"

@@ -35,6 +35,10 @@ std::optional<E> enum_from_word(const std::pair<E, const char*> (&table)[N],
   return std::nullopt;
 }
 
+/// "A:B" (sep ':') as two numbers, each the whole of its side (std::stod's form); nullopt when the
+/// text is not that.
+std::optional<std::pair<double, double>> number_pair(const std::string& text, char sep = ':');
+
 /// The shortest decimal text that reads back as exactly `v` (std::to_chars round trip).
 std::string lossless(double v);
 
