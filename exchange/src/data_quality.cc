@@ -2,6 +2,7 @@
 
 #include <fftw3.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -46,7 +47,7 @@ int64_t smooth_size(int64_t N) {
 // One integration window of the schedule, cut into blocks: a multisine's periods, or a sine's
 // blocks of whole cycles.
 struct Window {
-  int64_t from = 0;  // first sample (absolute)
+  int64_t from = 0, to = 0;  // first sample, one past the last (absolute)
   std::vector<int64_t> block_from, block_len;
   std::vector<double> freqs_hz;  // the excited frequencies
   bool multisine = false;
@@ -64,6 +65,7 @@ std::vector<Window> windows_of(const Schedule& sch, const TimeSeries& s) {
     if (e.sample < s.start_sample || e.sample + e.n_samples > end) continue;
     Window w;
     w.from = e.sample;
+    w.to = e.sample + e.n_samples;
     w.signature = std::to_string(int(e.excitation)) + ":";
     for (size_t i = 0; i < e.inputs.size() && i < e.amplitudes.size(); ++i)
       w.signature += e.inputs[i] + "=" + significant(e.amplitudes[i], 6) + ",";
@@ -231,8 +233,11 @@ double median(std::vector<double> v) {
 bool noisy(const double* x, int64_t N) {
   int64_t pairs = 0, changes = 0;
   double prev = 0;
+  // From first differences, which are exactly 0 over a flat stretch (the samples' own sum
+  // leaves a rounding residue of one sign there: a clipped stretch read as a smooth signal).
+  auto d = [x](int64_t k) { return x[k] - x[k - 1]; };
   for (int64_t k = 4; k < N; ++k) {
-    const double v = x[k] - 4 * x[k - 1] + 6 * x[k - 2] - 4 * x[k - 3] + x[k - 4];
+    const double v = d(k) - 3 * d(k - 1) + 3 * d(k - 2) - d(k - 3);
     if (!std::isfinite(v) || v == 0) {
       prev = 0;
       continue;
@@ -318,9 +323,11 @@ std::pair<double, double> check_clipping(const std::string& ch, const double* x,
     f.text = ch + " sits at its " + (side == 0 ? "largest" : "smallest") + " value " + fmt(level) +
              " in " + std::to_string(at) + " samples (" + fmt(100 * f.size) +
              " % of the run): a transducer or converter at its range";
+    f.mended = true;
     f.action =
-        "not mended (a clipped peak is not known): the sigmas of its pairs' points widened by "
-        "the share clipped; measure again with a wider range or a smaller amplitude";
+        "the clipped samples inside the integration windows replaced by the least-squares fit "
+        "of the excited lines to the samples inside the range, period by period (a sine step "
+        "over its window); a stretch with too few samples left gives invalid points";
     out->push_back(std::move(f));
   }
   return {hi, lo};
@@ -519,6 +526,8 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
 }
 
 // `values`: block_values of each of `windows` on x.
+constexpr int kMinSineBlocks = 4;
+
 void check_drift_and_clock(const std::string& ch, const double* x, const TimeSeries& s,
                            const std::vector<Window>& windows,
                            const std::vector<BlockValues>& values, const DataQualityOptions& o,
@@ -554,10 +563,26 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
     for (size_t i = 0; i < windows.size(); ++i) {
       const Window& w = windows[i];
       const BlockValues& v = values[i];
+      // Blocks with the window's response: a clock moves phases, not power, so where a
+      // multisine's lines stand far above the noise (the strongest block's power over 100 times
+      // what its non-excited lines give them), a block with less than half that power (the
+      // channel dead or stuck for part of the window) has no phase to follow. A channel near
+      // its noise keeps every block: choosing its strongest would choose noise that agrees.
+      std::vector<double> power(v.y.size(), 0.0);
+      size_t strongest = 0;
+      for (size_t b = 0; b < v.y.size(); ++b) {
+        for (const Complex& y : v.y[b]) power[b] += std::norm(y);
+        if (power[b] > power[strongest]) strongest = b;
+      }
+      const bool visible =
+          w.multisine && !v.y[strongest].empty() &&
+          power[strongest] > 100 * double(v.y[strongest].size()) * v.noise[strongest];
       std::vector<size_t> ok;
       for (size_t b = 0; b < v.y.size(); ++b)
-        if (!v.y[b].empty()) ok.push_back(b);
-      if (ok.size() < 2) continue;
+        if (!v.y[b].empty() && (!visible || power[b] >= 0.5 * power[strongest])) ok.push_back(b);
+      // A sine's noise comes from its blocks' scatter: from fewer than four (three degrees of
+      // freedom) it can be any size, and one window's chance agreement would outweigh the rest.
+      if (ok.size() < (w.multisine ? 2u : size_t(kMinSineBlocks))) continue;
       double tbar = 0;
       for (size_t b : ok) tbar += v.t[b] / double(ok.size());
       const size_t F = w.freqs_hz.size();
@@ -719,11 +744,111 @@ void interpolate(double* x, int64_t N, int64_t a, int64_t b) {
     x[k] = left + (right - left) * double(k - a + 1) / double(b - a + 2);
 }
 
-// The mending of one channel in the documented order: gaps, hum, drift, clock, spans without
-// response.
-void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFault*>& faults) {
+// The least-squares basis of a window's steady response at local sample n: 1, then cos and sin of
+// each excited line (a multisine's bins k of its period; a sine's frequency and its 2nd and 3rd
+// harmonics, and a straight line for what settles within the window).
+constexpr int kSineHarmonics = 3;
+
+int basis_size(const Window& w) {
+  return w.multisine ? 1 + 2 * int(w.lines.size()) : 2 + 2 * kSineHarmonics;
+}
+
+void basis_row(const Window& w, int64_t n, double fs, double* a) {
+  a[0] = 1.0;
+  int j = 1;
+  if (w.multisine) {
+    for (int k : w.lines) {
+      const double ph = 2 * kPi * double((int64_t(k) * n) % w.period) / w.period;
+      a[j++] = std::cos(ph);
+      a[j++] = std::sin(ph);
+    }
+    return;
+  }
+  a[j++] = double(n) / double(w.to - w.from);
+  for (int h = 1; h <= kSineHarmonics; ++h) {
+    const double ph = 2 * kPi * h * w.freqs_hz[0] * double(n) / fs;
+    a[j++] = std::cos(ph);
+    a[j++] = std::sin(ph);
+  }
+}
+
+// Clipped samples (clipped[n]) inside one stretch [from, from + len) of window w replaced by the
+// least-squares fit of w's basis to the stretch's other samples, evaluated over [from, until);
+// a stretch whose samples kept are fewer than twice the basis, or hold a NaN, gets NaN there
+// instead (its window then gives invalid points). Returns the samples filled.
+int64_t fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, int64_t from,
+                     int64_t len, int64_t until, double fs) {
+  int64_t any = 0;
+  for (int64_t n = from; n < until; ++n) any += clipped[size_t(n)];
+  if (any == 0) return 0;
+  const int m = basis_size(w);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(m), a(m);
+  int64_t kept = 0;
+  bool finite = true;
+  for (int64_t n = 0; n < len; ++n) {
+    if (clipped[size_t(from + n)]) continue;
+    finite = finite && std::isfinite(x[from + n]);
+    basis_row(w, n, fs, a.data());
+    G.selfadjointView<Eigen::Lower>().rankUpdate(a);
+    b += a * x[from + n];
+    ++kept;
+  }
+  Eigen::VectorXd c;
+  if (finite && kept >= 2 * m) {
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(G.selfadjointView<Eigen::Lower>());
+    if (ldlt.info() == Eigen::Success) c = ldlt.solve(b);
+  }
+  const bool ok = c.size() == m && c.allFinite();
+  for (int64_t n = 0; n < until - from; ++n) {
+    if (!clipped[size_t(from + n)]) continue;
+    basis_row(w, n, fs, a.data());
+    x[from + n] = ok ? a.dot(c) : std::numeric_limits<double>::quiet_NaN();
+  }
+  return ok ? any : 0;
+}
+
+// Every clipped sample inside the windows filled: a multisine period by period (a window's last,
+// partial period from the whole one before it), a sine step over its whole window.
+void fill_clipped(double* x, const TimeSeries& s, const std::vector<Window>& windows,
+                  const std::vector<bool>& clipped) {
+  const double fs = s.sample_rate_hz;
+  for (const Window& w : windows) {
+    const int64_t a = w.from - s.start_sample, z = w.to - s.start_sample;
+    if (!w.multisine) {
+      fill_stretch(x, clipped, w, a, z - a, z, fs);
+      continue;
+    }
+    for (size_t i = 0; i < w.block_from.size(); ++i) {
+      const int64_t from = w.block_from[i] - s.start_sample;
+      const bool last = i + 1 == w.block_from.size();
+      fill_stretch(x, clipped, w, from, w.block_len[i], last ? z : from + w.block_len[i], fs);
+    }
+  }
+}
+
+// The samples of x[0, N) at the level of a mended clipping of `faults` (x as recorded); empty when
+// there is none.
+std::vector<bool> clipped_samples(const double* x, int64_t N,
+                                  const std::vector<const DataFault*>& faults) {
+  std::vector<bool> clipped;
+  for (const DataFault* f : faults) {
+    if (!f->mended || f->kind != DataFaultKind::kClipping) continue;
+    clipped.resize(size_t(N), false);
+    for (int64_t n = 0; n < N; ++n)
+      if (x[n] == f->level) clipped[size_t(n)] = true;
+  }
+  return clipped;
+}
+
+// The mending of one channel in the documented order: gaps, hum, drift, clipping (given the
+// schedule's windows), clock, spans without response.
+void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFault*>& faults,
+                  const std::vector<Window>* windows = nullptr) {
   const int64_t N = s.n_samples;
   const double fs = s.sample_rate_hz;
+  // The clipped samples, told by their value before anything else changes it.
+  const std::vector<bool> clipped = windows ? clipped_samples(x, N, faults) : std::vector<bool>{};
   for (const DataFault* f : faults) {
     if (!f->mended || (f->kind != DataFaultKind::kLost && f->kind != DataFaultKind::kHeld))
       continue;
@@ -740,6 +865,7 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
     const double tm = 0.5 * (f->from_s + f->to_s);
     for (int64_t n = 0; n < N; ++n) x[n] -= f->size * (double(s.start_sample + n) / fs - tm);
   }
+  if (!clipped.empty()) fill_clipped(x, s, *windows, clipped);
   for (const DataFault* f : faults) {
     if (!f->mended || f->kind != DataFaultKind::kClock) continue;
     // Sample n on the excitation's clock is the channel's sample n / (1 - eps).
@@ -823,6 +949,12 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     std::vector<const DataFault*> hums;
     for (size_t i = before_hum; i < found.size(); ++i) hums.push_back(&found[i]);
     mend_channel(x, s, hums);
+    // The periods compared with clipping filled: a clipped peak moves a period's mean and phase.
+    std::vector<const DataFault*> clips;
+    for (const DataFault& f : found)
+      if (f.kind == DataFaultKind::kClipping) clips.push_back(&f);
+    if (const std::vector<bool> c = clipped_samples(raw, s.n_samples, clips); !c.empty())
+      fill_clipped(x, s, windows, c);
     // Each window's blocks, transformed once for the tests that compare periods.
     std::vector<BlockValues> values;
     for (const Window& w : windows)
@@ -834,13 +966,15 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
   return q;
 }
 
-TimeSeries mend_series(const TimeSeries& s, const DataQuality& q) {
+TimeSeries mend_series(const TimeSeries& s, const DataQuality& q, const Schedule& schedule) {
+  const std::vector<Window> windows = windows_of(schedule, s);
   TimeSeries out = s;
   for (size_t c = 0; c < s.channels.size(); ++c) {
     std::vector<const DataFault*> mine;
     for (const DataFault& f : q.faults)
       if (f.channel == s.channels[c] && f.mended) mine.push_back(&f);
-    if (!mine.empty()) mend_channel(out.samples.data() + c * size_t(s.n_samples), s, mine);
+    if (!mine.empty())
+      mend_channel(out.samples.data() + c * size_t(s.n_samples), s, mine, &windows);
   }
   return out;
 }
@@ -854,7 +988,7 @@ void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q) {
         if (!p.valid || !(p.sigma > 0)) continue;
         double extra = 0;
         if (f.kind == DataFaultKind::kClock && f.mended) extra = p.mag * p.w * f.sigma * f.to_s;
-        if (f.kind == DataFaultKind::kClipping) extra = p.mag * f.size;
+        if (f.kind == DataFaultKind::kClipping && !f.mended) extra = p.mag * f.size;
         p.sigma = std::sqrt(p.sigma * p.sigma + extra * extra);
       }
     }

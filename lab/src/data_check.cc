@@ -25,8 +25,8 @@ CheckedTape check_tape(const std::string& tape, const std::string& run_id,
   CheckedTape out;
   out.quality = check_data_quality(series, schedule, o);
   if (!out.quality.changes_curves()) return out;
-  const std::vector<Block> blocks =
-      series_to_blocks(mend_series(series, out.quality), schedule, run.blocks.front().n_samples);
+  const std::vector<Block> blocks = series_to_blocks(mend_series(series, out.quality, schedule),
+                                                     schedule, run.blocks.front().n_samples);
   out.mended_curves = analyse_run_in_memory(schedule.events, blocks, pairs);
   widen_for_mending(*out.mended_curves, out.quality);
   return out;

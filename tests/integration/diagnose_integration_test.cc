@@ -448,7 +448,9 @@ TEST(DataQuality, J85WithHumAndAClockErrorKeepsItsNineFindingsAndNamesBoth) {
 
 // N clipped at 80 % of its swing (15139 .. 15424 rpm about 15279), P5 recorded in psi and read
 // as kPa, T5 wired with the wrong sign: the nine findings stay; the clipping is named with its
-// level; the P5 gain and the T5 sign are findings with the units and the wiring named beside them.
+// level and filled (A8 -> N's spool lag within 3 % of the engine's 53.9 rad/s, as from a clean
+// recording: 50.9 unfilled); the P5 gain and the T5 sign are findings with the units and the
+// wiring named beside them.
 TEST(DataQuality, J85WithClippingUnitsAndWiringNamesEachBesideTheNineFindings) {
   std::string dir;
   const Json d =
@@ -463,6 +465,13 @@ TEST(DataQuality, J85WithClippingUnitsAndWiringNamesEachBesideTheNineFindings) {
   for (const Json& c : clips) {
     EXPECT_TRUE(c["level"] == 15139.0 || c["level"] == 15424.0) << c.dump();
     EXPECT_GT(c["size"].get<double>(), 0.001) << "a time share";
+    EXPECT_TRUE(c["mended"].get<bool>()) << c.dump();
+  }
+  constexpr double kFilledLagTol = 0.03;
+  for (const Json& f : d["findings"]) {
+    if (f["cause"] == "missing_lag" && f["input"] == "A8" && f["output"] == "N") {
+      EXPECT_NEAR(f["parameters"]["corner_rad_s"].get<double>(), 53.9, kFilledLagTol * 53.9);
+    }
   }
   int units = 0, wiring = 0;
   for (const auto& a : d["data_quality"]["alternatives"]) {

@@ -21,8 +21,14 @@
 //   clipping  samples equal to the channel's largest (smallest) value, when at least
 //             max(20, 3 m2 + 3) of them and 0.01 % of the run (m2: how many share the next
 //             value inside; a handful at an actuator's own stop is no range): a transducer
-//             or converter at its range. Not mended (a clipped peak is not known); the share of
-//             samples and the level are reported.
+//             or converter at its range; the share of samples and the level are reported.
+//             Mended inside the integration windows: the clipped samples are missing data, each
+//             multisine period's (a sine step's window's) samples inside the range fitted by
+//             least squares with the window's basis, x[n] ~ c0 + sum_k (a_k cos 2 pi k n / P +
+//             b_k sin 2 pi k n / P) over its excited bins k (a sine: its frequency and 2nd and
+//             3rd harmonics, plus a straight line), and the fit put in the clipped samples'
+//             place, so the Fourier filter's lines are those of the samples the range kept.
+//             A stretch keeping fewer than twice the basis' samples is set NaN instead.
 //   hum       lines at multiples m = 1..max_harmonic of 50 and 60 Hz (within mains_search_hz),
 //             away from every excited line, standing above the spectrum around them: |X|^2 of
 //             the Hann-windowed channel above hum_ratio times the mean noise power there (the
@@ -43,10 +49,15 @@
 //             of the block, tau_b = -sum_k |Y_k|^2 w_k phi_bk / sum_k |Y_k|^2 w_k^2 (w in rad/s);
 //             tau_b regressed on the block's time over every window gives the rate error
 //             eps = d tau / dt (> 0: the channel's samples lag more and more, its clock runs
-//             fast), flagged beyond clock_sigmas times its sigma and above min_clock. Mended by
-//             reading sample n of the channel at n / (1 - eps) (linear interpolation; the clocks
-//             taken as agreeing at sample 0: an offset between them is a delay the data cannot
-//             tell from the plant's).
+//             fast), flagged beyond clock_sigmas times its sigma and above min_clock. Where a
+//             multisine's lines stand far above the noise (the strongest period's power over
+//             100 times what its non-excited lines give them), a period with less than half that
+//             power (a clock moves phases, not power: dead or stuck for part of the period) is
+//             left out; a sine window of fewer than four blocks is (its noise, from the blocks'
+//             scatter, unknown).
+//             Mended by reading sample n of the channel at n / (1 - eps) (linear interpolation; the
+//             clocks taken as agreeing at sample 0: an offset between them is a delay the data
+//             cannot tell from the plant's).
 //   no response  a multisine period whose excited lines hold no more than the noise (power
 //             below 4 times that of the non-excited lines) while the same excitation gives more
 //             than 30 times in a quarter of the run's periods: a dead channel (to the end) or an
@@ -118,14 +129,16 @@ struct DataQuality {
 /// The checks above on `s`, with the excitation of `schedule` (its integrate windows).
 DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
                                const DataQualityOptions& o = {});
-/// `s` with every fault of `q` marked mended undone (the tape itself is not touched).
-TimeSeries mend_series(const TimeSeries& s, const DataQuality& q);
+/// `s` with every fault of `q` marked mended undone (the tape itself is not touched); the
+/// schedule's integration windows are where clipped samples are filled.
+TimeSeries mend_series(const TimeSeries& s, const DataQuality& q, const Schedule& schedule);
 
 /// The curves of a mended series with the uncertainty the faults leave added to each point's
 /// sigma, for a pair with the fault's channel as E1 or E2: a mended clock error's sigma_eps is a
 /// delay error up to sigma_eps to_s at the run's end, sigma^2 + (|G| w sigma_eps to_s)^2; a
-/// clipping's share p of the samples biases the gain by about that much (a saturation's
-/// describing function over a multisine's rare peaks), sigma^2 + (p |G|)^2.
+/// clipping left unmended (a section read from a run recorded before the fill) biases the gain by
+/// about its share p of the samples (a saturation's describing function over a multisine's rare
+/// peaks), sigma^2 + (p |G|)^2.
 void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q);
 
 /// docs/formats.md §13 "data_quality": {"checked": [...], "faults": [{"channel", "kind",
