@@ -1,5 +1,6 @@
 #include "fralab/diagnose/data_faults.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -14,7 +15,16 @@ constexpr std::pair<DataAlternative::Kind, const char*> kKindWords[] = {
     {DataAlternative::Kind::kWiringSign, "wiring_sign"},
     {DataAlternative::Kind::kUnits, "units"},
     {DataAlternative::Kind::kSwap, "swap"},
-    {DataAlternative::Kind::kClipping, "clipping"}};
+    {DataAlternative::Kind::kClipping, "clipping"},
+    {DataAlternative::Kind::kDeadChannel, "dead_channel"}};
+
+// A silent output: its points hold no more than noise (at most this share above kNoiseSigmas)
+// where the simulation expects at least kExpectedShare of them (and kMinExpected) above
+// kExpectedSigmas. A complex Gaussian of standard deviation sigma exceeds 3 sigma in about 1 %
+// of the points.
+constexpr double kNoiseSigmas = 3, kSilentShare = 0.2;
+constexpr double kExpectedSigmas = 10, kExpectedShare = 0.5;
+constexpr int kMinExpected = 5;
 
 struct UnitsFactor {
   double factor;
@@ -76,13 +86,61 @@ double exchanged_error(const Model& sim, const std::vector<MeasuredPair>& data,
 
 const char* to_string(DataAlternative::Kind k) { return enum_word(kKindWords, k); }
 
+std::vector<SilentOutput> silent_outputs(const Model& sim, const std::vector<MeasuredPair>& data,
+                                         const DiagnoseOptions& opt) {
+  std::vector<SilentOutput> out;
+  for (const ModelOutput& o : sim.outputs) {
+    SilentOutput s;
+    s.output = o.name;
+    for (const MeasuredPair& mp : data) {
+      const PairId id = PairId::parse(mp.pair);
+      if (id.output != o.name || id.command) continue;
+      bool counted = false;
+      for (const FrdPoint& p : mp.frd.points) {
+        if (!p.valid || !(p.sigma > 0)) continue;
+        const auto g = model_pair_response(sim, mp.pair, p.w, p.amplitude, opt.chain);
+        if (!g) continue;
+        counted = true;
+        ++s.points;
+        s.above_noise += p.mag > kNoiseSigmas * p.sigma;
+        s.expected += std::abs(*g) > kExpectedSigmas * p.sigma;
+      }
+      if (!counted) continue;
+      s.pairs.push_back(mp.pair);
+      if (std::find(s.inputs.begin(), s.inputs.end(), id.input) == s.inputs.end())
+        s.inputs.push_back(id.input);
+    }
+    if (s.points == 0 || s.expected < kMinExpected ||
+        double(s.expected) < kExpectedShare * s.points ||
+        double(s.above_noise) > kSilentShare * s.points)
+      continue;
+    s.text = o.name + " holds no more than its noise on every measured path (" +
+             std::to_string(s.above_noise) + " of " + std::to_string(s.points) +
+             " points above 3 sigma) where the simulation expects " + std::to_string(s.expected) +
+             " above 10 sigma: a dead channel from before the run's first period";
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
 std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
                                                const std::vector<MeasuredPair>& data,
                                                const DiagnoseOptions& opt,
-                                               const std::map<std::string, double>& clipped) {
+                                               const std::map<std::string, double>& clipped,
+                                               const std::vector<SilentOutput>& silent) {
   std::vector<DataAlternative> out;
   for (size_t i = 0; i < d.findings.size(); ++i) {
     const Finding& f = d.findings[i];
+    for (const SilentOutput& s : silent) {
+      if (f.output != s.output) continue;
+      DataAlternative a;
+      a.kind = DataAlternative::Kind::kDeadChannel;
+      a.channel = s.output;
+      a.finding = int(i);
+      a.text = "or " + s.output + "'s channel is dead (" + s.text +
+               "): check the sensor and its wiring before changing the model";
+      out.push_back(std::move(a));
+    }
     for (const std::string& at : {f.output, f.input}) {
       const auto c = clipped.find(at);
       if (at.empty() || c == clipped.end()) continue;
@@ -91,8 +149,8 @@ std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& 
       a.channel = at;
       a.finding = int(i);
       a.text = "or the clipping of " + at + " (" + significant(100 * c->second, 3) +
-               " % of its samples at its range) distorts its curves: measure again within range "
-               "before changing the model";
+               " % of its samples at its range, filled from the samples it kept) left its mark "
+               "on its curves: measure again within range before changing the model";
       out.push_back(std::move(a));
     }
     const std::string ch = channel_of(f);

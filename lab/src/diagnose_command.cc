@@ -12,6 +12,7 @@
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/baseline.h"
+#include "fralab/diagnose/data_faults.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/exchange/data_quality.h"
 #include "fralab/lab/envelope.h"
@@ -166,6 +167,28 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   DiagnoseOptions opt;
   opt.chain = folder.chain;
   std::vector<MeasuredPair> data = folder.data;
+  // An output silent on every path where the simulation expects a response: over two or more
+  // inputs a dead sensor, its pairs set aside; over one, left to the diagnosis with the dead
+  // channel named beside what it finds there.
+  DataQuality from_sim;
+  for (const ModelOutput& o : sim.outputs) from_sim.checked.push_back(o.name);
+  std::vector<SilentOutput> silent_kept;
+  for (const SilentOutput& s : silent_outputs(sim, data, opt)) {
+    if (s.inputs.size() < 2) {
+      silent_kept.push_back(s);
+      continue;
+    }
+    std::erase_if(data, [&](const MeasuredPair& mp) {
+      return std::find(s.pairs.begin(), s.pairs.end(), mp.pair) != s.pairs.end();
+    });
+    DataFault f;
+    f.channel = s.output;
+    f.kind = DataFaultKind::kNoResponse;
+    f.text = s.text;
+    f.action = "its pairs (" + join_list(s.pairs) +
+               ") set aside: nothing is concluded from them; check the sensor and its wiring";
+    from_sim.faults.push_back(std::move(f));
+  }
   const Json levels_json = attach_levels(c, data);
   Json baseline_json;
   if (!c.baseline.empty()) {
@@ -196,8 +219,12 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
         double& share = clipped[f["channel"].get<std::string>()];
         share = std::max(share, f["size"].get<double>());
       }
-  notes.alternatives = data_alternatives(d, sim, data, opt, clipped);
+  notes.alternatives = data_alternatives(d, sim, data, opt, clipped, silent_kept);
+  for (const DataFault& f : from_sim.faults)
+    notes.faults.push_back("the measurement against the simulation: " + f.text + "; " + f.action +
+                           ".");
   dj["data_quality"] = {{"runs", runs},
+                        {"channels", data_quality_to_json(from_sim)},
                         {"alternatives", data_alternatives_to_json(notes.alternatives)}};
   if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
   if (!levels_json.is_null()) dj["levels"] = levels_json;

@@ -114,3 +114,52 @@ TEST(DataAlternatives, AFindingAtAClippedChannelMayBeTheClipping) {
   EXPECT_EQ(a[0].channel, "B");
   EXPECT_THAT(a[0].text, HasSubstr("3.7 % of its samples"));
 }
+
+namespace {
+
+// X:B's points replaced by noise of standard deviation `sigma` (magnitudes 0.3-1.5 sigma, phases
+// all round): a dead sensor.
+void kill_b(std::vector<MeasuredPair>& data, double sigma) {
+  for (MeasuredPair& mp : data) {
+    if (mp.pair != "X:B") continue;
+    for (size_t k = 0; k < mp.frd.points.size(); ++k) {
+      FrdPoint& p = mp.frd.points[k];
+      p.mag = sigma * (0.3 + 1.2 * double((k * 7) % 11) / 10.0);
+      p.phase_deg = double((k * 137) % 360) - 180;
+      p.sigma = sigma;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(SilentOutputs, AnOutputHoldingOnlyNoiseWhereTheSimulationExpectsMuchMoreIsDead) {
+  // B's simulated |G| is 0.5 .. 0.2 over the points: 50-20 times a noise of 0.01.
+  std::vector<MeasuredPair> data = measured(sim(), "A", "B");
+  ASSERT_TRUE(silent_outputs(sim(), data).empty()) << "both outputs respond as simulated";
+  kill_b(data, 0.01);
+  const auto s = silent_outputs(sim(), data);
+  ASSERT_EQ(s.size(), 1u);
+  EXPECT_EQ(s[0].output, "B");
+  EXPECT_THAT(s[0].pairs, ::testing::ElementsAre("X:B"));
+  EXPECT_THAT(s[0].inputs, ::testing::ElementsAre("X"));
+  EXPECT_EQ(s[0].points, 30);
+  EXPECT_EQ(s[0].above_noise, 0) << "no noise point reaches 3 sigma";
+  EXPECT_EQ(s[0].expected, 30);
+  EXPECT_THAT(s[0].text, HasSubstr("dead channel"));
+  // A finding at B names the dead channel beside it.
+  Diagnosis d;
+  d.findings = {at_output(CauseKind::kGainMismatch, "B", {{"gain_db", -30.0}})};
+  const auto a = data_alternatives(d, sim(), data, {}, {}, s);
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kDeadChannel);
+  EXPECT_EQ(a[0].channel, "B");
+  EXPECT_EQ(a[0].finding, 0);
+}
+
+TEST(SilentOutputs, AWeakOutputWhoseSimulationIsNearItsNoiseIsNotDead) {
+  // The same noise at B, but a noise of 0.1: the simulation expects no more than 5 sigma.
+  std::vector<MeasuredPair> data = measured(sim(), "A", "B");
+  kill_b(data, 0.1);
+  EXPECT_TRUE(silent_outputs(sim(), data).empty());
+}

@@ -11,6 +11,8 @@ namespace fralab {
 
 /// Splits on `sep`, dropping empty items: "a,b,,c" -> {"a", "b", "c"}.
 std::vector<std::string> split_list(const std::string& text, char sep = ',');
+/// The items with `sep` between them: {"a", "b"} -> "a, b".
+std::string join_list(const std::vector<std::string>& items, const std::string& sep = ", ");
 
 /// The index of `name` in `names` (a block's or series' channels), -1 when absent.
 inline int index_of(const std::vector<std::string>& names, const std::string& name) {

@@ -9,8 +9,18 @@
 //                %/fraction 100, ...): the channel recorded in one unit and read as the other.
 //   clipping     any finding at a clipped channel (its output, or its input's position), given
 //                the share of its samples the recordings' checks found at its range: the
-//                clipping lowers the channel's gain and distorts its curves as a model
-//                difference would.
+//                clipped samples are filled from those the range kept, but what the fill
+//                cannot know (the plant's own distortion at those peaks, samples outside the
+//                integration windows) stays, and unfilled clipping lowers the channel's gain
+//                and distorts its curves as a model difference would.
+//   dead_channel an output whose every measured pair holds only noise (at most 20 % of the
+//                points above 3 sigma) while the simulation expects far more (at least half the
+//                points and five of them above 10 sigma): a sensor dead from before the run's
+//                first period, which the recording's own checks have nothing to compare with.
+//                Over two or more inputs' paths a dead sensor is the likelier reading (every
+//                path into one output gone at once is not a model difference) and the lab sets
+//                its pairs aside (silent_outputs); over one, a missing path reads the same, and
+//                the finding there names the dead channel beside it.
 //   swap         two outputs A, B whose measured curves match the simulation's with the two
 //                exchanged: with e(A, B) = rms |ln(measured A / simulated B)| over every
 //                input's points, e(A,B) + e(B,A) < 0.35 (e(A,A) + e(B,B)) and each exchanged
@@ -28,7 +38,7 @@
 namespace fralab {
 
 struct DataAlternative {
-  enum class Kind { kWiringSign, kUnits, kSwap, kClipping };
+  enum class Kind { kWiringSign, kUnits, kSwap, kClipping, kDeadChannel };
   Kind kind = Kind::kWiringSign;
   std::string channel;  // the channel to check
   std::string other;    // swap: the channel it looks exchanged with
@@ -36,15 +46,32 @@ struct DataAlternative {
   double factor = 0;    // units: the units factor matched
   std::string text;     // one sentence, what to check
 };
-/// "wiring_sign", "units", "swap", "clipping".
+/// "wiring_sign", "units", "swap", "clipping", "dead_channel".
 const char* to_string(DataAlternative::Kind k);
 
+/// An output of the simulation whose measured pairs hold only noise where the simulation expects
+/// a response well above it (dead_channel above).
+struct SilentOutput {
+  std::string output;
+  std::vector<std::string> pairs;   // its measured pairs (X:O, position-relative)
+  std::vector<std::string> inputs;  // their inputs
+  int points = 0;                   // valid points with a sigma over those pairs
+  int above_noise = 0;              // of them, |H| > 3 sigma
+  int expected = 0;                 // of them, |G_sim| > 10 sigma
+  std::string text;                 // what was seen, one sentence
+};
+/// The silent outputs of `data` against `sim` (its chain in opt), in the simulation's order.
+std::vector<SilentOutput> silent_outputs(const Model& sim, const std::vector<MeasuredPair>& data,
+                                         const DiagnoseOptions& opt = {});
+
 /// The alternatives of diagnosis `d` of `data` against `sim` (its chain in opt); `clipped`: per
-/// channel the largest share of its samples a recording of the measurement held at its range.
+/// channel the largest share of its samples a recording of the measurement held at its range;
+/// `silent`: the silent outputs left in the data (a finding at one names the dead channel).
 std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
                                                const std::vector<MeasuredPair>& data,
                                                const DiagnoseOptions& opt = {},
-                                               const std::map<std::string, double>& clipped = {});
+                                               const std::map<std::string, double>& clipped = {},
+                                               const std::vector<SilentOutput>& silent = {});
 
 /// [{"kind", "channel", "other", "finding", "factor", "text"}], "finding" null when none.
 Json data_alternatives_to_json(const std::vector<DataAlternative>& a);
