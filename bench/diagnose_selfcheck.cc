@@ -14,10 +14,12 @@
 // --plants state (tests/util/random_state.h: state models, entries changed) likewise.
 // --through-lab measures modal plants through the processes instead (outputs given noise:
 // random_modal.h, set_lab_noise); --lab-flags passes more flags to `fralab diagnose` (the zoom's).
-// --faults (machine plants): 0-2 recording faults per case (tests/util/random_faults.h) put into
-// the engine's channels; the summary adds the faults named in diagnosis.json's data_quality (any
-// run of the measurement), those sized within 10 %, those named but not put in, and precision and
-// recall over the cases with faults and over those without apart (a finding a fault caused is a
+// --plants j85 (tests/util/j85_case.h): the J85 at 95 % every case, its nine findings hidden,
+// measured with the lab's own band and density (--band and --points-per-decade ignored).
+// --faults (machine and j85 plants): 0-2 recording faults per case (tests/util/random_faults.h) put
+// into the engine's channels; the summary adds the faults named in diagnosis.json's data_quality
+// (any run of the measurement), those sized within 10 %, those named but not put in, and precision
+// and recall over the cases with faults and over those without apart (a finding a fault caused is a
 // false finding of a case with faults).
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
 #include <sys/wait.h>
@@ -28,6 +30,7 @@
 #include <filesystem>
 
 #include "fralab/exchange/tape_series.h"
+#include "j85_case.h"
 #include "random_faults.h"
 #include "random_machine.h"
 #include "random_modal.h"
@@ -49,13 +52,16 @@ std::vector<Finding> read_findings(const std::string& file) {
   return v;
 }
 
-// Every fault the data-quality checks named in diagnosis.json, once per channel and kind.
+// Every fault the data-quality checks named in diagnosis.json (its runs' and the diagnosis' own
+// against the simulation), once per channel and kind.
 std::vector<DataFault> named_faults(const std::string& file) {
   const Json j = json_load_file(file);
   std::vector<DataFault> out;
   if (!j.contains("data_quality")) return out;
-  for (const Json& r : j["data_quality"]["runs"]) {
-    const DataQuality q = data_quality_from_json(r, JsonWhere{file, "/data_quality/runs"});
+  std::vector<Json> sections(j["data_quality"]["runs"].begin(), j["data_quality"]["runs"].end());
+  if (j["data_quality"].contains("channels")) sections.push_back(j["data_quality"]["channels"]);
+  for (const Json& r : sections) {
+    const DataQuality q = data_quality_from_json(r, JsonWhere{file, "/data_quality"});
     for (const DataFault& f : q.faults) {
       bool seen = false;
       for (const DataFault& o : out) seen |= o.channel == f.channel && o.kind == f.kind;
@@ -130,11 +136,12 @@ int main(int argc, char** argv) {
          "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
          "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
          "modal (random_modal.h: structures, measured in-process) or state (random_state.h: "
-         "state models with changed entries, measured in-process)")
-      ->check(CLI::IsMember({"random", "machine", "modal", "state"}))
+         "state models with changed entries, measured in-process) or j85 (the J85 at 95 %, "
+         "its nine findings hidden, the lab's band and density)")
+      ->check(CLI::IsMember({"random", "machine", "modal", "state", "j85"}))
       ->capture_default_str();
   bool faults = false;
-  app.add_flag("--faults", faults, "machine plants: 0-2 recording faults per case");
+  app.add_flag("--faults", faults, "machine and j85 plants: 0-2 recording faults per case");
   bool through_lab = false;
   app.add_flag("--through-lab", through_lab,
                "modal plants: measured through the lab's processes as the others are (outputs "
@@ -144,10 +151,12 @@ int main(int argc, char** argv) {
                  "more flags for `fralab diagnose` (e.g. \"--zoom-period-factor 4\", "
                  "\"--no-zoom\")");
   CLI11_PARSE(app, argc, argv);
-  if (faults && plants != "machine") throw InputError("--faults needs --plants machine");
+  if (faults && plants != "machine" && plants != "j85")
+    throw InputError("--faults needs --plants machine or j85");
+  if (plants == "j85") band = "0.04:100", ppd = 10;  // the lab's own (fralab run's defaults)
   if (through_lab && plants != "modal") throw InputError("--through-lab needs --plants modal");
   FaultScore fault_total;
-  Score with_faults, without_faults;
+  Score with_faults, without_faults, on_dead;
   const std::string bin =
       std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
   Score total;
@@ -156,6 +165,7 @@ int main(int argc, char** argv) {
     RandomCase c = plants == "machine" ? random_machine_case(seed, i)
                    : plants == "modal" ? random_modal_case(seed, i)
                    : plants == "state" ? random_state_case(seed, i)
+                   : plants == "j85"   ? j85_case(i)
                                        : random_case(seed, i);
     const std::string dir = out + "/" + c.name;
     std::filesystem::create_directories(dir);
@@ -216,20 +226,37 @@ int main(int argc, char** argv) {
       fault_total.add(fs);
       for (const std::string& l : fs.lines) std::printf("    fault %s\n", l.c_str());
       Score& part = injected.empty() ? without_faults : with_faults;
-      const Score sc = score(c, read_findings(dj));
+      const std::vector<Finding> found = read_findings(dj);
+      const Score sc = score(c, found);
       part.findings += sc.findings, part.true_findings += sc.true_findings;
       part.hidden += sc.hidden, part.found += sc.found;
+      // Effects at an output that a fault made dead: the recording holds nothing of them.
+      for (const HiddenEffect& e : c.hidden) {
+        bool dead = false;
+        for (const InjectedFault& f : injected)
+          dead |= f.kind == DataFaultKind::kNoResponse && f.channel == e.output;
+        if (!dead) continue;
+        ++on_dead.hidden;
+        for (const Finding& f : found)
+          if (e.matches(f)) {
+            ++on_dead.found;
+            break;
+          }
+      }
     }
   }
   if (faults) {
     auto share = [](int a, int b) { return b ? double(a) / b : 1.0; };
     std::printf(
         "faults: named %d / %d (%.3f), sized within 10 %% %d / %d, named but not put in %d; "
-        "cases with faults: precision %.3f recall %.3f; without: precision %.3f recall %.3f\n",
+        "cases with faults: precision %.3f recall %.3f (%.3f of the %d effects at outputs "
+        "alive, %d of %d at dead ones found); without: precision %.3f recall %.3f\n",
         fault_total.named, fault_total.put, share(fault_total.named, fault_total.put),
         fault_total.sized, fault_total.to_size, fault_total.false_named,
         share(with_faults.true_findings, with_faults.findings),
         share(with_faults.found, with_faults.hidden),
+        share(with_faults.found - on_dead.found, with_faults.hidden - on_dead.hidden),
+        with_faults.hidden - on_dead.hidden, on_dead.found, on_dead.hidden,
         share(without_faults.true_findings, without_faults.findings),
         share(without_faults.found, without_faults.hidden));
   }
