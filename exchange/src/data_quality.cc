@@ -105,17 +105,19 @@ std::vector<Window> windows_of(const Schedule& sch, const TimeSeries& s) {
 }
 
 // Per block of a window: the channel's complex amplitude at each excited frequency (phase on the
-// sample clock), its mean, and the mean power on a period's non-excited bins in the excited band
-// (multisine; NaN otherwise). A block holding a NaN sample has no values (empty).
+// sample clock), its power there (the sum of |y|^2 over the excited frequencies), its mean, and
+// the mean power on a period's non-excited bins in the excited band (multisine; NaN otherwise).
+// A block holding a NaN sample has no values (empty, power 0).
 struct BlockValues {
-  std::vector<std::vector<Complex>> y;  // [block][frequency]
-  std::vector<double> mean, t, noise;   // per block
+  std::vector<std::vector<Complex>> y;        // [block][frequency]
+  std::vector<double> power, mean, t, noise;  // per block
 };
 
 BlockValues block_values(const Window& w, const double* x, int64_t start, double fs) {
   BlockValues v;
   const size_t B = w.block_from.size();
   v.y.resize(B);
+  v.power.assign(B, 0.0);
   v.mean.assign(B, 0.0);
   v.t.assign(B, 0.0);
   v.noise.assign(B, std::nan(""));
@@ -161,6 +163,7 @@ BlockValues block_values(const Window& w, const double* x, int64_t start, double
         acc += (xb[n] - m) * std::polar(1.0, -om * double(w.block_from[b] + n));
       v.y[b].push_back(acc * (2.0 / double(L)));
     }
+    for (const Complex& y : v.y[b]) v.power[b] += std::norm(y);
   }
   return v;
 }
@@ -568,12 +571,8 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
       // what its non-excited lines give them), a block with less than half that power (the
       // channel dead or stuck for part of the window) has no phase to follow. A channel near
       // its noise keeps every block: choosing its strongest would choose noise that agrees.
-      std::vector<double> power(v.y.size(), 0.0);
-      size_t strongest = 0;
-      for (size_t b = 0; b < v.y.size(); ++b) {
-        for (const Complex& y : v.y[b]) power[b] += std::norm(y);
-        if (power[b] > power[strongest]) strongest = b;
-      }
+      const std::vector<double>& power = v.power;
+      const size_t strongest = size_t(std::max_element(power.begin(), power.end()) - power.begin());
       const bool visible =
           w.multisine && !v.y[strongest].empty() &&
           power[strongest] > 100 * double(v.y[strongest].size()) * v.noise[strongest];
@@ -690,9 +689,7 @@ void check_no_response(const std::string& ch, const TimeSeries& s,
     const BlockValues& v = values[i];
     for (size_t b = 0; b < v.y.size(); ++b) {
       if (v.y[b].empty() || !(v.noise[b] > 0)) continue;
-      double p = 0;
-      for (const Complex& y : v.y[b]) p += std::norm(y);
-      const double r = p / double(v.y[b].size()) / v.noise[b];
+      const double r = v.power[b] / double(v.y[b].size()) / v.noise[b];
       const double t0 = double(w.block_from[b]) / s.sample_rate_hz;
       items.push_back({t0, t0 + double(w.block_len[b]) / s.sample_rate_hz, r, w.signature});
       by_sig[w.signature].push_back(r);
@@ -775,12 +772,11 @@ void basis_row(const Window& w, int64_t n, double fs, double* a) {
 // Clipped samples (clipped[n]) inside one stretch [from, from + len) of window w replaced by the
 // least-squares fit of w's basis to the stretch's other samples, evaluated over [from, until);
 // a stretch whose samples kept are fewer than twice the basis, or hold a NaN, gets NaN there
-// instead (its window then gives invalid points). Returns the samples filled.
-int64_t fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, int64_t from,
-                     int64_t len, int64_t until, double fs) {
-  int64_t any = 0;
-  for (int64_t n = from; n < until; ++n) any += clipped[size_t(n)];
-  if (any == 0) return 0;
+// instead (its window then gives invalid points).
+void fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, int64_t from,
+                  int64_t len, int64_t until, double fs) {
+  if (std::find(clipped.begin() + from, clipped.begin() + until, true) == clipped.begin() + until)
+    return;
   const int m = basis_size(w);
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(m), a(m);
@@ -805,7 +801,6 @@ int64_t fill_stretch(double* x, const std::vector<bool>& clipped, const Window& 
     basis_row(w, n, fs, a.data());
     x[from + n] = ok ? a.dot(c) : std::numeric_limits<double>::quiet_NaN();
   }
-  return ok ? any : 0;
 }
 
 // Every clipped sample inside the windows filled: a multisine period by period (a window's last,

@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/text.h"
 #include "fralab/lab/diagnose_command.h"
 #include "fralab/lab/run_record.h"
 #include "fralab/plant/embedded_models.h"
@@ -76,8 +77,7 @@ void run(RunCommand c) {
     speedup = campaign.speedup;
     tapes = md.multisine().tape();
     if (!campaign.sine.inputs.empty()) {
-      std::string ins;
-      for (const std::string& x : campaign.sine.inputs) ins += (ins.empty() ? "" : ",") + x;
+      const std::string ins = join_list(campaign.sine.inputs, ",");
       tapes += " and " + md.sine().tape();
       std::printf(
           "fralab: auto campaign: orthogonal multisine %.0f s, sine for %s (it distorts at the "

@@ -12,12 +12,6 @@ namespace fralab {
 
 namespace {
 
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
-}
-
 // The deputy host that runs processes of `kind` ("" = this host).
 std::string host_of(const MeasureOptions& o, const std::string& kind) {
   auto it = o.hosts.find(kind);
@@ -100,7 +94,7 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
   for (int i : excite) input_names.push_back(model.inputs[i].name);
   for (const auto& out : model.outputs) outs.push_back(out.name);
   AcquireOptions ao = o.acquire;
-  ao.inputs = join(input_names);
+  ao.inputs = join_list(input_names, ",");
   ao.block = block_samples(model, ao);  // the number every process is given
   auto start = [&](ProcessSpec spec) { plan.processes.push_back(std::move(spec)); };
 
@@ -164,7 +158,7 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
                                   "--run-id",
                                   run_id,
                                   "--consumers",
-                                  join(plan.consumers),
+                                  join_list(plan.consumers, ","),
                                   "--stall-timeout",
                                   lossless(o.stall_timeout_s),
                                   "--first-block",

@@ -10,6 +10,7 @@
 
 #include "fralab/acquire/acquire_flags.h"
 #include "fralab/core/measurement_chain.h"
+#include "fralab/core/text.h"
 #include "fralab/plant/embedded_models.h"
 
 namespace fralab {
@@ -62,12 +63,6 @@ std::vector<std::string> analysers(const std::string& x) {
   return {"analyze-" + x + "_N",      "analyze-" + x + "_P3", "analyze-" + x + "_DPP3",
           "analyze-" + x + "_P5",     "analyze-" + x + "_T5", "analyze-u_" + x + "_" + x,
           "analyze-u_" + x + "_N-cmd"};
-}
-
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
 }
 
 std::vector<std::string> concat(std::vector<std::vector<std::string>> parts) {
@@ -193,7 +188,7 @@ TEST(ProcessPlan, EachProcessGetsTheRunsArguments) {
       "--run-id",
       kRun,
       "--consumers",
-      "plant,recorder," + join(concat({analysers("Wf"), analysers("A8")})),
+      "plant,recorder," + join_list(concat({analysers("Wf"), analysers("A8")}), ","),
       "--stall-timeout",
       "60",
       "--first-block",
