@@ -54,13 +54,18 @@ struct Window {
   int period = 0;
   std::vector<int> lines;  // multisine: excited bins of a period
   std::string signature;   // the excitation (inputs and amplitudes, lines): equal, equal response
+  /// Multisine: the first sample of the settle's last period, just before `from` (the same
+  /// excitation, its transient the least), or -1 when the series does not hold it.
+  int64_t reference_from = -1;
 };
 
 std::vector<Window> windows_of(const Schedule& sch, const TimeSeries& s) {
   std::vector<Window> out;
   const double fs = s.sample_rate_hz;
   const int64_t end = s.start_sample + s.n_samples;
+  const StatusEvent* settle = nullptr;
   for (const StatusEvent& e : sch.events) {
+    if (e.state == RunState::kSettle) settle = &e;
     if (e.state != RunState::kIntegrate || e.n_samples <= 0) continue;
     if (e.sample < s.start_sample || e.sample + e.n_samples > end) continue;
     Window w;
@@ -84,6 +89,9 @@ std::vector<Window> windows_of(const Schedule& sch, const TimeSeries& s) {
         w.block_from.push_back(e.sample + b);
         w.block_len.push_back(P);
       }
+      if (settle && settle->step == e.step && settle->sample <= e.sample - P &&
+          settle->sample + settle->n_samples == e.sample && e.sample - P >= s.start_sample)
+        w.reference_from = e.sample - P;
     } else if (e.excitation == Excitation::kStepped && e.frequency_hz > 0 && e.n_cycles >= 2) {
       const int K = std::min(8, e.n_cycles), c = e.n_cycles / K;
       const double per_cycle = fs / e.frequency_hz;
@@ -733,6 +741,122 @@ void check_no_response(const std::string& ch, const TimeSeries& s,
   }
 }
 
+// A stretch's variance about its mean over half the variance of its first differences: white
+// noise gives 1, a response well above the noise far more. NaN when a sample is NaN; 0 for a
+// stretch holding one value (a noise-free channel's dead end).
+double variance_ratio(const double* x, int64_t n) {
+  double m = 0, md = 0;
+  for (int64_t k = 0; k < n; ++k) m += x[k] / double(n);
+  for (int64_t k = 1; k < n; ++k) md += (x[k] - x[k - 1]) / double(n - 1);
+  double v = 0, vd = 0;
+  for (int64_t k = 0; k < n; ++k) v += (x[k] - m) * (x[k] - m);
+  for (int64_t k = 1; k < n; ++k) vd += (x[k] - x[k - 1] - md) * (x[k] - x[k - 1] - md);
+  v /= double(n);
+  vd /= double(n - 1);
+  if (!std::isfinite(v) || !std::isfinite(vd)) return std::nan("");
+  if (vd == 0) return v == 0 ? 0.0 : INFINITY;
+  return v / (0.5 * vd);
+}
+
+// Silent stretches inside periods: a multisine's response repeats every period, so each eighth
+// of a measured period is compared with the same eighth of the window's other periods and of
+// the settle's last period (a reference only: it shows the response where every measured
+// period is already dead). An eighth at the noise (variance_ratio below kSilentRatio) where
+// another period's same eighth stands well above it (above kLiveRatio) is silent; two or more
+// silent eighths in a row, not already inside a span named by check_no_response, are a span
+// without response (a channel that died within a period, or before the first measured one).
+constexpr double kSilentRatio = 1.5, kLiveRatio = 30.0;
+constexpr int kEighths = 8;
+
+void check_silent_eighths(const std::string& ch, const double* x, const TimeSeries& s,
+                          const std::vector<Window>& windows, std::vector<DataFault>* out) {
+  struct Eighth {
+    int64_t from, to, period_from, period_to;  // samples (absolute)
+    bool shown;   // another period's same eighth stands above the noise (kLiveRatio)
+    bool silent;  // shown, and this one at the noise
+    double live;  // the largest ratio of the same eighth over the window's periods
+  };
+  std::vector<Eighth> eighths;
+  for (const Window& w : windows) {
+    if (!w.multisine) continue;
+    std::vector<int64_t> starts = w.block_from;
+    const bool ref = w.reference_from >= 0;
+    if (ref) starts.insert(starts.begin(), w.reference_from);
+    std::vector<std::vector<double>> r(starts.size(), std::vector<double>(kEighths));
+    for (size_t b = 0; b < starts.size(); ++b)
+      for (int j = 0; j < kEighths; ++j) {
+        const int64_t a = starts[b] + int64_t(w.period) * j / kEighths,
+                      z = starts[b] + int64_t(w.period) * (j + 1) / kEighths;
+        r[b][size_t(j)] = variance_ratio(x + (a - s.start_sample), z - a);
+      }
+    for (size_t b = ref ? 1 : 0; b < starts.size(); ++b)
+      for (int j = 0; j < kEighths; ++j) {
+        double live = 0;
+        for (size_t c = 0; c < starts.size(); ++c)
+          if (std::isfinite(r[c][size_t(j)])) live = std::max(live, r[c][size_t(j)]);
+        const int64_t a = starts[b] + int64_t(w.period) * j / kEighths,
+                      z = starts[b] + int64_t(w.period) * (j + 1) / kEighths;
+        const bool shown = live > kLiveRatio;
+        eighths.push_back({a, z, starts[b], starts[b] + w.period, shown,
+                           shown && r[b][size_t(j)] < kSilentRatio, live});
+      }
+  }
+  std::sort(eighths.begin(), eighths.end(),
+            [](const Eighth& a, const Eighth& b) { return a.from < b.from; });
+  const double fs = s.sample_rate_hz;
+  auto named = [&](const Eighth& e) {
+    for (const DataFault& f : *out)
+      if (f.channel == ch && f.kind == DataFaultKind::kNoResponse && double(e.to) / fs > f.from_s &&
+          double(e.from) / fs < f.to_s)
+        return true;
+    return false;
+  };
+  // A silent stretch runs over eighths that no period shows (nothing to compare there) and ends
+  // at the first one shown and not silent.
+  for (size_t i = 0; i < eighths.size();) {
+    if (!eighths[i].silent || named(eighths[i])) {
+      ++i;
+      continue;
+    }
+    size_t e = i, j = i + 1, n_silent = 1;
+    double live = eighths[i].live;
+    for (; j < eighths.size() && (eighths[j].silent || !eighths[j].shown) && !named(eighths[j]);
+         ++j) {
+      if (!eighths[j].silent) continue;
+      e = j;
+      ++n_silent;
+      live = std::min(live, eighths[j].live);
+    }
+    // A silent stretch running into a span already named is that span's start, inside the period
+    // it sets aside before it.
+    if (n_silent < 2 || (j < eighths.size() && named(eighths[j]))) {
+      i = j;
+      continue;
+    }
+    const bool to_end = j == eighths.size();
+    DataFault f;
+    f.channel = ch;
+    f.kind = DataFaultKind::kNoResponse;
+    f.from_s = double(eighths[i].from) / fs;
+    f.to_s = double(to_end ? eighths.back().to : eighths[e].to) / fs;
+    f.size = f.to_s - f.from_s;
+    f.text = ch + " stays at its noise from " + fmt(f.from_s) + " s" +
+             (to_end ? " to the end of the run" : " to " + fmt(f.to_s) + " s") +
+             " where the same part of another period of the excitation varies " + fmt(live) +
+             " times as much: " +
+             (to_end ? "a dead channel" : "an actuator stuck or a sensor silent for a while");
+    // The periods holding it set aside whole (a period partly silent is no period).
+    const int64_t a = eighths[i].period_from,
+                  z = to_end ? s.start_sample + s.n_samples : eighths[e].period_to;
+    f.spans.emplace_back(a, z - 1);
+    f.mended = true;
+    f.action = "set aside from " + fmt(double(a) / fs) + " to " + fmt(double(z) / fs) +
+               " s (the periods holding it): the windows holding it give no points";
+    out->push_back(std::move(f));
+    i = j;
+  }
+}
+
 // Linear interpolation over [a, b] (sample indices into the series) from the samples either side.
 void interpolate(double* x, int64_t N, int64_t a, int64_t b) {
   const double left = a > 0 ? x[a - 1] : (b + 1 < N ? x[b + 1] : 0.0);
@@ -956,6 +1080,7 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
       values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
     check_drift_and_clock(ch, x, s, windows, values, o, &found);
     check_no_response(ch, s, windows, values, &found);
+    check_silent_eighths(ch, x, s, windows, &found);
     for (DataFault& f : found) q.faults.push_back(std::move(f));
   }
   return q;

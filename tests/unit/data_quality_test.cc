@@ -267,6 +267,40 @@ TEST(DataQuality, ADeadChannelIsSaidFromWhenItDied) {
   EXPECT_GT(valid, 0) << "the realisation before the channel died is kept";
 }
 
+TEST(DataQuality, AChannelDeadBeforeTheFirstMeasuredPeriodIsSaid) {
+  // The machine of the test below measured the same way; Y1 dies half a period before the first
+  // measured period, so no measured period shows the response another shows. The settle's last
+  // period does (the first period, from rest, is the whole settle of this plant).
+  fralab::testing::RandomCase c = fralab::testing::random_machine_case(2, 2, 0);
+  AcquireOptions o;
+  o.band = "0.1:20";
+  o.points_per_decade = 5;
+  o.excitation = Excitation::kMultisine;
+  o.min_cycles = 2;
+  const auto clean = simulate_campaign(c.engine, o, true, 2);
+  const StatusEvent* first = nullptr;
+  for (const StatusEvent& e : clean.events)
+    if (e.state == RunState::kIntegrate && !first) first = &e;
+  ASSERT_NE(first, nullptr);
+  ASSERT_GE(first->sample, first->period_samples) << "a settle of a whole period";
+  ChannelFault dead;
+  dead.kind = ChannelFaultKind::kDead;
+  dead.from_s = double(first->sample - first->period_samples / 2) / 1000.0;
+  c.engine.outputs[size_t(c.engine.output_index("Y1"))].faults = {dead};
+  const auto r = simulate_campaign(c.engine, o, true, 2);
+  const TimeSeries s = blocks_to_series(r.blocks, "test");
+  const DataQuality q = check_data_quality(s, Schedule{s.sample_rate_hz, "test", r.events});
+  const DataFault* f = find(q, "Y1", DataFaultKind::kNoResponse);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->from_s, double(first->sample) / 1000.0, 1e-9)
+      << "from the first measured period (the settle is not measured)";
+  EXPECT_NEAR(f->to_s, double(s.start_sample + s.n_samples) / 1000.0, 0.002) << "to the end";
+  EXPECT_EQ(q.faults.size(), 1u) << listed(q);
+  const TimeSeries cs = blocks_to_series(clean.blocks, "test");
+  EXPECT_TRUE(
+      check_data_quality(cs, Schedule{cs.sample_rate_hz, "test", clean.events}).faults.empty());
+}
+
 TEST(DataQuality, TheSectionRoundTripsThroughJson) {
   const Json hum{{"kind", "hum"}, {"frequency_hz", 60.0}, {"amplitude", 0.02}};
   const Recording r = record(plant(Json::array({hum})));
@@ -311,7 +345,7 @@ TEST(DataQuality, AQuantisedChannelsOwnRepeatsAreNotHeldSamples) {
   EXPECT_EQ(h->level, 40.0) << "the 40 samples after the good one, mended";
 }
 
-TEST(DataQuality, AChannelDyingInsideAPeriodIsNoClockError) {
+TEST(DataQuality, AChannelDyingInsideAPeriodIsSaidNotTakenForAClock) {
   // A machine (random_machine.h, seed 2 case 2: one input, five outputs) measured by the lab's
   // multisine, two periods of 9.4 s in one window; Y1 dies 30 % of the way into the second. That
   // period's phases are part noise and its power a quarter of the first's: the two periods'
@@ -330,6 +364,12 @@ TEST(DataQuality, AChannelDyingInsideAPeriodIsNoClockError) {
   const TimeSeries s = blocks_to_series(r.blocks, "test");
   const DataQuality q = check_data_quality(s, Schedule{s.sample_rate_hz, "test", r.events});
   EXPECT_EQ(find(q, "Y1", DataFaultKind::kClock), nullptr) << listed(q);
+  // Its death is said within the period: the eighths after it stay at the noise where the
+  // first period's vary.
+  const DataFault* f = find(q, "Y1", DataFaultKind::kNoResponse);
+  ASSERT_NE(f, nullptr) << listed(q);
+  EXPECT_NEAR(f->from_s, 27.3, 9.4 / 8) << "within an eighth of a period";
+  EXPECT_EQ(q.faults.size(), 1u) << listed(q);
 }
 
 TEST(DataQuality, ASineWindowOfTwoBlocksGivesNoClock) {

@@ -63,6 +63,16 @@
 //             than 30 times in a quarter of the run's periods: a dead channel (to the end) or an
 //             actuator stuck or its sensor silent (a span). Set aside with the period either
 //             side (NaN in the mended series): the windows holding it give invalid points.
+//             Within periods: a multisine's response repeats each period, so each eighth of a
+//             measured period is compared with the same eighth of its window's other periods and
+//             of the settle's last period (a reference only, where it is a whole period): an
+//             eighth whose variance about its mean is within 1.5 times the noise's (half the
+//             variance of its first differences; white noise gives 1) where another period's same
+//             eighth varies over 30 times the noise is silent; two or more silent eighths in a
+//             row (eighths no period shows are passed over) are a span without response, named
+//             from its first silent eighth: a channel that died inside a period, or before the
+//             first measured one (every measured period silent, the settle not). The periods
+//             holding it are set aside whole.
 // Faults the data alone cannot tell (a wiring sign, a units factor, two channels swapped) are
 // the diagnosis' to name beside its findings (diagnose/data_faults.h).
 #pragma once
