@@ -857,6 +857,23 @@ void check_silent_eighths(const std::string& ch, const double* x, const TimeSeri
   }
 }
 
+// The blocks overlapping a span set aside (spans of `faults`) emptied, as a block holding a NaN
+// sample is: the period comparisons pass them over.
+void leave_out_spans(const std::vector<Window>& windows, const std::vector<DataFault>& faults,
+                     std::vector<BlockValues>& values) {
+  for (size_t i = 0; i < windows.size(); ++i)
+    for (size_t b = 0; b < windows[i].block_from.size(); ++b) {
+      const int64_t a = windows[i].block_from[b], z = a + windows[i].block_len[b] - 1;
+      for (const DataFault& f : faults)
+        for (const auto& [from, to] : f.spans)
+          if (a <= to && z >= from) {
+            values[i].y[b].clear();
+            values[i].power[b] = 0;
+            values[i].mean[b] = std::nan("");
+          }
+    }
+}
+
 // Linear interpolation over [a, b] (sample indices into the series) from the samples either side.
 void interpolate(double* x, int64_t N, int64_t a, int64_t b) {
   const double left = a > 0 ? x[a - 1] : (b + 1 < N ? x[b + 1] : 0.0);
@@ -1078,9 +1095,14 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     std::vector<BlockValues> values;
     for (const Window& w : windows)
       values.push_back(block_values(w, x, s.start_sample, s.sample_rate_hz));
+    // The spans without response first: the periods they set aside enter neither the drift nor
+    // the clock (a dead stretch's phases are noise).
+    std::vector<DataFault> silent;
+    check_no_response(ch, s, windows, values, &silent);
+    check_silent_eighths(ch, x, s, windows, &silent);
+    leave_out_spans(windows, silent, values);
     check_drift_and_clock(ch, x, s, windows, values, o, &found);
-    check_no_response(ch, s, windows, values, &found);
-    check_silent_eighths(ch, x, s, windows, &found);
+    for (DataFault& f : silent) found.push_back(std::move(f));
     for (DataFault& f : found) q.faults.push_back(std::move(f));
   }
   return q;

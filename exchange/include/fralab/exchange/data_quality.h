@@ -118,7 +118,7 @@ struct DataQualityOptions {
   int max_harmonic = 5;          // hum: multiples checked
   double hum_ratio = 100.0;      // hum: line power over the mean noise power there
   double drift_sigmas = 8.0;     // drift: slope over its sigma
-  double clock_sigmas = 8.0;     // clock: rate error over its sigma
+  double clock_sigmas = 6.0;     // clock: rate error over its sigma
   double min_clock = 2e-6;       // clock: below this, not reported (2 ppm)
   /// A simulation without noise: a channel repeats exactly where nothing excites it, so held
   /// samples are not looked for.
