@@ -9,8 +9,8 @@
 //   sized: hum amplitude, drift rate, clock rate error within 10 % / those named;
 //   false: faults named that were not put in (a fault case's other channels and kinds);
 //   clean flagged: clean cases with anything named / clean cases.
-// Exit status 1 when named < --min-named or the clean cases' share without a flag <
-// --min-clean. Deterministic in --seed.
+// Exit status 1 when named < --min-named, false > --max-false or the clean cases' share without
+// a flag < --min-clean. Deterministic in --seed.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -46,11 +46,14 @@ int main(int argc, char** argv) {
   int cases = 60, clean_cases = 60;
   uint64_t seed = 1;
   double min_named = 0, min_clean = 0;
+  int max_false = -1;
   app.add_option("--cases", cases, "cases with 1-2 recording faults")->capture_default_str();
   app.add_option("--clean", clean_cases, "cases without")->capture_default_str();
   app.add_option("--seed", seed, "the plants' and faults' seed")->capture_default_str();
   app.add_option("--min-named", min_named, "exit 1 below this share of faults named");
   app.add_option("--min-clean", min_clean, "exit 1 below this share of clean cases unflagged");
+  app.add_option("--max-false", max_false,
+                 "exit 1 when more faults than this are named that were not put in (-1: any)");
   CLI11_PARSE(app, argc, argv);
   FaultScore total;
   int clean_flagged = 0;
@@ -85,5 +88,6 @@ int main(int argc, char** argv) {
       "flagged %d / %d (unflagged %.3f)\n",
       total.named, total.put, named_share, total.sized, total.to_size, total.false_named,
       clean_flagged, clean_cases, clean_share);
-  return named_share < min_named || clean_share < min_clean ? 1 : 0;
+  const bool too_many_false = max_false >= 0 && total.false_named > max_false;
+  return named_share < min_named || clean_share < min_clean || too_many_false ? 1 : 0;
 }

@@ -542,7 +542,7 @@ constexpr int kMinSineBlocks = 4;
 void check_drift_and_clock(const std::string& ch, const double* x, const TimeSeries& s,
                            const std::vector<Window>& windows,
                            const std::vector<BlockValues>& values, const DataQualityOptions& o,
-                           std::vector<DataFault>* out) {
+                           std::vector<DataFault>* out, std::vector<ClockEstimate>* clocks) {
   SlopeAccumulator drift;
   double t0 = INFINITY, t1 = -INFINITY;
   // Drift: the means of each eighth of a multisine's period (a sine's blocks), compared across
@@ -667,13 +667,42 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
     f.action = "the straight line removed before the Fourier filter";
     out->push_back(std::move(f));
   }
-  if (c.blocks > 0 && std::abs(c.value) > o.clock_sigmas * c.sigma &&
-      std::abs(c.value) > o.min_clock) {
-    DataFault f = sloped(DataFaultKind::kClock, c);
-    f.text = ch + "'s phase walks with time: its samples lag " + fmt(c.value * 1e3) +
-             " ms more each second (+-" + fmt(c.sigma * 1e3) + "), a clock " +
-             fmt(std::abs(c.value) * 100) + " % " + (c.value > 0 ? "fast" : "slow") +
-             " against the excitation's";
+  // This run's estimate, pooled (weights 1 / sigma^2) with the campaign's other runs' of the same
+  // channel that agree with it within 4 sigma of their difference (all of them where this run
+  // has none: a sine of two-cycle steps).
+  const bool own = c.blocks > 0 && c.sigma > 0;
+  if (own) clocks->push_back({ch, c.value, c.sigma, ""});
+  double wsum = own ? 1 / (c.sigma * c.sigma) : 0, wx = own ? c.value * wsum : 0;
+  int others = 0;
+  for (const ClockEstimate& e : o.other_runs) {
+    if (e.channel != ch || !(e.sigma > 0)) continue;
+    if (own && std::abs(e.eps - c.value) > 4 * std::hypot(e.sigma, c.sigma)) continue;
+    wsum += 1 / (e.sigma * e.sigma);
+    wx += e.eps / (e.sigma * e.sigma);
+    ++others;
+  }
+  if (!(wsum > 0)) return;
+  const Slope pooled{wx / wsum, 1 / std::sqrt(wsum), c.blocks};
+  if (std::abs(pooled.value) > o.clock_sigmas * pooled.sigma &&
+      std::abs(pooled.value) > o.min_clock) {
+    if (!std::isfinite(t0)) {  // no window of its own: the run's span
+      t0 = double(s.start_sample) / s.sample_rate_hz;
+      t1 = double(s.start_sample + s.n_samples) / s.sample_rate_hz;
+    }
+    DataFault f = sloped(DataFaultKind::kClock, pooled);
+    const std::string rate = fmt(pooled.value * 1e3) + " ms more each second (+-" +
+                             fmt(pooled.sigma * 1e3) + "), a clock " +
+                             fmt(std::abs(pooled.value) * 100) + " % " +
+                             (pooled.value > 0 ? "fast" : "slow") + " against the excitation's";
+    if (!own)
+      f.text = ch + "'s samples lag " + rate + " in the campaign's other runs (" +
+               std::to_string(others) + "); this run's windows are too short to see it";
+    else if (others == 0)
+      f.text = ch + "'s phase walks with time: its samples lag " + rate;
+    else
+      f.text = ch + "'s phase walks with time: its samples lag " + rate + ", this run's " +
+               fmt(c.value * 1e3) + " +- " + fmt(c.sigma * 1e3) + " with the campaign's other " +
+               "runs (" + std::to_string(others) + ")";
     f.action =
         "resampled on the excitation's clock (taken to agree at sample 0: an offset between the "
         "clocks is a delay the data cannot tell from the plant's)";
@@ -1101,7 +1130,7 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     check_no_response(ch, s, windows, values, &silent);
     check_silent_eighths(ch, x, s, windows, &silent);
     leave_out_spans(windows, silent, values);
-    check_drift_and_clock(ch, x, s, windows, values, o, &found);
+    check_drift_and_clock(ch, x, s, windows, values, o, &found, &q.clocks);
     for (DataFault& f : silent) found.push_back(std::move(f));
     for (DataFault& f : found) q.faults.push_back(std::move(f));
   }

@@ -86,6 +86,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
     return pair.rfind("u_", 0) == 0 ? pair.substr(2, pair.find(':') - 2) : std::string();
   };
   std::optional<RunRecord> sine_run;
+  std::vector<ClockEstimate> clocks = mr.clock_estimates;  // the runs' own, for a later run
   if (!res.sine_inputs.empty()) {
     MeasureOptions s = plain;
     s.acquire.excitation = Excitation::kStepped;
@@ -98,7 +99,9 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
     s.acquire.zoom.clear();    // the zoom places multisine lines
     s.seed = opt.seed + 1000;  // its own noise
     s.out = opt.out + "/sine";
+    s.clock_estimates = mr.clock_estimates;  // two-cycle steps see no clock of their own
     const MeasureResult sr = run_measure(s);
+    clocks = sr.clock_estimates;
     res.sine_engine_s = sr.engine_time_s;
     sine_run = load_run_record(MeasureDir(s.out).run_json());
     // 4. Merge: the sine's actuator curve replaces the multisine's; the multisine's u_X:O go.
@@ -122,6 +125,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
       save_curves_and_fit(curves, opt.out, opt.fit_delay,
                           model.name + ": measured transfer matrix (auto campaign)", opt.timeout_s);
   res.measure = mr;
+  res.measure.clock_estimates = std::move(clocks);
   res.measure.pairs.clear();
   for (const Frd& f : curves) res.measure.pairs.push_back(f.pair);
   res.measure.engine_time_s = res.multisine_engine_s + res.sine_engine_s;

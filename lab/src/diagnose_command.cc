@@ -15,6 +15,7 @@
 #include "fralab/diagnose/data_faults.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/exchange/data_quality.h"
+#include "fralab/lab/data_check.h"
 #include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lcm/tape_file.h"
@@ -144,8 +145,8 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
       m.acquire.zoom = light_modes(sim, lo, hi);
     }
     m.out = c.out + "/measure";
-    if (const MeasureResult r = measure(m); r.partial())
-      res.partial.push_back(partial_run_message(r, m.out));
+    const MeasureResult measured = measure(m);
+    if (measured.partial()) res.partial.push_back(partial_run_message(measured, m.out));
     data_dir = m.out;
     data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed);
     if (c.validation) {
@@ -156,8 +157,17 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
       v.seed = m.seed + 1;
       v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
       v.out = MeasureDir(m.out).validation().root;
-      if (const MeasureResult r = measure(v); r.partial())
-        res.partial.push_back(partial_run_message(r, v.out));
+      v.clock_estimates = measured.clock_estimates;  // the same recorder's clocks, pooled
+      const MeasureResult validated = measure(v);
+      if (validated.partial()) res.partial.push_back(partial_run_message(validated, v.out));
+      // A clock the pool of both measurements names, which the measurement's own runs did not:
+      // they are checked again, so the curves diagnosed are mended as the validation's are.
+      ClockRecheck again = recheck_clocks(m.out, validated.clock_estimates);
+      if (const std::string refit = refit_after_recheck(m.out, again, m.fit_delay, m.timeout_s);
+          !refit.empty())
+        again.lines.push_back(refit);
+      for (const std::string& line : again.lines)
+        std::cerr << "fralab: data quality, checked again: " << line << "\n";
       data_name += "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
     } else {
       data_name += "; no validation measurement)";

@@ -295,6 +295,8 @@ void MeasureRun::verify_tape() {
 void MeasureRun::check_data() {
   DataQualityOptions dq;
   dq.noise_free = o_.no_noise;
+  dq.other_runs = o_.clock_estimates;
+  r_.clock_estimates = o_.clock_estimates;
   // The measurement is whole whatever the checks say: a tape they cannot read is said, not fatal.
   CheckedTape checked;
   try {
@@ -302,6 +304,10 @@ void MeasureRun::check_data() {
   } catch (const InputError& e) {
     std::cerr << "fralab: data quality not checked: " << e.what() << "\n";
     return;
+  }
+  for (ClockEstimate c : checked.quality.clocks) {
+    c.run = o_.out;
+    r_.clock_estimates.push_back(std::move(c));
   }
   print_data_quality(checked.quality);
   run_.data_quality = std::move(checked.quality);

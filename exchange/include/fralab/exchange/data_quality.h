@@ -49,7 +49,9 @@
 //             of the block, tau_b = -sum_k |Y_k|^2 w_k phi_bk / sum_k |Y_k|^2 w_k^2 (w in rad/s);
 //             tau_b regressed on the block's time over every window gives the rate error
 //             eps = d tau / dt (> 0: the channel's samples lag more and more, its clock runs
-//             fast), flagged beyond clock_sigmas times its sigma and above min_clock. Where a
+//             fast), pooled with the campaign's other runs' estimates of the channel that agree
+//             (DataQualityOptions::other_runs; weights 1 / sigma^2), flagged where the pool is
+//             beyond clock_sigmas times its sigma and above min_clock. Where a
 //             multisine's lines stand far above the noise (the strongest period's power over
 //             100 times what its non-excited lines give them), a period with less than half that
 //             power (a clock moves phases, not power: dead or stuck for part of the period) is
@@ -112,6 +114,14 @@ struct DataFault {
   std::vector<std::pair<int64_t, int64_t>> spans;
 };
 
+/// A channel's clock rate error eps as one run measured it (flagged or not), for pooling with the
+/// campaign's other runs: the same recorder, the same rate.
+struct ClockEstimate {
+  std::string channel;
+  double eps = 0.0, sigma = 0.0;
+  std::string run;  // the run's folder (the lab's label; "" from check_data_quality)
+};
+
 struct DataQualityOptions {
   double max_gap_s = 0.1;        // lost/held runs mended up to this length, s
   double mains_search_hz = 0.5;  // hum: around each multiple of 50 and 60 Hz, Hz
@@ -123,6 +133,10 @@ struct DataQualityOptions {
   /// A simulation without noise: a channel repeats exactly where nothing excites it, so held
   /// samples are not looked for.
   bool noise_free = false;
+  /// The campaign's other runs' clock estimates (DataQuality::clocks of each): a channel's own
+  /// estimate is pooled with those of it that agree, and the pool decides; a run without its own
+  /// (a sine of two-cycle steps) takes the others'.
+  std::vector<ClockEstimate> other_runs;
   /// Throws InputError naming the option.
   void validate() const;
 };
@@ -130,6 +144,9 @@ struct DataQualityOptions {
 struct DataQuality {
   std::vector<std::string> checked;  // channels checked
   std::vector<DataFault> faults;     // in channel order, then kind
+  /// Each channel's own clock estimate where its windows give one (not in the JSON): what the
+  /// campaign's other runs pool with (DataQualityOptions::other_runs).
+  std::vector<ClockEstimate> clocks;
   bool any_mended() const;
   /// A fault mended, or one that widens the curves' sigmas (widen_for_mending): the run's curves
   /// are then analysed again.

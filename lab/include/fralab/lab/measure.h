@@ -16,6 +16,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/json_util.h"
 #include "fralab/core/measurement_chain.h"
+#include "fralab/exchange/data_quality.h"
 #include "fralab/lab/run_record.h"
 #include "fralab/plant/model.h"
 
@@ -69,6 +70,9 @@ struct MeasureOptions {
   /// multisine and a sine for the inputs that distort at its level. measure() runs it;
   /// run_measure, which runs one plain measurement, refuses it.
   bool auto_campaign = false;
+  /// The campaign's earlier runs' clock estimates (each labelled with its run's folder): the data
+  /// checks pool each channel's with this run's own (exchange/data_quality.h).
+  std::vector<ClockEstimate> clock_estimates;
 };
 
 struct MeasureResult {
@@ -83,6 +87,9 @@ struct MeasureResult {
   /// model) and its error. DIR/run.json says the same ("state": "partial", "failed_step").
   std::string failed_step, failure;
   bool partial() const { return !failed_step.empty(); }
+  /// MeasureOptions::clock_estimates and this measurement's runs' own, labelled with their
+  /// folders (none where the checks did not run): what a later run of the campaign pools with.
+  std::vector<ClockEstimate> clock_estimates;
 };
 
 /// Thrown by the commands after a partial run has written everything it could (exit status 3):
