@@ -426,10 +426,12 @@ Complex hann_dft(const double* x, int64_t N, double mean, double f, double fs, i
   return acc;
 }
 
+// Over the channel's first n_live samples (all by default: a channel that died keeps its hum only
+// while it lives).
 void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
                const std::vector<Window>& windows, const DataQualityOptions& o,
-               std::vector<DataFault>* out) {
-  const int64_t N = smooth_size(s.n_samples);
+               std::vector<DataFault>* out, int64_t n_live = -1) {
+  const int64_t N = smooth_size(n_live < 0 ? s.n_samples : std::min(n_live, s.n_samples));
   const double fs = s.sample_rate_hz;
   if (N < 1024) return;
   double mean = 0, range_lo = INFINITY, range_hi = -INFINITY;
@@ -530,7 +532,9 @@ void check_hum(const std::string& ch, const double* x, const TimeSeries& s,
       h.text = "a line at " + fmt(f) + " Hz on " + ch + ", amplitude " + fmt(h.size) + " (" +
                fmt(10 * std::log10(std::norm(X[size_t(peak)]) / noise)) +
                " dB above the noise there), off every excited line: mains hum";
-      h.action = "subtracted (its frequency, amplitude and phase fitted over the run)";
+      h.action = n_live < 0
+                     ? "subtracted (its frequency, amplitude and phase fitted over the run)"
+                     : "subtracted (its frequency, amplitude and phase fitted while it lived)";
       out->push_back(std::move(h));
     }
   }
@@ -1130,6 +1134,20 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     check_no_response(ch, s, windows, values, &silent);
     check_silent_eighths(ch, x, s, windows, &silent);
     leave_out_spans(windows, silent, values);
+    // A channel silent from some time on may have carried a hum only while it lived: looked for
+    // again over the stretch before its first silent span.
+    if (hums.empty() && !silent.empty()) {
+      int64_t live = s.n_samples;
+      for (const DataFault& f : silent)
+        for (const auto& span : f.spans) live = std::min(live, span.first - s.start_sample);
+      std::vector<DataFault> late;
+      if (live > 0) check_hum(ch, x, s, windows, o, &late, live);
+      std::vector<const DataFault*> late_hums;
+      for (const DataFault& f : late) late_hums.push_back(&f);
+      mend_channel(x, s, late_hums);
+      found.insert(found.begin() + long(before_hum), std::make_move_iterator(late.begin()),
+                   std::make_move_iterator(late.end()));
+    }
     check_drift_and_clock(ch, x, s, windows, values, o, &found, &q.clocks);
     for (DataFault& f : silent) found.push_back(std::move(f));
     for (DataFault& f : found) q.faults.push_back(std::move(f));

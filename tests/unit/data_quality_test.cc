@@ -301,6 +301,23 @@ TEST(DataQuality, AChannelDeadBeforeTheFirstMeasuredPeriodIsSaid) {
       check_data_quality(cs, Schedule{cs.sample_rate_hz, "test", clean.events}).faults.empty());
 }
 
+TEST(DataQuality, AHumOnAChannelThatDiedIsFoundWhileItLived) {
+  // Y carries a 60 Hz hum until it dies at 40 s of the 62 s run (the hum with it): no quarter of
+  // the run after the death holds the line, so the run as a whole shows no lasting hum; the
+  // stretch before the silent span does.
+  const Json hum{{"kind", "hum"}, {"frequency_hz", 60.0}, {"amplitude", 0.02}};
+  const Json dead{{"kind", "dead"}, {"from_s", 40.0}};
+  const Recording r = record(plant(Json::array({hum, dead})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* h = find(q, "Y", DataFaultKind::kHum);
+  ASSERT_NE(h, nullptr) << listed(q);
+  EXPECT_NEAR(h->frequency_hz, 60.0, 0.01);
+  EXPECT_NEAR(h->size, 0.02, 0.002) << "amplitude within 10 %";
+  EXPECT_LE(h->to_s, 40.0) << "fitted while the channel lived";
+  EXPECT_NE(find(q, "Y", DataFaultKind::kNoResponse), nullptr) << listed(q);
+  EXPECT_EQ(q.faults.size(), 2u) << listed(q);
+}
+
 TEST(DataQuality, TheSectionRoundTripsThroughJson) {
   const Json hum{{"kind", "hum"}, {"frequency_hz", 60.0}, {"amplitude", 0.02}};
   const Recording r = record(plant(Json::array({hum})));
