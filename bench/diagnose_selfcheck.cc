@@ -18,9 +18,11 @@
 // measured with the lab's own band and density (--band and --points-per-decade ignored).
 // --faults (machine and j85 plants): 0-2 recording faults per case (tests/util/random_faults.h) put
 // into the engine's channels; the summary adds the faults named in diagnosis.json's data_quality
-// (any run of the measurement), those sized within 10 %, those named but not put in, and precision
-// and recall over the cases with faults and over those without apart (a finding a fault caused is a
-// false finding of a case with faults).
+// (any run of the measurement), those sized within 10 %, those named but not put in, those the
+// checks did not name but the diagnosis names beside a finding they explain (a data alternative:
+// a clock too small to name, a dead channel, a clipping), and precision and recall over the cases
+// with faults and over those without apart (a finding a fault caused is a false finding of a case
+// with faults, its alternative named or not).
 // Run it isolated: scripts/isolated.sh build/bin/fralab-bench-diagnose --cases 60
 #include <sys/wait.h>
 
@@ -69,6 +71,30 @@ std::vector<DataFault> named_faults(const std::string& file) {
     }
   }
   return out;
+}
+
+// The data alternatives of diagnosis.json beside its findings: (channel, kind) of each.
+std::vector<std::pair<std::string, std::string>> alternatives(const std::string& file) {
+  const Json j = json_load_file(file);
+  std::vector<std::pair<std::string, std::string>> out;
+  if (!j.contains("data_quality") || !j["data_quality"].contains("alternatives")) return out;
+  for (const Json& a : j["data_quality"]["alternatives"])
+    out.emplace_back(a.value("channel", ""), a.value("kind", ""));
+  return out;
+}
+
+// A fault's name as a finding's data alternative (diagnose/data_faults.h), "" where none is.
+std::string alternative_kind(DataFaultKind k) {
+  switch (k) {
+    case DataFaultKind::kClock:
+      return "clock";
+    case DataFaultKind::kNoResponse:
+      return "dead_channel";
+    case DataFaultKind::kClipping:
+      return "clipping";
+    default:
+      return "";
+  }
 }
 
 // Recording faults for case `i` of `seed`: 0, 1 or 2 (a third of the cases each), sized from a
@@ -156,6 +182,7 @@ int main(int argc, char** argv) {
   if (plants == "j85") band = "0.04:100", ppd = 10;  // the lab's own (fralab run's defaults)
   if (through_lab && plants != "modal") throw InputError("--through-lab needs --plants modal");
   FaultScore fault_total;
+  int beside_findings = 0;  // faults not named by the checks, named as a finding's alternative
   Score with_faults, without_faults, on_dead;
   const std::string bin =
       std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
@@ -222,9 +249,22 @@ int main(int argc, char** argv) {
     const std::string dj = dir + "/diagnosis/diagnosis.json";
     report(c, read_findings(dj), total, failing);
     if (faults) {
-      const FaultScore fs = score_faults(injected, named_faults(dj));
+      const std::vector<DataFault> named = named_faults(dj);
+      const FaultScore fs = score_faults(injected, named);
       fault_total.add(fs);
       for (const std::string& l : fs.lines) std::printf("    fault %s\n", l.c_str());
+      // A fault the checks did not name, named beside a finding it explains as well.
+      const auto alts = alternatives(dj);
+      for (const InjectedFault& f : injected) {
+        const bool in_section = std::any_of(named.begin(), named.end(), [&](const DataFault& n) {
+          return n.channel == f.channel && n.kind == f.kind;
+        });
+        const std::string kind = alternative_kind(f.kind);
+        if (in_section || kind.empty()) continue;
+        if (std::find(alts.begin(), alts.end(), std::pair{f.channel, kind}) == alts.end()) continue;
+        ++beside_findings;
+        std::printf("    fault named beside a finding: %s %s\n", f.channel.c_str(), kind.c_str());
+      }
       Score& part = injected.empty() ? without_faults : with_faults;
       const std::vector<Finding> found = read_findings(dj);
       const Score sc = score(c, found);
@@ -249,10 +289,11 @@ int main(int argc, char** argv) {
     auto share = [](int a, int b) { return b ? double(a) / b : 1.0; };
     std::printf(
         "faults: named %d / %d (%.3f), sized within 10 %% %d / %d, named but not put in %d; "
+        "of the others, named beside a finding they explain %d; "
         "cases with faults: precision %.3f recall %.3f (%.3f of the %d effects at outputs "
         "alive, %d of %d at dead ones found); without: precision %.3f recall %.3f\n",
         fault_total.named, fault_total.put, share(fault_total.named, fault_total.put),
-        fault_total.sized, fault_total.to_size, fault_total.false_named,
+        fault_total.sized, fault_total.to_size, fault_total.false_named, beside_findings,
         share(with_faults.true_findings, with_faults.findings),
         share(with_faults.found, with_faults.hidden),
         share(with_faults.found - on_dead.found, with_faults.hidden - on_dead.hidden),

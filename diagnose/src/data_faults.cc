@@ -16,7 +16,8 @@ constexpr std::pair<DataAlternative::Kind, const char*> kKindWords[] = {
     {DataAlternative::Kind::kUnits, "units"},
     {DataAlternative::Kind::kSwap, "swap"},
     {DataAlternative::Kind::kClipping, "clipping"},
-    {DataAlternative::Kind::kDeadChannel, "dead_channel"}};
+    {DataAlternative::Kind::kDeadChannel, "dead_channel"},
+    {DataAlternative::Kind::kClock, "clock"}};
 
 // A silent output: its points hold no more than noise (at most this share above kNoiseSigmas)
 // where the simulation expects at least kExpectedShare of them (and kMinExpected) above
@@ -127,10 +128,35 @@ std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& 
                                                const std::vector<MeasuredPair>& data,
                                                const DiagnoseOptions& opt,
                                                const std::map<std::string, double>& clipped,
-                                               const std::vector<SilentOutput>& silent) {
+                                               const std::vector<SilentOutput>& silent,
+                                               const std::map<std::string, ClockEvidence>& clocks) {
   std::vector<DataAlternative> out;
   for (size_t i = 0; i < d.findings.size(); ++i) {
     const Finding& f = d.findings[i];
+    if (const auto c = clocks.find(f.output); c != clocks.end()) {
+      // The delay the finding stands for: a lag's at low frequency is 1 / corner.
+      double tau = 0;
+      if (f.cause == CauseKind::kTimeDelay && f.parameters.count("delay_s"))
+        tau = f.parameters.at("delay_s");
+      else if (f.cause == CauseKind::kMissingLag && f.parameters.count("corner_rad_s"))
+        tau = 1 / f.parameters.at("corner_rad_s");
+      const ClockEvidence& e = c->second;
+      const double lo = (std::abs(e.eps) - 2 * e.sigma) * e.t_mid_s,
+                   hi = (std::abs(e.eps) + 2 * e.sigma) * e.t_mid_s;
+      if (tau > 0 && e.eps > 0 && std::abs(e.eps) >= 2 * e.sigma && tau >= lo && tau <= hi) {
+        DataAlternative a;
+        a.kind = DataAlternative::Kind::kClock;
+        a.channel = f.output;
+        a.finding = int(i);
+        a.text = "or " + f.output + "'s recorder runs on a clock " + significant(100 * e.eps, 3) +
+                 " % fast (+-" + significant(100 * e.sigma, 2) +
+                 " %, too little for the recordings' checks to name): by the measured periods' " +
+                 "mean time, " + significant(e.t_mid_s, 3) + " s from the run's start, that " +
+                 "delays its samples by " + significant(1e3 * e.eps * e.t_mid_s, 3) + " ms; " +
+                 "check its clock against the excitation's before changing the model";
+        out.push_back(std::move(a));
+      }
+    }
     for (const SilentOutput& s : silent) {
       if (f.output != s.output) continue;
       DataAlternative a;

@@ -675,7 +675,7 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
   // channel that agree with it within 4 sigma of their difference (all of them where this run
   // has none: a sine of two-cycle steps).
   const bool own = c.blocks > 0 && c.sigma > 0;
-  if (own) clocks->push_back({ch, c.value, c.sigma, ""});
+  if (own) clocks->push_back({ch, c.value, c.sigma, std::isfinite(t0) ? 0.5 * (t0 + t1) : 0.0, ""});
   double wsum = own ? 1 / (c.sigma * c.sigma) : 0, wx = own ? c.value * wsum : 0;
   int others = 0;
   for (const ClockEstimate& e : o.other_runs) {

@@ -121,6 +121,30 @@ Json attach_levels(const DiagnoseCommand& c, std::vector<MeasuredPair>& data) {
   return j;
 }
 
+// Per channel the campaign's clock estimates pooled (weights 1 / sigma^2), for the channels the
+// checks did not name (those are mended): the measured periods' mean time from the
+// measurement's own runs (those under `measured`, not its validation).
+std::map<std::string, ClockEvidence> clock_evidence(const std::vector<ClockEstimate>& all,
+                                                    const std::string& measured) {
+  std::map<std::string, ClockEvidence> out;
+  const std::vector<std::string> named = pooled_clocks(all);
+  const std::string validation = MeasureDir(measured).validation().root;
+  std::map<std::string, std::pair<double, double>> pool;
+  for (const ClockEstimate& e : all) {
+    if (!(e.sigma > 0) || std::find(named.begin(), named.end(), e.channel) != named.end()) continue;
+    auto& [w, wx] = pool[e.channel];
+    w += 1 / (e.sigma * e.sigma);
+    wx += e.eps / (e.sigma * e.sigma);
+    ClockEvidence& ev = out[e.channel];
+    if (ev.t_mid_s == 0 && !e.run.starts_with(validation)) ev.t_mid_s = e.t_mid_s;
+  }
+  for (auto& [ch, ev] : out) {
+    ev.eps = pool[ch].second / pool[ch].first;
+    ev.sigma = 1 / std::sqrt(pool[ch].first);
+  }
+  return out;
+}
+
 }  // namespace
 
 DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
@@ -132,6 +156,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   // The diagnosis's folder is its own until it ends (its measurements take their sub-folders).
   const RunLock lock(c.out, "fralab diagnose");
   std::string data_dir = c.measured, data_name = c.measured;
+  std::vector<ClockEstimate> clock_estimates;  // every run's own, for the clock alternative
   if (!c.engine.empty()) {
     MeasureOptions m = c.measure;
     m.engine = c.engine;
@@ -147,6 +172,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
     m.out = c.out + "/measure";
     const MeasureResult measured = measure(m);
     if (measured.partial()) res.partial.push_back(partial_run_message(measured, m.out));
+    clock_estimates = measured.clock_estimates;
     data_dir = m.out;
     data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed);
     if (c.validation) {
@@ -160,6 +186,7 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
       v.clock_estimates = measured.clock_estimates;  // the same recorder's clocks, pooled
       const MeasureResult validated = measure(v);
       if (validated.partial()) res.partial.push_back(partial_run_message(validated, v.out));
+      clock_estimates = validated.clock_estimates;
       // A clock the pool of both measurements names, which the measurement's own runs did not:
       // they are checked again, so the curves diagnosed are mended as the validation's are.
       ClockRecheck again = recheck_clocks(m.out, validated.clock_estimates);
@@ -229,7 +256,8 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
         double& share = clipped[f["channel"].get<std::string>()];
         share = std::max(share, f["size"].get<double>());
       }
-  notes.alternatives = data_alternatives(d, sim, data, opt, clipped, silent_kept);
+  notes.alternatives = data_alternatives(d, sim, data, opt, clipped, silent_kept,
+                                         clock_evidence(clock_estimates, data_dir));
   for (const DataFault& f : from_sim.faults)
     notes.faults.push_back("the measurement against the simulation: " + f.text + "; " + f.action +
                            ".");

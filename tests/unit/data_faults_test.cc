@@ -1,5 +1,5 @@
-// The diagnosis' data alternatives: a sign or a gain a recording fault explains as well, and two
-// outputs exchanged, on known answers.
+// The diagnosis' data alternatives: a sign, a gain or a delay a recording fault explains as well,
+// and two outputs exchanged, on known answers.
 #include "fralab/diagnose/data_faults.h"
 
 #include <gmock/gmock.h>
@@ -113,6 +113,32 @@ TEST(DataAlternatives, AFindingAtAClippedChannelMayBeTheClipping) {
   EXPECT_EQ(a[0].finding, 1);
   EXPECT_EQ(a[0].channel, "B");
   EXPECT_THAT(a[0].text, HasSubstr("3.7 % of its samples"));
+}
+
+TEST(DataAlternatives, ADelayAClockBelowTheChecksWouldGiveNamesTheClock) {
+  // B's recorder clock estimated 0.016 % fast +- 0.005 % over the campaign (3.2 sigma, unnamed);
+  // the measured periods' mean time 17 s from the run's start: a delay of 2.7 ms there, and the
+  // 2 sigma band 1.0-4.4 ms. A path delay of 2.67 ms at B and a lag of corner 370 rad/s (2.7 ms)
+  // are within it; a delay of 9 ms, and any delay at A, are not.
+  Diagnosis d;
+  Finding delay = at_output(CauseKind::kTimeDelay, "B", {{"delay_s", 0.00267}});
+  delay.scope = Scope::kPath;
+  delay.input = "X";
+  Finding lag = at_output(CauseKind::kMissingLag, "B", {{"corner_rad_s", 370.0}});
+  d.findings = {delay, lag, at_output(CauseKind::kTimeDelay, "B", {{"delay_s", 0.009}}),
+                at_output(CauseKind::kTimeDelay, "A", {{"delay_s", 0.00267}})};
+  const std::map<std::string, ClockEvidence> clocks{{"B", {1.6e-4, 0.5e-4, 17.0}}};
+  const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"), {}, {}, {}, clocks);
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[0].kind, DataAlternative::Kind::kClock);
+  EXPECT_EQ(a[0].finding, 0);
+  EXPECT_EQ(a[0].channel, "B");
+  EXPECT_THAT(a[0].text, HasSubstr("0.016 % fast"));
+  EXPECT_THAT(a[0].text, HasSubstr("2.72 ms"));
+  EXPECT_EQ(a[1].finding, 1);
+  // Under 2 sigma the estimate is no evidence.
+  const std::map<std::string, ClockEvidence> weak{{"B", {1.6e-4, 0.9e-4, 17.0}}};
+  EXPECT_TRUE(data_alternatives(d, sim(), measured(sim(), "A", "B"), {}, {}, {}, weak).empty());
 }
 
 namespace {

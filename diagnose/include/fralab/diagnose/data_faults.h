@@ -21,6 +21,12 @@
 //                path into one output gone at once is not a model difference) and the lab sets
 //                its pairs aside (silent_outputs); over one, a missing path reads the same, and
 //                the finding there names the dead channel beside it.
+//   clock        a time_delay (delay tau) or missing_lag (corner wc: at low frequency a delay of
+//                1 / wc) at an output whose recorder's clock estimate over the campaign's runs
+//                (pooled, ClockEvidence) stands 2 sigma or more from zero but below what the
+//                recordings' checks name: a clock eps fast delays the samples by eps t, so at
+//                the measured periods' mean time t_mid by eps t_mid; the alternative is named
+//                when tau (or 1 / wc) lies within (|eps| +- 2 sigma) t_mid.
 //   swap         two outputs A, B whose measured curves match the simulation's with the two
 //                exchanged: with e(A, B) = rms |ln(measured A / simulated B)| over every
 //                input's points, e(A,B) + e(B,A) < 0.35 (e(A,A) + e(B,B)) and each exchanged
@@ -38,7 +44,7 @@
 namespace fralab {
 
 struct DataAlternative {
-  enum class Kind { kWiringSign, kUnits, kSwap, kClipping, kDeadChannel };
+  enum class Kind { kWiringSign, kUnits, kSwap, kClipping, kDeadChannel, kClock };
   Kind kind = Kind::kWiringSign;
   std::string channel;  // the channel to check
   std::string other;    // swap: the channel it looks exchanged with
@@ -46,8 +52,15 @@ struct DataAlternative {
   double factor = 0;    // units: the units factor matched
   std::string text;     // one sentence, what to check
 };
-/// "wiring_sign", "units", "swap", "clipping", "dead_channel".
+/// "wiring_sign", "units", "swap", "clipping", "dead_channel", "clock".
 const char* to_string(DataAlternative::Kind k);
+
+/// An output's clock rate error as the campaign's recordings estimate it and do not name: eps
+/// (> 0: its samples lag more and more) and its sigma, pooled over the runs, and the mean time
+/// of the measured periods since the run's start, s.
+struct ClockEvidence {
+  double eps = 0, sigma = 0, t_mid_s = 0;
+};
 
 /// An output of the simulation whose measured pairs hold only noise where the simulation expects
 /// a response well above it (dead_channel above).
@@ -66,12 +79,13 @@ std::vector<SilentOutput> silent_outputs(const Model& sim, const std::vector<Mea
 
 /// The alternatives of diagnosis `d` of `data` against `sim` (its chain in opt); `clipped`: per
 /// channel the largest share of its samples a recording of the measurement held at its range;
-/// `silent`: the silent outputs left in the data (a finding at one names the dead channel).
-std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
-                                               const std::vector<MeasuredPair>& data,
-                                               const DiagnoseOptions& opt = {},
-                                               const std::map<std::string, double>& clipped = {},
-                                               const std::vector<SilentOutput>& silent = {});
+/// `silent`: the silent outputs left in the data (a finding at one names the dead channel);
+/// `clocks`: per output, its clock evidence (clock above).
+std::vector<DataAlternative> data_alternatives(
+    const Diagnosis& d, const Model& sim, const std::vector<MeasuredPair>& data,
+    const DiagnoseOptions& opt = {}, const std::map<std::string, double>& clipped = {},
+    const std::vector<SilentOutput>& silent = {},
+    const std::map<std::string, ClockEvidence>& clocks = {});
 
 /// [{"kind", "channel", "other", "finding", "factor", "text"}], "finding" null when none.
 Json data_alternatives_to_json(const std::vector<DataAlternative>& a);

@@ -119,7 +119,8 @@ struct DataFault {
 struct ClockEstimate {
   std::string channel;
   double eps = 0.0, sigma = 0.0;
-  std::string run;  // the run's folder (the lab's label; "" from check_data_quality)
+  double t_mid_s = 0.0;  // the middle of the windows it came from, s on the sample clock
+  std::string run;       // the run's folder (the lab's label; "" from check_data_quality)
 };
 
 struct DataQualityOptions {
