@@ -996,18 +996,28 @@ void fill_clipped(double* x, const TimeSeries& s, const std::vector<Window>& win
   }
 }
 
-// The samples of x[0, N) at the level of a mended clipping of `faults` (x as recorded); empty when
-// there is none.
-std::vector<bool> clipped_samples(const double* x, int64_t N,
+// The samples of the series the fill treats as missing (x as recorded): those at the level of a
+// mended clipping of `faults`, and those of its mended gaps (lost or held: interpolated first, so
+// that the hum and drift checks see no hole, then filled from the excited lines as the clipped
+// ones are); empty when there are none.
+std::vector<bool> missing_samples(const double* x, const TimeSeries& s,
                                   const std::vector<const DataFault*>& faults) {
-  std::vector<bool> clipped;
+  const int64_t N = s.n_samples;
+  std::vector<bool> missing;
   for (const DataFault* f : faults) {
-    if (!f->mended || f->kind != DataFaultKind::kClipping) continue;
-    clipped.resize(size_t(N), false);
-    for (int64_t n = 0; n < N; ++n)
-      if (x[n] == f->level) clipped[size_t(n)] = true;
+    if (!f->mended) continue;
+    if (f->kind == DataFaultKind::kClipping) {
+      missing.resize(size_t(N), false);
+      for (int64_t n = 0; n < N; ++n)
+        if (x[n] == f->level) missing[size_t(n)] = true;
+    } else if (f->kind == DataFaultKind::kLost || f->kind == DataFaultKind::kHeld) {
+      missing.resize(size_t(N), false);
+      for (const auto& [a, b] : f->spans)
+        for (int64_t n = std::max(a, s.start_sample); n <= std::min(b, s.start_sample + N - 1); ++n)
+          missing[size_t(n - s.start_sample)] = true;
+    }
   }
-  return clipped;
+  return missing;
 }
 
 // The mending of one channel in the documented order: gaps, hum, drift, clipping (given the
@@ -1016,8 +1026,8 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
                   const std::vector<Window>* windows = nullptr) {
   const int64_t N = s.n_samples;
   const double fs = s.sample_rate_hz;
-  // The clipped samples, told by their value before anything else changes it.
-  const std::vector<bool> clipped = windows ? clipped_samples(x, N, faults) : std::vector<bool>{};
+  // The clipped samples, told by their value before anything else changes it, and the gaps.
+  const std::vector<bool> clipped = windows ? missing_samples(x, s, faults) : std::vector<bool>{};
   for (const DataFault* f : faults) {
     if (!f->mended || (f->kind != DataFaultKind::kLost && f->kind != DataFaultKind::kHeld))
       continue;
@@ -1118,11 +1128,11 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     std::vector<const DataFault*> hums;
     for (size_t i = before_hum; i < found.size(); ++i) hums.push_back(&found[i]);
     mend_channel(x, s, hums);
-    // The periods compared with clipping filled: a clipped peak moves a period's mean and phase.
-    std::vector<const DataFault*> clips;
-    for (const DataFault& f : found)
-      if (f.kind == DataFaultKind::kClipping) clips.push_back(&f);
-    if (const std::vector<bool> c = clipped_samples(raw, s.n_samples, clips); !c.empty())
+    // The periods compared with clipping and gaps filled: a clipped peak moves a period's mean
+    // and phase, a gap's straight line its higher lines.
+    std::vector<const DataFault*> holes;
+    for (const DataFault& f : found) holes.push_back(&f);
+    if (const std::vector<bool> c = missing_samples(raw, s, holes); !c.empty())
       fill_clipped(x, s, windows, c);
     // Each window's blocks, transformed once for the tests that compare periods.
     std::vector<BlockValues> values;

@@ -301,6 +301,33 @@ TEST(DataQuality, AChannelDeadBeforeTheFirstMeasuredPeriodIsSaid) {
       check_data_quality(cs, Schedule{cs.sample_rate_hz, "test", clean.events}).faults.empty());
 }
 
+TEST(DataQuality, GapsInsideTheWindowsAreFilledFromTheExcitedLines) {
+  // Z held for 16 samples three times a second (5 % of its samples; a gap is a third of the
+  // 20 Hz line's period): a straight line across each gap bends the top lines (1 %); the
+  // least-squares fill of the excited lines from the samples kept does not.
+  const Json held{{"kind", "dropouts"}, {"rate_hz", 3.0}, {"length", 16}, {"mode", "held"}};
+  const Recording r = record(plant(nullptr, Json::array({held})));
+  const DataQuality q = check_data_quality(r.series, r.schedule);
+  const DataFault* h = find(q, "Z", DataFaultKind::kHeld);
+  ASSERT_NE(h, nullptr) << listed(q);
+  const Recording clean = record(plant(nullptr));
+  const Frd truth = curve(clean, clean.series, "X:Z");
+  // The straight lines alone.
+  TimeSeries lines = r.series;
+  const int zc = lines.channel_index("Z");
+  double* z = lines.samples.data() + size_t(zc) * size_t(lines.n_samples);
+  for (const auto& [a, b] : h->spans) {
+    const int64_t i = a - lines.start_sample, j = b - lines.start_sample;
+    for (int64_t k = i; k <= j; ++k)
+      z[k] = z[i - 1] + (z[j + 1] - z[i - 1]) * double(k - i + 1) / double(j - i + 2);
+  }
+  const double straight = worst_log_error(curve(r, lines, "X:Z"), truth),
+               filled =
+                   worst_log_error(curve(r, mend_series(r.series, q, r.schedule), "X:Z"), truth);
+  EXPECT_GT(straight, 0.005) << "the straight lines bend the curve";
+  EXPECT_LT(filled, 0.25 * straight) << "filled " << filled << ", straight " << straight;
+}
+
 TEST(DataQuality, AHumOnAChannelThatDiedIsFoundWhileItLived) {
   // Y carries a 60 Hz hum until it dies at 40 s of the 62 s run (the hum with it): no quarter of
   // the run after the death holds the line, so the run as a whole shows no lasting hum; the

@@ -7,8 +7,11 @@
 // (ref_*) and the plant's underrun flag. Times are seconds on the sample clock (t = n / fs).
 // Checks, each on one channel x[n]:
 //   lost      samples that are NaN (a link that lost them). Mended by linear interpolation between
-//             the good samples either side when the gap is at most max_gap_s; longer gaps stay
-//             NaN (the analyser then makes the windows they cut invalid, naming the gap).
+//             the good samples either side when the gap is at most max_gap_s (so that the hum and
+//             drift checks see no hole), then, inside the integration windows, filled as clipped
+//             samples are (below: a straight line across a gap of a tenth of a period at the
+//             band's top is no response); longer gaps stay NaN (the analyser then makes the
+//             windows they cut invalid, naming the gap).
 //   held      runs of identical consecutive samples (a link that repeated its last value) away
 //             from the channel's extremes, on a channel whose resolution makes a repeat
 //             improbable: repeats are expected with probability q / (sigma_d sqrt(2 pi)) per
