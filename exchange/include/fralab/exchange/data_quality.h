@@ -48,7 +48,9 @@
 //             Mended by subtracting rate (t - t_mid).
 //   clock     the channel's own clock runs at another rate than the excitation's: within each
 //             integration window, the phase of each block (a multisine period; a sine's block of
-//             whole cycles) at the excited frequencies against the window's mean gives the delay
+//             whole cycles) at the excited frequencies of the band's top 1.3 decades (above a
+//             twentieth of its highest line: a slow mode's leftover transient moves the low lines'
+//             phases, a clock the high lines' most) against the window's mean gives the delay
 //             of the block, tau_b = -sum_k |Y_k|^2 w_k phi_bk / sum_k |Y_k|^2 w_k^2 (w in rad/s);
 //             tau_b regressed on the block's time over every window gives the rate error
 //             eps = d tau / dt (> 0: the channel's samples lag more and more, its clock runs
