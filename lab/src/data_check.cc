@@ -48,20 +48,29 @@ void print_data_quality(const DataQuality& q) {
     std::cerr << "fralab: data quality: " << f.text << "; " << f.action << "\n";
 }
 
-std::vector<std::string> pooled_clocks(const std::vector<ClockEstimate>& all,
-                                       const DataQualityOptions& o) {
-  std::map<std::string, std::pair<double, double>> pool;  // channel -> (sum w, sum w eps)
+std::map<std::string, ClockEstimate> pool_clocks(const std::vector<ClockEstimate>& all) {
+  std::map<std::string, std::pair<double, double>> sums;  // channel -> (sum w, sum w eps)
+  std::map<std::string, ClockEstimate> out;
   for (const ClockEstimate& e : all) {
     if (!(e.sigma > 0)) continue;
-    auto& [w, wx] = pool[e.channel];
+    auto& [w, wx] = sums[e.channel];
     w += 1 / (e.sigma * e.sigma);
     wx += e.eps / (e.sigma * e.sigma);
+    if (!out.count(e.channel)) out[e.channel] = e;  // its time and run: the first's
   }
+  for (auto& [ch, e] : out) {
+    e.eps = sums[ch].second / sums[ch].first;
+    e.sigma = 1 / std::sqrt(sums[ch].first);
+  }
+  return out;
+}
+
+std::vector<std::string> pooled_clocks(const std::vector<ClockEstimate>& all,
+                                       const DataQualityOptions& o) {
   std::vector<std::string> out;
-  for (const auto& [ch, p] : pool) {
-    const double eps = p.second / p.first, sigma = 1 / std::sqrt(p.first);
-    if (std::abs(eps) > o.clock_sigmas * sigma && std::abs(eps) > o.min_clock) out.push_back(ch);
-  }
+  for (const auto& [ch, e] : pool_clocks(all))
+    if (std::abs(e.eps) > o.clock_sigmas * e.sigma && std::abs(e.eps) > o.min_clock)
+      out.push_back(ch);
   return out;
 }
 

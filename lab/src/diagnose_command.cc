@@ -121,26 +121,22 @@ Json attach_levels(const DiagnoseCommand& c, std::vector<MeasuredPair>& data) {
   return j;
 }
 
-// Per channel the campaign's clock estimates pooled (weights 1 / sigma^2), for the channels the
-// checks did not name (those are mended): the measured periods' mean time from the
-// measurement's own runs (those under `measured`, not its validation).
+// Per channel the campaign's clock estimates pooled, for the channels the checks did not name
+// (those are mended): the measured periods' mean time from the measurement's own runs (those
+// under `measured`, not its validation).
 std::map<std::string, ClockEvidence> clock_evidence(const std::vector<ClockEstimate>& all,
                                                     const std::string& measured) {
-  std::map<std::string, ClockEvidence> out;
   const std::vector<std::string> named = pooled_clocks(all);
   const std::string validation = MeasureDir(measured).validation().root;
-  std::map<std::string, std::pair<double, double>> pool;
-  for (const ClockEstimate& e : all) {
-    if (!(e.sigma > 0) || std::find(named.begin(), named.end(), e.channel) != named.end()) continue;
-    auto& [w, wx] = pool[e.channel];
-    w += 1 / (e.sigma * e.sigma);
-    wx += e.eps / (e.sigma * e.sigma);
-    ClockEvidence& ev = out[e.channel];
-    if (ev.t_mid_s == 0 && !e.run.starts_with(validation)) ev.t_mid_s = e.t_mid_s;
-  }
-  for (auto& [ch, ev] : out) {
-    ev.eps = pool[ch].second / pool[ch].first;
-    ev.sigma = 1 / std::sqrt(pool[ch].first);
+  std::vector<ClockEstimate> measurement;  // the measurement's runs' own, for the times
+  for (const ClockEstimate& e : all)
+    if (!e.run.starts_with(validation)) measurement.push_back(e);
+  const std::map<std::string, ClockEstimate> times = pool_clocks(measurement);
+  std::map<std::string, ClockEvidence> out;
+  for (const auto& [ch, e] : pool_clocks(all)) {
+    if (std::find(named.begin(), named.end(), ch) != named.end()) continue;
+    const auto t = times.find(ch);
+    out[ch] = {e.eps, e.sigma, t != times.end() ? t->second.t_mid_s : e.t_mid_s};
   }
   return out;
 }
