@@ -680,18 +680,21 @@ void check_drift_and_clock(const std::string& ch, const double* x, const TimeSer
   // channel that agree with it within 4 sigma of their difference (all of them where this run
   // has none: a sine of two-cycle steps).
   const bool own = c.blocks > 0 && c.sigma > 0;
-  if (own) clocks->push_back({ch, c.value, c.sigma, std::isfinite(t0) ? 0.5 * (t0 + t1) : 0.0, ""});
-  double wsum = own ? 1 / (c.sigma * c.sigma) : 0, wx = own ? c.value * wsum : 0;
+  std::vector<ClockEstimate> agreeing;
+  if (own) {
+    clocks->push_back({ch, c.value, c.sigma, std::isfinite(t0) ? 0.5 * (t0 + t1) : 0.0, ""});
+    agreeing.push_back(clocks->back());
+  }
   int others = 0;
   for (const ClockEstimate& e : o.other_runs) {
     if (e.channel != ch || !(e.sigma > 0)) continue;
     if (own && std::abs(e.eps - c.value) > 4 * std::hypot(e.sigma, c.sigma)) continue;
-    wsum += 1 / (e.sigma * e.sigma);
-    wx += e.eps / (e.sigma * e.sigma);
+    agreeing.push_back(e);
     ++others;
   }
-  if (!(wsum > 0)) return;
-  const Slope pooled{wx / wsum, 1 / std::sqrt(wsum), c.blocks};
+  const auto pool = pool_clocks(agreeing);
+  if (pool.empty()) return;
+  const Slope pooled{pool.begin()->second.eps, pool.begin()->second.sigma, c.blocks};
   if (std::abs(pooled.value) > o.clock_sigmas * pooled.sigma &&
       std::abs(pooled.value) > o.min_clock) {
     if (!std::isfinite(t0)) {  // no window of its own: the run's span
@@ -948,13 +951,13 @@ void basis_row(const Window& w, int64_t n, double fs, double* a) {
   }
 }
 
-// Clipped samples (clipped[n]) inside one stretch [from, from + len) of window w replaced by the
-// least-squares fit of w's basis to the stretch's other samples, evaluated over [from, until);
-// a stretch whose samples kept are fewer than twice the basis, or hold a NaN, gets NaN there
-// instead (its window then gives invalid points).
-void fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, int64_t from,
+// Missing samples (missing[n]: missing, or a gap's) inside one stretch [from, from + len) of window
+// w replaced by the least-squares fit of w's basis to the stretch's other samples, evaluated over
+// [from, until); a stretch whose samples kept are fewer than twice the basis, or hold a NaN, gets
+// NaN there instead (its window then gives invalid points).
+void fill_stretch(double* x, const std::vector<bool>& missing, const Window& w, int64_t from,
                   int64_t len, int64_t until, double fs) {
-  if (std::find(clipped.begin() + from, clipped.begin() + until, true) == clipped.begin() + until)
+  if (std::find(missing.begin() + from, missing.begin() + until, true) == missing.begin() + until)
     return;
   const int m = basis_size(w);
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
@@ -962,7 +965,7 @@ void fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, 
   int64_t kept = 0;
   bool finite = true;
   for (int64_t n = 0; n < len; ++n) {
-    if (clipped[size_t(from + n)]) continue;
+    if (missing[size_t(from + n)]) continue;
     finite = finite && std::isfinite(x[from + n]);
     basis_row(w, n, fs, a.data());
     G.selfadjointView<Eigen::Lower>().rankUpdate(a);
@@ -976,27 +979,27 @@ void fill_stretch(double* x, const std::vector<bool>& clipped, const Window& w, 
   }
   const bool ok = c.size() == m && c.allFinite();
   for (int64_t n = 0; n < until - from; ++n) {
-    if (!clipped[size_t(from + n)]) continue;
+    if (!missing[size_t(from + n)]) continue;
     basis_row(w, n, fs, a.data());
     x[from + n] = ok ? a.dot(c) : std::numeric_limits<double>::quiet_NaN();
   }
 }
 
-// Every clipped sample inside the windows filled: a multisine period by period (a window's last,
+// Every missing sample inside the windows filled: a multisine period by period (a window's last,
 // partial period from the whole one before it), a sine step over its whole window.
-void fill_clipped(double* x, const TimeSeries& s, const std::vector<Window>& windows,
-                  const std::vector<bool>& clipped) {
+void fill_missing(double* x, const TimeSeries& s, const std::vector<Window>& windows,
+                  const std::vector<bool>& missing) {
   const double fs = s.sample_rate_hz;
   for (const Window& w : windows) {
     const int64_t a = w.from - s.start_sample, z = w.to - s.start_sample;
     if (!w.multisine) {
-      fill_stretch(x, clipped, w, a, z - a, z, fs);
+      fill_stretch(x, missing, w, a, z - a, z, fs);
       continue;
     }
     for (size_t i = 0; i < w.block_from.size(); ++i) {
       const int64_t from = w.block_from[i] - s.start_sample;
       const bool last = i + 1 == w.block_from.size();
-      fill_stretch(x, clipped, w, from, w.block_len[i], last ? z : from + w.block_len[i], fs);
+      fill_stretch(x, missing, w, from, w.block_len[i], last ? z : from + w.block_len[i], fs);
     }
   }
 }
@@ -1032,7 +1035,7 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
   const int64_t N = s.n_samples;
   const double fs = s.sample_rate_hz;
   // The clipped samples, told by their value before anything else changes it, and the gaps.
-  const std::vector<bool> clipped = windows ? missing_samples(x, s, faults) : std::vector<bool>{};
+  const std::vector<bool> missing = windows ? missing_samples(x, s, faults) : std::vector<bool>{};
   for (const DataFault* f : faults) {
     if (!f->mended || (f->kind != DataFaultKind::kLost && f->kind != DataFaultKind::kHeld))
       continue;
@@ -1049,7 +1052,7 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
     const double tm = 0.5 * (f->from_s + f->to_s);
     for (int64_t n = 0; n < N; ++n) x[n] -= f->size * (double(s.start_sample + n) / fs - tm);
   }
-  if (!clipped.empty()) fill_clipped(x, s, *windows, clipped);
+  if (!missing.empty()) fill_missing(x, s, *windows, missing);
   for (const DataFault* f : faults) {
     if (!f->mended || f->kind != DataFaultKind::kClock) continue;
     // Sample n on the excitation's clock is the channel's sample n / (1 - eps).
@@ -1079,6 +1082,23 @@ void mend_channel(double* x, const TimeSeries& s, const std::vector<const DataFa
 }  // namespace
 
 const char* to_string(DataFaultKind k) { return enum_word(kKindWords, k); }
+
+std::map<std::string, ClockEstimate> pool_clocks(const std::vector<ClockEstimate>& all) {
+  std::map<std::string, std::pair<double, double>> sums;  // channel -> (sum w, sum w eps)
+  std::map<std::string, ClockEstimate> out;
+  for (const ClockEstimate& e : all) {
+    if (!(e.sigma > 0)) continue;
+    auto& [w, wx] = sums[e.channel];
+    w += 1 / (e.sigma * e.sigma);
+    wx += e.eps / (e.sigma * e.sigma);
+    if (!out.count(e.channel)) out[e.channel] = e;  // its time and run: the first's
+  }
+  for (auto& [ch, e] : out) {
+    e.eps = sums[ch].second / sums[ch].first;
+    e.sigma = 1 / std::sqrt(sums[ch].first);
+  }
+  return out;
+}
 
 void DataQualityOptions::validate() const {
   auto positive = [](double v, const char* name) {
@@ -1138,7 +1158,7 @@ DataQuality check_data_quality(const TimeSeries& s, const Schedule& schedule,
     std::vector<const DataFault*> holes;
     for (const DataFault& f : found) holes.push_back(&f);
     if (const std::vector<bool> c = missing_samples(raw, s, holes); !c.empty())
-      fill_clipped(x, s, windows, c);
+      fill_missing(x, s, windows, c);
     // Each window's blocks, transformed once for the tests that compare periods.
     std::vector<BlockValues> values;
     for (const Window& w : windows)

@@ -48,23 +48,6 @@ void print_data_quality(const DataQuality& q) {
     std::cerr << "fralab: data quality: " << f.text << "; " << f.action << "\n";
 }
 
-std::map<std::string, ClockEstimate> pool_clocks(const std::vector<ClockEstimate>& all) {
-  std::map<std::string, std::pair<double, double>> sums;  // channel -> (sum w, sum w eps)
-  std::map<std::string, ClockEstimate> out;
-  for (const ClockEstimate& e : all) {
-    if (!(e.sigma > 0)) continue;
-    auto& [w, wx] = sums[e.channel];
-    w += 1 / (e.sigma * e.sigma);
-    wx += e.eps / (e.sigma * e.sigma);
-    if (!out.count(e.channel)) out[e.channel] = e;  // its time and run: the first's
-  }
-  for (auto& [ch, e] : out) {
-    e.eps = sums[ch].second / sums[ch].first;
-    e.sigma = 1 / std::sqrt(sums[ch].first);
-  }
-  return out;
-}
-
 std::vector<std::string> pooled_clocks(const std::vector<ClockEstimate>& all,
                                        const DataQualityOptions& o) {
   std::vector<std::string> out;

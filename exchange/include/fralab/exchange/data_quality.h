@@ -85,6 +85,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -127,6 +128,10 @@ struct ClockEstimate {
   double t_mid_s = 0.0;  // the middle of the windows it came from, s on the sample clock
   std::string run;       // the run's folder (the lab's label; "" from check_data_quality)
 };
+
+/// Per channel its estimates in `all` pooled with weights 1 / sigma^2: eps and sigma the pool's,
+/// t_mid_s and run the first estimate's (estimates without a sigma left out).
+std::map<std::string, ClockEstimate> pool_clocks(const std::vector<ClockEstimate>& all);
 
 struct DataQualityOptions {
   double max_gap_s = 0.1;        // lost/held runs mended up to this length, s

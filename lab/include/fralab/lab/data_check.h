@@ -37,12 +37,9 @@ CheckedTape check_tape(const std::string& tape, const std::string& run_id,
 /// One line per fault, "fralab: data quality: TEXT; ACTION", on stderr.
 void print_data_quality(const DataQuality& q);
 
-/// Per channel its clock estimates in `all` (every run's own, exchange/data_quality.h) pooled with
-/// weights 1 / sigma^2: eps and sigma the pool's, t_mid_s and run the first estimate's.
-std::map<std::string, ClockEstimate> pool_clocks(const std::vector<ClockEstimate>& all);
-
-/// The channels whose pooled estimate (pool_clocks) stands beyond `o.clock_sigmas` times its sigma
-/// and above `o.min_clock`.
+/// The channels whose clock estimates in `all` (every run's own), pooled (pool_clocks,
+/// exchange/data_quality.h), stand beyond `o.clock_sigmas` times the pool's sigma and above
+/// `o.min_clock`.
 std::vector<std::string> pooled_clocks(const std::vector<ClockEstimate>& all,
                                        const DataQualityOptions& o = {});
 
