@@ -92,16 +92,12 @@ TEST(DataCheck, AClockTheValidationPoolsIsMendedInTheMeasurementToo) {
   // multisine twice (noise seeds 3 and 4): each run alone sees it at 5-6 sigma, below the 6 sigma
   // that names it; the second, pooled with the first, names it. The first run's folder, a plain
   // measurement as `fralab measure` leaves it (tape, frd, run.json), is checked again.
-  fralab::testing::RandomCase c = fralab::testing::random_machine_case(4, 51, 0);
   ChannelFault clock;
   clock.kind = ChannelFaultKind::kClock;
   clock.rate_error = 1.5e-4;
-  c.engine.outputs[size_t(c.engine.output_index("Y1"))].faults = {clock};
-  AcquireOptions o;
-  o.band = "0.1:20";
-  o.points_per_decade = 5;
-  o.excitation = Excitation::kMultisine;
-  o.min_cycles = 2;
+  const fralab::testing::RandomCase c =
+      fralab::testing::random_machine_case_with_fault(4, 51, "Y1", clock);
+  const AcquireOptions o = fralab::testing::lab_multisine();
   const std::string d = fralab::testing::tmpdir("recheck", "fralab_dq_");
   const MeasureDir md(d);
   const fralab::testing::TapeRun first = fralab::testing::simulate_campaign(c.engine, o, true, 3);

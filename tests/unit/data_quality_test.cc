@@ -16,6 +16,7 @@
 
 using namespace fralab;
 using fralab::testing::analyse_run;
+using fralab::testing::lab_multisine;
 using fralab::testing::random_phase_multisine;
 using fralab::testing::simulate_campaign;
 
@@ -269,28 +270,20 @@ TEST(DataQuality, ADeadChannelIsSaidFromWhenItDied) {
 
 namespace {
 
-// The auto campaign's first run on a machine: an orthogonal multisine over 0.1-20 Hz, 5 lines a
-// decade, two measured periods.
-AcquireOptions lab_multisine() {
-  AcquireOptions o;
-  o.band = "0.1:20";
-  o.points_per_decade = 5;
-  o.excitation = Excitation::kMultisine;
-  o.min_cycles = 2;
-  return o;
+// Y1 of machine `index` of `seed` with its recorder clock `rate` fast.
+fralab::testing::RandomCase machine_with_y1_clock(uint64_t seed, int index, double rate) {
+  ChannelFault f;
+  f.kind = ChannelFaultKind::kClock;
+  f.rate_error = rate;
+  return fralab::testing::random_machine_case_with_fault(seed, index, "Y1", f);
 }
 
-// Machine `index` of `seed` (random_machine.h, nothing hidden) with Y1's recorder clock `rate`
-// fast (or dead from `dead_from_s`, when given).
-fralab::testing::RandomCase machine_with_y1(uint64_t seed, int index, double rate,
-                                            double dead_from_s = -1) {
-  fralab::testing::RandomCase c = fralab::testing::random_machine_case(seed, index, 0);
+// Y1 of machine `index` of `seed` dead from `from_s`.
+fralab::testing::RandomCase machine_with_y1_dead(uint64_t seed, int index, double from_s) {
   ChannelFault f;
-  f.kind = dead_from_s >= 0 ? ChannelFaultKind::kDead : ChannelFaultKind::kClock;
-  f.rate_error = rate;
-  f.from_s = std::max(dead_from_s, 0.0);
-  c.engine.outputs[size_t(c.engine.output_index("Y1"))].faults = {f};
-  return c;
+  f.kind = ChannelFaultKind::kDead;
+  f.from_s = from_s;
+  return fralab::testing::random_machine_case_with_fault(seed, index, "Y1", f);
 }
 
 }  // namespace
@@ -309,7 +302,7 @@ TEST(DataQuality, AChannelDeadBeforeTheFirstMeasuredPeriodIsSaid) {
   ASSERT_NE(first, nullptr);
   ASSERT_GE(first->sample, first->period_samples) << "a settle of a whole period";
   const double died = double(first->sample - first->period_samples / 2) / 1000.0;
-  const auto r = simulate_campaign(machine_with_y1(2, 2, 0, died).engine, o, true, 2);
+  const auto r = simulate_campaign(machine_with_y1_dead(2, 2, died).engine, o, true, 2);
   const TimeSeries s = blocks_to_series(r.blocks, "test");
   const DataQuality q = check_data_quality(s, Schedule{s.sample_rate_hz, "test", r.events});
   const DataFault* f = find(q, "Y1", DataFaultKind::kNoResponse);
@@ -416,7 +409,8 @@ TEST(DataQuality, AChannelDyingInsideAPeriodIsSaidNotTakenForAClock) {
   // multisine, two periods of 9.4 s in one window; Y1 dies 30 % of the way into the second. That
   // period's phases are part noise and its power a quarter of the first's: the two periods'
   // phases differ as a clock's walk would, but a clock moves phases, not power.
-  const auto r = simulate_campaign(machine_with_y1(2, 2, 0, 27.3).engine, lab_multisine(), true, 2);
+  const auto r =
+      simulate_campaign(machine_with_y1_dead(2, 2, 27.3).engine, lab_multisine(), true, 2);
   const TimeSeries s = blocks_to_series(r.blocks, "test");
   const DataQuality q = check_data_quality(s, Schedule{s.sample_rate_hz, "test", r.events});
   EXPECT_EQ(find(q, "Y1", DataFaultKind::kClock), nullptr) << listed(q);
@@ -452,7 +446,8 @@ TEST(DataQuality, ASmallClockOverTwoPeriodsIsNamed) {
   // multisine, one window of two periods; Y1's clock 0.018 % fast moves its delay by 1.7 ms over
   // a 9.4 s period, 3.3-6.7 times the estimate's sigma over noise seeds 1-10 (6.6 at seed 3):
   // named beyond 6 sigma, and nothing on the clean channels (within 1.8 sigma, the same seeds).
-  const auto r = simulate_campaign(machine_with_y1(4, 51, 1.8e-4).engine, lab_multisine(), true, 3);
+  const auto r =
+      simulate_campaign(machine_with_y1_clock(4, 51, 1.8e-4).engine, lab_multisine(), true, 3);
   const TimeSeries s = blocks_to_series(r.blocks, "test");
   const DataQuality q = check_data_quality(s, Schedule{s.sample_rate_hz, "test", r.events});
   const DataFault* f = find(q, "Y1", DataFaultKind::kClock);
@@ -466,7 +461,7 @@ TEST(DataQuality, TwoRunsTooShortAloneNameAClockTogether) {
   // own estimate stands 5.7 and 5.0 sigma from zero, below the 6 sigma a run needs alone; pooled
   // with the other run's, about 7.5 sigma. A sine of two-cycle steps, which sees no clock of its
   // own, takes the pool's.
-  const fralab::testing::RandomCase c = machine_with_y1(4, 51, 1.5e-4);
+  const fralab::testing::RandomCase c = machine_with_y1_clock(4, 51, 1.5e-4);
   const AcquireOptions o = lab_multisine();
   auto check = [&](const AcquireOptions& a, uint64_t seed, const DataQualityOptions& dq) {
     const auto r = simulate_campaign(c.engine, a, true, seed);

@@ -229,4 +229,11 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
   return c;
 }
 
+RandomCase random_machine_case_with_fault(uint64_t seed, int index, const std::string& output,
+                                          const ChannelFault& f) {
+  RandomCase c = random_machine_case(seed, index, 0);
+  c.engine.outputs[size_t(c.engine.output_index(output))].faults = {f};
+  return c;
+}
+
 }  // namespace fralab::testing

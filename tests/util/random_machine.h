@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "random_plant.h"
 
@@ -21,5 +22,9 @@ namespace fralab::testing {
 /// > 0 set the size (a test cell's dozens of channels), else 1-3 x 2-5 at random.
 RandomCase random_machine_case(uint64_t seed, int index, int n_hidden = -1, int inputs = 0,
                                int outputs = 0);
+
+/// Case `index` of `seed` with nothing hidden and the recording fault `f` on the engine's `output`.
+RandomCase random_machine_case_with_fault(uint64_t seed, int index, const std::string& output,
+                                          const ChannelFault& f);
 
 }  // namespace fralab::testing

@@ -87,6 +87,15 @@ AcquireOptions random_phase_multisine(const std::string& band, int points_per_de
   return o;
 }
 
+AcquireOptions lab_multisine() {
+  AcquireOptions o;
+  o.band = "0.1:20";
+  o.points_per_decade = 5;
+  o.excitation = Excitation::kMultisine;
+  o.min_cycles = 2;
+  return o;
+}
+
 TapeRun simulate_campaign(const Model& m, const AcquireOptions& given, bool noise, uint64_t seed) {
   AcquireOptions o = given;
   o.block = block_samples(m, o);  // as fralab-acquire sizes it

@@ -44,6 +44,9 @@ TapeRun simulate_tape(const Model& m, const std::vector<std::string>& excite,
 /// design over the excited inputs) on `band` ("LO:HI" Hz), as fralab-acquire's options.
 AcquireOptions random_phase_multisine(const std::string& band, int points_per_decade,
                                       double amplitude_pct, int realisations);
+/// The auto campaign's first run on a machine (random_machine.h): an orthogonal multisine over
+/// 0.1-20 Hz, 5 lines a decade, two measured periods.
+AcquireOptions lab_multisine();
 /// The same with the acquisition's options as they are (realisations, phases, design, ...); an
 /// adaptive stepped sine (o.adaptive) decides on the tape as fralab-acquire does.
 TapeRun simulate_campaign(const Model& m, const AcquireOptions& o, bool noise, uint64_t seed);
