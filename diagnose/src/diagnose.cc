@@ -138,15 +138,14 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
   return (cmd ? act * h : h / coupling) * held;
 }
 
-Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
-                   const DiagnoseOptions& opt) {
-  opt.validate();
-  opt.chain.validate();
-  DiagnosisRun r(sim, data, opt);
-  r.d.chain = opt.chain;
-  r.d.extended = sim;
+namespace {
+
+// The stages in order (docs/method/diagnosis.md, "The stages"); stage 3a only with_states.
+void run_stages(DiagnosisRun& r, bool with_states) {
+  r.d.chain = r.opt.chain;
+  r.d.extended = r.sim;
   prepare(r);
-  states(r);
+  if (with_states) states(r);
   modes(r);
   fit_causes(r);
   scope(r);
@@ -159,7 +158,53 @@ Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
   earn_place(r);
   level(r);
   summarise(r);
-  return std::move(r.d);
+}
+
+// The fitted parameters of a diagnosis: each finding's primary one and those besides it fitted.
+int fitted_parameters(const std::vector<Finding>& fs) {
+  int k = 0;
+  for (const Finding& f : fs) {
+    k += 1;
+    for (const SecondaryParameter& sp : cause_unit(f.cause)->secondary_parameters(f))
+      k += sp.fitted ? 1 : 0;
+  }
+  return k;
+}
+
+// chi2 of the extended model over every fitted pair and the diagnosis's parameters.
+std::pair<double, int> criterion_of(const DiagnosisRun& r) {
+  std::vector<std::string> all;
+  for (const std::vector<PairFit>* set : {&r.original, &r.absent})
+    for (const PairFit& p : *set) all.push_back(p.pair);
+  return {chi2_of(r, r.d.extended, fitted_pairs(r, all)), fitted_parameters(r.d.findings)};
+}
+
+}  // namespace
+
+Diagnosis diagnose(const Model& sim, const std::vector<MeasuredPair>& data,
+                   const DiagnoseOptions& opt) {
+  opt.validate();
+  opt.chain.validate();
+  DiagnosisRun r(sim, data, opt);
+  run_stages(r, true);
+  if (r.state_findings.empty()) return std::move(r.d);
+  // The state model's entries against the diagnosis the paths alone give: what a set of entries
+  // explains only in part (a change no entry makes, as a pole moved on one path) is better said
+  // by the paths' causes. Each is scored by its chi2 plus ln 2N per fitted parameter, in units of
+  // the misfit level of the better fit (the states stage's criterion); the paths' diagnosis is
+  // kept only when it scores better by more than one parameter's ln 2N, since where both say the
+  // same the state model's terms are the owner's.
+  DiagnosisRun paths(sim, data, opt);
+  run_stages(paths, false);
+  const auto [c_states, k_states] = criterion_of(r);
+  const auto [c_paths, k_paths] = criterion_of(paths);
+  size_t n = 0;
+  for (const PairFit& p : r.original) n += p.w.size();
+  const double penalty = std::log(2.0 * double(std::max<size_t>(n, 1)));
+  const double s = std::max(1.0, std::min(c_states, c_paths) / double(std::max<size_t>(n, 1)));
+  const bool states_better =
+      c_states / s + k_states * penalty <= c_paths / s + (k_paths + 1) * penalty;
+  return std::move(states_better ? r.d : paths.d);
 }
 
 namespace {

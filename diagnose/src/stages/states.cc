@@ -1,20 +1,31 @@
 // Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
-// model (plant/state_space.h), its own entries are candidate causes, each fitted once over every
-// pair: a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
+// model (plant/state_space.h), its own entries are candidate causes, each fitted over every pair:
+// a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
 // coupling), of B (how an input drives a state) and of C (how a state shows at an output). One
 // changed state moves the poles, zeros and gains of every path it reaches; fitted pair by pair it
 // splits into pieces or is missed.
 //
-// Each candidate's value by a scan (kScan points: a diagonal entry of A over its logarithm within
-// a factor kSpan either way, keeping its sign; another entry over +-kSpan times its value) and
-// Brent's method between the scan's neighbours; on each pair the factor G_moved / G_sim of its
-// path (the actuator's own pair: 1). Greedy, at most kMaxEntries, while the best lowers chi2 by
-// more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
-// and lowers the error of the pairs; then, kStateBackfitRounds times, each accepted entry is fitted
-// again with the others in place and replaced by another entry that fits better there. The
-// accepted entries' factor stays on the pairs, so the stages after it fit what they leave.
+// On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated as
+// C (jwI - A)^-1 B + D (delays cancel in the ratio; the actuator's own pair and a path the
+// simulation lacks: 1). Several entries changed at once are searched as sets, a beam of kBeam sets
+// per size: each set of k entries is extended by every other entry fitted alone on top of it (a
+// scan of kScan points, a diagonal entry of A over its logarithm within a factor kSpan either way
+// keeping its sign, another entry over +-kSpan times its value, then Brent's method between the
+// scan's neighbours), the kScreened best of those are fitted jointly with the set's entries
+// (Levenberg-Marquardt, Eigen's), and the kBeam best sets of k + 1 go on. Fitted one at a time, a
+// first entry that stands in for two changed ones would stay; fitted as sets, the entries that
+// changed fit together. The best set of each size is taken while the next size lowers chi2 by more
+// than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion) and
+// lowers the error of the pairs. The accepted entries' factor stays on the pairs, so the stages
+// after it fit what they leave.
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <numeric>
+#include <tuple>
+#include <unsupported/Eigen/LevenbergMarquardt>
+#include <unsupported/Eigen/NumericalDiff>
 
 #include "../causes/state_parameter.h"
 #include "fralab/core/numerics.h"
@@ -24,59 +35,121 @@
 namespace fralab::diag {
 namespace {
 
-constexpr int kScan = 41;
+constexpr int kScan = 21;
 constexpr double kSpan = 4;
 constexpr int kMaxEntries = 3;
-constexpr int kStateBrentBits = 30;
-constexpr int kStateBackfitRounds = 2;
+constexpr int kStateBrentBits = 24;
+constexpr size_t kBeam = 4;
+constexpr size_t kScreened = 6;
+// The step of the linear screen's derivatives, in an entry's coordinate (ln |v| or v / |v0|).
+constexpr double kLinearStep = 0.05;
+// A residual standing for an unstable state model (Levenberg-Marquardt then refuses the step).
+constexpr double kUnstableResidual = 1e8;
 
 using Paths = std::vector<std::vector<std::optional<Tf>>>;
 
-// On every prepared pair, its path's response under `to` over that under `from` (the actuator's
-// own pair, and a path `from` lacks: 1).
-std::vector<std::vector<C>> path_ratio(const DiagnosisRun& r, const StateSpace& ss,
-                                       const Paths& from, const Paths& to) {
-  std::vector<std::vector<C>> F(r.pairs.size());
-  for (size_t k = 0; k < r.pairs.size(); ++k) {
-    const PairFit& p = r.pairs[k];
-    F[k].assign(p.w.size(), C(1, 0));
-    const PairId id = PairId::parse(p.pair);
-    if (id.actuator()) continue;
-    const auto oi = std::find(ss.outputs.begin(), ss.outputs.end(), id.output);
-    const auto ii = std::find(ss.inputs.begin(), ss.inputs.end(), id.input);
-    if (oi == ss.outputs.end() || ii == ss.inputs.end()) continue;
-    const size_t i = size_t(oi - ss.outputs.begin()), j = size_t(ii - ss.inputs.begin());
-    const auto& a = from[i][j];
-    const auto& b = to[i][j];
-    if (!a) continue;
-    for (size_t q = 0; q < p.w.size(); ++q) {
-      const C s(0, p.w[q]);
-      F[k][q] = b ? b->rational(s) / a->rational(s) : C(0, 0);
+// The prepared pairs' points as the state model sees them: the response of a state model at every
+// distinct frequency, and the factor it puts on each pair over the simulation's.
+class StateEval {
+ public:
+  StateEval(const DiagnosisRun& r, const StateSpace& sim, const Paths& sim_paths) : r_(r) {
+    std::map<double, size_t> index;
+    at_.resize(r.pairs.size());
+    for (size_t k = 0; k < r.pairs.size(); ++k) {
+      const PairFit& p = r.pairs[k];
+      const PairId id = PairId::parse(p.pair);
+      if (id.actuator()) continue;
+      const auto oi = std::find(sim.outputs.begin(), sim.outputs.end(), id.output);
+      const auto ii = std::find(sim.inputs.begin(), sim.inputs.end(), id.input);
+      if (oi == sim.outputs.end() || ii == sim.inputs.end()) continue;
+      const size_t i = size_t(oi - sim.outputs.begin()), j = size_t(ii - sim.inputs.begin());
+      if (!sim_paths[i][j]) continue;
+      at_[k].path = {Eigen::Index(i), Eigen::Index(j)};
+      for (double w : p.w) {
+        const auto it = index.emplace(w, w_.size()).first;
+        if (it->second == w_.size()) w_.push_back(w);
+        at_[k].w.push_back(it->second);
+      }
     }
+    ok_ = responses(sim, &g_sim_);
   }
-  return F;
-}
+  bool ok() const { return ok_; }
 
-// The factor of the entry moved to v on every prepared pair, over `base` (ss's paths); empty
-// when the state model is not stable or cannot be factored at v.
-std::vector<std::vector<C>> factors(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
-                                    const StateEntry& e, double v) {
-  const auto moved = state_paths(with_entry(ss, e, v));
-  if (!moved) return {};
-  return path_ratio(r, ss, base, *moved);
-}
-
-double state_chi2_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
-  double c = 0;
-  for (size_t k = 0; k < r.pairs.size(); ++k) {
-    const PairFit& p = r.pairs[k];
-    for (size_t q = 0; q < p.w.size(); ++q) {
-      const C f = F.empty() ? p.factor[q] : p.factor[q] * F[k][q];
-      c += std::norm((p.meas[q] - p.sim[q] * f) / p.sig[q]);
+  // G(jw) = C (jwI - A)^-1 B + D at every distinct frequency; false when A has a mode outside the
+  // open left half plane.
+  bool responses(const StateSpace& ss, std::vector<Eigen::MatrixXcd>* g) const {
+    const Eigen::Index n = ss.A.rows();
+    if (n == 0 || !ss.A.allFinite()) return false;
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
+    if (es.info() != Eigen::Success || !(es.eigenvalues().real().maxCoeff() < 0)) return false;
+    const Eigen::MatrixXcd B = ss.B.cast<C>(), Cm = ss.C.cast<C>();
+    g->resize(w_.size());
+    for (size_t q = 0; q < w_.size(); ++q) {
+      Eigen::MatrixXcd M = -ss.A.cast<C>();
+      M.diagonal().array() += C(0, w_[q]);
+      (*g)[q] = Cm * M.partialPivLu().solve(B);
+      if (ss.D.size()) (*g)[q] += ss.D.cast<C>();
     }
+    return true;
   }
-  return c;
-}
+
+  // On every prepared pair, the factor G_ss / G_sim at each point (1 where the path is not the
+  // state model's); empty when ss is not stable.
+  std::vector<std::vector<C>> ratio(const StateSpace& ss) const {
+    std::vector<Eigen::MatrixXcd> g;
+    if (!responses(ss, &g)) return {};
+    std::vector<std::vector<C>> F(r_.pairs.size());
+    for (size_t k = 0; k < r_.pairs.size(); ++k) {
+      F[k].assign(r_.pairs[k].w.size(), C(1, 0));
+      const auto [i, j] = at_[k].path;
+      if (i < 0) continue;
+      for (size_t q = 0; q < F[k].size(); ++q) {
+        const C s = g_sim_[at_[k].w[q]](i, j);
+        if (std::abs(s) > 0) F[k][q] = g[at_[k].w[q]](i, j) / s;
+      }
+    }
+    return F;
+  }
+
+  // The weighted residuals (real and imaginary parts, every pair's points in turn) of the pairs
+  // under ss on top of their factors before this stage; false when ss is not stable.
+  bool residuals(const StateSpace& ss, Eigen::VectorXd* res) const {
+    const auto F = ratio(ss);
+    if (F.empty()) return false;
+    res->resize(Eigen::Index(2 * points()));
+    Eigen::Index m = 0;
+    for (size_t k = 0; k < r_.pairs.size(); ++k) {
+      const PairFit& p = r_.pairs[k];
+      for (size_t q = 0; q < p.w.size(); ++q) {
+        const C e = (p.meas[q] - p.sim[q] * p.factor[q] * F[k][q]) / p.sig[q];
+        (*res)(m++) = e.real(), (*res)(m++) = e.imag();
+      }
+    }
+    return true;
+  }
+
+  double chi2(const StateSpace& ss) const {
+    Eigen::VectorXd res;
+    return residuals(ss, &res) ? res.squaredNorm() : INFINITY;
+  }
+
+  size_t points() const {
+    size_t n = 0;
+    for (const PairFit& p : r_.pairs) n += p.w.size();
+    return n;
+  }
+
+ private:
+  struct PairAt {
+    std::pair<Eigen::Index, Eigen::Index> path{-1, -1};  // (output, input) in the state model
+    std::vector<size_t> w;                               // each point's distinct frequency
+  };
+  const DiagnosisRun& r_;
+  std::vector<double> w_;
+  std::vector<PairAt> at_;
+  std::vector<Eigen::MatrixXcd> g_sim_;
+  bool ok_ = false;
+};
 
 // rms |ln(model / measured)| over every prepared pair with F on top of their factors.
 double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
@@ -95,41 +168,42 @@ double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>
   return n ? std::sqrt(s / double(n)) : 0;
 }
 
-struct Fitted {
-  StateEntry e;
-  double value = 0, chi2 = INFINITY;
-  std::vector<std::vector<C>> F;
-};
+bool is_rate(const StateEntry& e) { return e.matrix == 'A' && e.row == e.col; }
 
-Fitted fit_entry(const DiagnosisRun& r, const StateSpace& ss, const Paths& base,
-                 const StateEntry& e) {
-  const double v0 = entry_value(ss, e);
-  const bool rate = e.matrix == 'A' && e.row == e.col;
-  // The scan's coordinate x: ln |v| for a rate (its sign kept), v itself otherwise.
-  auto value = [&](double x) { return rate ? std::copysign(std::exp(x), v0) : x; };
-  const double lo = rate ? std::log(std::abs(v0) / kSpan) : v0 - kSpan * std::abs(v0);
-  const double hi = rate ? std::log(std::abs(v0) * kSpan) : v0 + kSpan * std::abs(v0);
-  auto chi2_at = [&](double x) {
-    const auto F = factors(r, ss, base, e, value(x));
-    return F.empty() ? INFINITY : state_chi2_with(r, F);
-  };
-  std::vector<double> xs(kScan), cs(kScan);
-  size_t best = 0;
-  for (int q = 0; q < kScan; ++q) {
-    xs[size_t(q)] = lo + (hi - lo) * q / (kScan - 1);
-    cs[size_t(q)] = chi2_at(xs[size_t(q)]);
-    if (cs[size_t(q)] < cs[best]) best = size_t(q);
-  }
-  Fitted f;
-  f.e = e;
-  if (!std::isfinite(cs[best])) return f;
-  const double a = xs[best > 0 ? best - 1 : 0], b = xs[std::min(best + 1, xs.size() - 1)];
-  const double x = detail::brent_minimum(chi2_at, a, b, kStateBrentBits);
-  f.value = value(x);
-  f.F = factors(r, ss, base, e, f.value);
-  f.chi2 = f.F.empty() ? INFINITY : state_chi2_with(r, f.F);
-  return f;
+// An entry's coordinate for the fits: ln |v| for a rate (its sign kept), v / |v0| otherwise.
+double to_x(const StateEntry& e, double v0, double v) {
+  return is_rate(e) ? std::log(std::abs(v)) : v / std::abs(v0);
 }
+double to_v(const StateEntry& e, double v0, double x) {
+  return is_rate(e) ? std::copysign(std::exp(x), v0) : x * std::abs(v0);
+}
+
+bool same_entry(const StateEntry& a, const StateEntry& b) {
+  return a.matrix == b.matrix && a.row == b.row && a.col == b.col;
+}
+
+// Entries of the state model moved together, and chi2 with them moved.
+struct EntrySet {
+  std::vector<StateEntry> e;
+  std::vector<double> v;
+  double chi2 = INFINITY;
+
+  bool holds(const StateEntry& x) const {
+    return std::any_of(e.begin(), e.end(), [&](const StateEntry& y) { return same_entry(x, y); });
+  }
+  StateSpace applied_to(const StateSpace& sim) const {
+    StateSpace ss = sim;
+    for (size_t k = 0; k < e.size(); ++k) ss = with_entry(ss, e[k], v[k]);
+    return ss;
+  }
+  // The same entries whatever their order.
+  std::vector<std::tuple<char, int, int>> key() const {
+    std::vector<std::tuple<char, int, int>> out;
+    for (const StateEntry& x : e) out.emplace_back(x.matrix, x.row, x.col);
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+};
 
 // The state model's nonzero entries of A, B and C.
 std::vector<StateEntry> candidates_of(const StateSpace& ss) {
@@ -146,24 +220,154 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
   return out;
 }
 
-bool same_entry(const StateEntry& a, const StateEntry& b) {
-  return a.matrix == b.matrix && a.row == b.row && a.col == b.col;
+// Entry e fitted alone on top of `base` (the set's entries in place): its value and chi2.
+std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim,
+                                    const StateSpace& base, const StateEntry& e) {
+  const double v0 = entry_value(sim, e);
+  const double x0 = to_x(e, v0, v0);
+  const double lo = is_rate(e) ? x0 - std::log(kSpan) : -kSpan;
+  const double hi = is_rate(e) ? x0 + std::log(kSpan) : kSpan;
+  // A rate's coordinate is centred on its value; another entry's spans +-kSpan times it around it.
+  const double shift = is_rate(e) ? 0 : x0;
+  auto chi2_at = [&](double x) { return ev.chi2(with_entry(base, e, to_v(e, v0, x + shift))); };
+  std::vector<double> xs(kScan), cs(kScan);
+  size_t best = 0;
+  for (int q = 0; q < kScan; ++q) {
+    xs[size_t(q)] = lo + (hi - lo) * q / (kScan - 1);
+    cs[size_t(q)] = chi2_at(xs[size_t(q)]);
+    if (cs[size_t(q)] < cs[best]) best = size_t(q);
+  }
+  if (!std::isfinite(cs[best])) return {v0, INFINITY};
+  const double a = xs[best > 0 ? best - 1 : 0], b = xs[std::min(best + 1, xs.size() - 1)];
+  const double x = detail::brent_minimum(chi2_at, a, b, kStateBrentBits);
+  const double c = chi2_at(x);
+  return c < cs[best] ? std::make_pair(to_v(e, v0, x + shift), c)
+                      : std::make_pair(to_v(e, v0, xs[best] + shift), cs[best]);
 }
 
-// The best entry to move on top of `ss` (the others' factors on the pairs), `skip` left out.
-Fitted best_entry(const DiagnosisRun& r, const StateSpace& ss,
-                  const std::vector<StateEntry>& skip) {
-  Fitted best;
-  const auto base = state_paths(ss);
-  if (!base) return best;
-  for (const StateEntry& e : candidates_of(ss)) {
-    if (std::any_of(skip.begin(), skip.end(),
-                    [&](const StateEntry& s) { return same_entry(s, e); }))
-      continue;
-    Fitted f = fit_entry(r, ss, *base, e);
-    if (f.chi2 < best.chi2) best = std::move(f);
+// The residuals of a set of entries at coordinates x, for Eigen's Levenberg-Marquardt.
+struct SetResiduals : Eigen::DenseFunctor<double> {
+  SetResiduals(const StateEval& ev, const StateSpace& sim, const EntrySet& s, int values)
+      : Eigen::DenseFunctor<double>(int(s.e.size()), values), ev(ev), sim(sim), s(s) {}
+  int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& fvec) const {
+    EntrySet t = s;
+    for (size_t k = 0; k < t.e.size(); ++k)
+      t.v[k] = to_v(t.e[k], entry_value(sim, t.e[k]), x(Eigen::Index(k)));
+    if (!ev.residuals(t.applied_to(sim), &fvec)) fvec.setConstant(values(), kUnstableResidual);
+    return 0;
   }
-  return best;
+  const StateEval& ev;
+  const StateSpace& sim;
+  const EntrySet& s;
+};
+
+// The set's entries fitted together from their values in s; s as it was when that does not lower
+// its chi2.
+EntrySet fit_jointly(const StateEval& ev, const StateSpace& sim, EntrySet s) {
+  s.chi2 = ev.chi2(s.applied_to(sim));
+  if (!std::isfinite(s.chi2)) return s;
+  Eigen::VectorXd x(Eigen::Index(s.e.size()));
+  for (size_t k = 0; k < s.e.size(); ++k)
+    x(Eigen::Index(k)) = to_x(s.e[k], entry_value(sim, s.e[k]), s.v[k]);
+  const SetResiduals f(ev, sim, s, int(2 * ev.points()));
+  Eigen::NumericalDiff<SetResiduals> df(f);
+  Eigen::LevenbergMarquardt<Eigen::NumericalDiff<SetResiduals>> lm(df);
+  lm.setMaxfev(50 * (int(s.e.size()) + 1));
+  lm.minimize(x);
+  EntrySet t = s;
+  for (size_t k = 0; k < t.e.size(); ++k)
+    t.v[k] = to_v(t.e[k], entry_value(sim, t.e[k]), x(Eigen::Index(k)));
+  t.chi2 = ev.chi2(t.applied_to(sim));
+  return t.chi2 < s.chi2 ? t : s;
+}
+
+// The residuals of `s` with entry e (not in s) at coordinate x.
+Eigen::VectorXd residuals_at(const StateEval& ev, const StateSpace& sim, const StateSpace& base,
+                             const StateEntry& e, double x) {
+  Eigen::VectorXd res;
+  if (!ev.residuals(with_entry(base, e, to_v(e, entry_value(sim, e), x)), &res))
+    res.setConstant(Eigen::Index(2 * ev.points()), kUnstableResidual);
+  return res;
+}
+
+// For each candidate, the chi2 a Gauss-Newton step predicts with it and the set's entries moved
+// together from `s`: the residuals r0 and each entry's derivative (forward differences of
+// kLinearStep in its coordinate), the candidate's derivative and r0 projected off the set's
+// derivatives, chi2 = |r0'|^2 - (j' . r0')^2 / |j'|^2. INFINITY where not stable.
+std::vector<double> linear_screen(const StateEval& ev, const StateSpace& sim, const EntrySet& s,
+                                  const std::vector<StateEntry>& candidates) {
+  const StateSpace base = s.applied_to(sim);
+  Eigen::VectorXd r0;
+  std::vector<double> out(candidates.size(), INFINITY);
+  if (!ev.residuals(base, &r0)) return out;
+  auto derivative = [&](const StateEntry& e, double v) {
+    const double x = to_x(e, entry_value(sim, e), v);
+    return Eigen::VectorXd((residuals_at(ev, sim, base, e, x + kLinearStep) - r0) / kLinearStep);
+  };
+  Eigen::MatrixXd Js(r0.size(), Eigen::Index(s.e.size()));
+  for (size_t k = 0; k < s.e.size(); ++k) Js.col(Eigen::Index(k)) = derivative(s.e[k], s.v[k]);
+  // P projects off the set's derivatives (the identity for the empty set).
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Js);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(Js.rows(), Js.cols());
+  auto off = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+    return Js.cols() ? Eigen::VectorXd(v - Q * (Q.transpose() * v)) : v;
+  };
+  const Eigen::VectorXd r = off(r0);
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    if (s.holds(candidates[c])) continue;
+    const Eigen::VectorXd j = off(derivative(candidates[c], entry_value(sim, candidates[c])));
+    const double jj = j.squaredNorm();
+    if (!std::isfinite(jj) || j.cwiseAbs().maxCoeff() >= kUnstableResidual / kLinearStep / 2)
+      continue;
+    const double jr = j.dot(r);
+    out[c] = jj > 0 ? r.squaredNorm() - jr * jr / jj : r.squaredNorm();
+  }
+  return out;
+}
+
+// Every set of one more entry than those of `beam`: each new entry screened alone on top of the
+// set (fit_alone) and by a Gauss-Newton step with the set's entries (linear_screen); the
+// kScreened best by each fitted jointly with the set's entries; the kBeam best, distinct, best
+// first.
+std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
+                             const std::vector<StateEntry>& candidates,
+                             const std::vector<EntrySet>& beam) {
+  std::vector<EntrySet> next;
+  for (const EntrySet& s : beam) {
+    const StateSpace base = s.applied_to(sim);
+    const std::vector<double> linear = linear_screen(ev, sim, s, candidates);
+    std::vector<double> alone(candidates.size(), INFINITY), value(candidates.size(), 0);
+    for (size_t c = 0; c < candidates.size(); ++c)
+      if (!s.holds(candidates[c]))
+        std::tie(value[c], alone[c]) = fit_alone(ev, sim, base, candidates[c]);
+    std::vector<bool> chosen(candidates.size(), false);
+    for (const std::vector<double>* by :
+         {static_cast<const std::vector<double>*>(&alone), &linear}) {
+      std::vector<size_t> order(candidates.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(),
+                [&](size_t a, size_t b) { return (*by)[a] < (*by)[b]; });
+      for (size_t k = 0; k < std::min(kScreened, order.size()); ++k)
+        if (std::isfinite((*by)[order[k]]) && std::isfinite(alone[order[k]]))
+          chosen[order[k]] = true;
+    }
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      if (!chosen[c]) continue;
+      EntrySet t = s;
+      t.e.push_back(candidates[c]), t.v.push_back(value[c]);
+      next.push_back(fit_jointly(ev, sim, std::move(t)));
+    }
+  }
+  std::sort(next.begin(), next.end(),
+            [](const EntrySet& a, const EntrySet& b) { return a.chi2 < b.chi2; });
+  std::vector<EntrySet> out;
+  for (EntrySet& s : next) {
+    if (out.size() == kBeam) break;
+    if (!std::isfinite(s.chi2)) continue;
+    if (std::none_of(out.begin(), out.end(), [&](const EntrySet& o) { return o.key() == s.key(); }))
+      out.push_back(std::move(s));
+  }
+  return out;
 }
 
 }  // namespace
@@ -173,66 +377,40 @@ void states(DiagnosisRun& r) {
   const StateSpace& sim = *r.sim.state_space;
   const auto sim_paths = state_paths(sim);
   if (!sim_paths) return;
-  size_t n = 0;
+  const StateEval ev(r, sim, *sim_paths);
+  if (!ev.ok()) return;
+  const size_t n = ev.points();
   std::vector<std::string> pairs;
-  std::vector<std::vector<C>> f0;  // the pairs' factors before this stage
-  for (const PairFit& p : r.pairs) {
-    n += p.w.size();
-    f0.push_back(p.factor);
+  for (const PairFit& p : r.pairs)
     if (!PairId::parse(p.pair).actuator()) pairs.push_back(p.pair);
+  const std::vector<StateEntry> candidates = candidates_of(sim);
+
+  EntrySet none;
+  none.chi2 = ev.chi2(sim);
+  std::vector<EntrySet> best{none}, beam{none};
+  for (int size = 1; size <= kMaxEntries; ++size) {
+    beam = extend(ev, sim, candidates, beam);
+    if (beam.empty()) break;
+    best.push_back(beam.front());
   }
-  // The accepted entries (distinct, so their order does not matter); set_factors puts those but
-  // `skip` on the pairs and returns that state model.
-  std::vector<Fitted> taken;
-  auto set_factors = [&](size_t skip) {
-    StateSpace ss = sim;
-    for (size_t j = 0; j < taken.size(); ++j)
-      if (j != skip) ss = with_entry(ss, taken[j].e, taken[j].value);
-    const auto paths = state_paths(ss);
-    const auto F = paths ? path_ratio(r, sim, *sim_paths, *paths) : std::vector<std::vector<C>>{};
-    for (size_t k = 0; k < r.pairs.size(); ++k)
-      for (size_t q = 0; q < r.pairs[k].w.size(); ++q)
-        r.pairs[k].factor[q] = F.empty() ? f0[k][q] : f0[k][q] * F[k][q];
-    return ss;
-  };
-  auto entries_but = [&](size_t skip) {
-    std::vector<StateEntry> out;
-    for (size_t j = 0; j < taken.size(); ++j)
-      if (j != skip) out.push_back(taken[j].e);
-    return out;
-  };
-  for (int round = 0; round < kMaxEntries; ++round) {
-    const StateSpace ss = set_factors(taken.size());
-    const double c0 = state_chi2_with(r, {}), e0 = state_error_with(r, {});
-    Fitted best = best_entry(r, ss, entries_but(taken.size()));
-    if (!std::isfinite(best.chi2) || earned(c0, best.chi2, n, 1) <= 0 ||
-        !(state_error_with(r, best.F) < e0))
-      break;
-    taken.push_back(std::move(best));
+  // The largest set each of whose sizes earned its place over the one before, and that the
+  // simulation's own factoring takes (as the finding's model will).
+  size_t k = 0;
+  double e_k = state_error_with(r, {});
+  while (k + 1 < best.size()) {
+    const StateSpace ss = best[k + 1].applied_to(sim);
+    const auto F = ev.ratio(ss);
+    if (F.empty() || earned(best[k].chi2, best[k + 1].chi2, n, 1) <= 0 || !state_paths(ss)) break;
+    const double e = state_error_with(r, F);
+    if (!(e < e_k)) break;
+    e_k = e, ++k;
   }
-  // Each accepted entry taken out and the best entry put in its place, the others as they are:
-  // a first pick that stood in for two changed entries gives way to the entries that changed.
-  for (int round = 0; round < kStateBackfitRounds && taken.size() > 1; ++round) {
-    bool swapped = false;
-    for (size_t j = 0; j < taken.size(); ++j) {
-      const StateSpace ss = set_factors(j);
-      const auto base = state_paths(ss);
-      if (!base) continue;
-      Fitted again = fit_entry(r, ss, *base, taken[j].e);
-      Fitted best = best_entry(r, ss, entries_but(j));
-      if (std::isfinite(best.chi2) && best.chi2 < again.chi2 * (1 - 1e-9) &&
-          !same_entry(best.e, taken[j].e)) {
-        taken[j] = std::move(best);
-        swapped = true;
-      } else if (std::isfinite(again.chi2)) {
-        taken[j] = std::move(again);
-      }
-    }
-    if (!swapped) break;
-  }
-  set_factors(taken.size());
-  for (const Fitted& t : taken)
-    r.state_findings.push_back(state_parameter_finding(sim, t.e, t.value, pairs));
+  if (k == 0) return;
+  const auto F = ev.ratio(best[k].applied_to(sim));
+  for (size_t p = 0; p < r.pairs.size(); ++p)
+    for (size_t q = 0; q < r.pairs[p].w.size(); ++q) r.pairs[p].factor[q] *= F[p][q];
+  for (size_t j = 0; j < best[k].e.size(); ++j)
+    r.state_findings.push_back(state_parameter_finding(sim, best[k].e[j], best[k].v[j], pairs));
 }
 
 }  // namespace fralab::diag
