@@ -114,7 +114,10 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
   return c;
 }
 
-std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
+namespace {
+
+// state_measurement's grid, rad/s: a decade beyond the simulation's modes each side, 10 a decade.
+std::vector<double> state_grid(const RandomCase& c) {
   const Eigen::MatrixXd& A = c.simulation.state_space->A;
   const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
   double lo = INFINITY, hi = 0;
@@ -126,7 +129,44 @@ std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, 
   const int n = int(std::ceil(10 * std::log10(hi / lo))) + 1;
   std::vector<double> w;
   for (int j = 0; j < n; ++j) w.push_back(lo * std::pow(hi / lo, double(j) / (n - 1)));
-  return exact_measurement(c.engine, w, seed, rel_sigma);
+  return w;
+}
+
+// C (jwI - A)^-1 B + D.
+Eigen::MatrixXcd response(const StateSpace& ss, double w) {
+  Eigen::MatrixXcd M = -ss.A.cast<C>();
+  M.diagonal().array() += C(0, w);
+  Eigen::MatrixXcd g = ss.C.cast<C>() * M.partialPivLu().solve(ss.B.cast<C>());
+  if (ss.D.size()) g += ss.D.cast<C>();
+  return g;
+}
+
+}  // namespace
+
+std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
+  return exact_measurement(c.engine, state_grid(c), seed, rel_sigma);
+}
+
+bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double rel_sigma) {
+  const StateSpace& truth = *c.engine.state_space;
+  const StateSpace& sim = *c.simulation.state_space;
+  const char matrix = e.text.at("matrix")[0];
+  const int i = int(e.exact.at("row")) - 1, j = int(e.exact.at("col")) - 1;
+  StateSpace undone = truth;
+  Eigen::MatrixXd& m = matrix == 'A' ? undone.A : matrix == 'B' ? undone.B : undone.C;
+  m(i, j) = (matrix == 'A' ? sim.A : matrix == 'B' ? sim.B : sim.C)(i, j);
+  double chi2 = 0;
+  size_t n = 0;
+  for (double w : state_grid(c)) {
+    const Eigen::MatrixXcd g = response(truth, w), h = response(undone, w);
+    for (Eigen::Index a = 0; a < g.rows(); ++a)
+      for (Eigen::Index b = 0; b < g.cols(); ++b) {
+        if (std::abs(g(a, b)) == 0) continue;
+        chi2 += std::norm((g(a, b) - h(a, b)) / (rel_sigma * std::abs(g(a, b))));
+        ++n;
+      }
+  }
+  return chi2 > std::log(2.0 * double(std::max<size_t>(n, 1)));
 }
 
 }  // namespace fralab::testing

@@ -22,4 +22,11 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden = -1);
 std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed,
                                             double rel_sigma = 0.002);
 
+/// Whether the data resolve hidden entry `e` of case c: undoing it alone (the engine's entry back
+/// at the simulation's value, the other changes kept) moves the responses on the measurement's
+/// grid (state_measurement's) by chi2 = sum |G - G_undone|^2 / (rel_sigma |G|)^2 over every path
+/// and point of more than ln 2N, N the points, what one parameter must earn in the diagnosis.
+/// An entry that does not move them that far is not in the data to be found.
+bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double rel_sigma = 0.002);
+
 }  // namespace fralab::testing
