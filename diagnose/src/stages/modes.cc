@@ -9,8 +9,11 @@
 // input (at least two pairs). A move is the factor D_from / D_to on each pair (ln wn by a grid
 // over +-kSearchRel in steps of a third of the damping, then the damping, then the two
 // alternately by Brent's method), or, when its chi2 is lower, the same move with each path's mode
-// shape kept (mode_residues.h). Greedy, while a move lowers chi2 by more than k ln 2N in units of
-// its pairs' misfit level s = max(1, chi2 / N) and lowers their error; then each mode fitted
+// shape kept (mode_residues.h). chi2 here is taken in the logarithm with each pair's gain left
+// free (pair_log_chi2): a calibration or a path gain, fitted by the later stages, is not taken up
+// by a mode, and a wrong neighbour's peak does not flatten the mode being fitted. Greedy, while a
+// move lowers chi2 by more than k ln 2N in units of its pairs' misfit level s = max(1, chi2 / N)
+// and lowers their error; then each mode fitted
 // again with the others in place, and the least useful dropped while it does not earn its place.
 // A frequency move below kBandShare of the half-power band is a damping_error.
 #include <algorithm>
@@ -164,13 +167,35 @@ std::vector<std::vector<C>> move_factors(const DiagnosisRun& r, const SharedMode
   return F;
 }
 
+// chi2 of one pair in the logarithm, its gain profiled out: each point's term is
+// |ln(model / meas) - ln g|^2 (|meas| / sigma)^2, g the pair's real gain that minimises the sum
+// (the weighted mean of ln |model / meas|). Near the fit a point's term is its
+// |meas - model|^2 / sigma^2; far from it, the logarithm weighs a resonance the model puts where
+// the data have none as it weighs one the data have where the model has none (the plain term
+// weighs the first by the peak's height squared, and a fit of one mode next to another mode that
+// is wrong then flattens its own peak). The gain left free keeps a calibration or a path's gain,
+// which later stages fit, from being taken up by the modes.
+template <class Model>
+double pair_log_chi2(const PairFit& p, Model&& model) {
+  double sw = 0, swa = 0, swaa = 0, swbb = 0;
+  for (size_t q = 0; q < p.w.size(); ++q) {
+    const C m = model(q);
+    if (!(std::abs(m) > 0) || !(std::abs(p.meas[q]) > 0)) continue;
+    const C l = std::log(m / p.meas[q]);
+    const double w = std::norm(p.meas[q]) / (p.sig[q] * p.sig[q]);
+    sw += w, swa += w * l.real(), swaa += w * l.real() * l.real(), swbb += w * l.imag() * l.imag();
+  }
+  return sw > 0 ? std::max(0.0, swaa - swa * swa / sw) + swbb : 0.0;
+}
+
 // chi2 over the mode's pairs with F on top of their factors (none: their factors as they are).
 double chi2_with(const DiagnosisRun& r, const SharedMode& m,
                  const std::vector<std::vector<C>>& F = {}) {
   double c = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
     const PairFit& p = r.pairs[m.pairs[j]];
-    c += chi2(p, F.empty() ? std::vector<C>(p.w.size(), 1.0) : F[j]);
+    c += pair_log_chi2(
+        p, [&](size_t q) { return p.sim[q] * p.factor[q] * (F.empty() ? C(1) : F[j][q]); });
   }
   return c;
 }
@@ -181,10 +206,9 @@ double chi2_moved(const DiagnosisRun& r, const SharedMode& m, const Root& to, bo
   double c = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
     const PairFit& p = r.pairs[m.pairs[j]];
-    for (size_t q = 0; q < p.w.size(); ++q) {
-      const C F = move_factor(m, j, q, p.w[q], to, shape_kept);
-      c += std::norm((p.meas[q] - p.sim[q] * p.factor[q] * F) / p.sig[q]);
-    }
+    c += pair_log_chi2(p, [&](size_t q) {
+      return p.sim[q] * p.factor[q] * move_factor(m, j, q, p.w[q], to, shape_kept);
+    });
   }
   return c;
 }
