@@ -144,6 +144,7 @@ void resolve(DiagnosisRun& r) {
                       {"from_zeta", f.parameters.at("from_zeta")},
                       {"to_zeta", f.parameters.at("to_zeta")}};
       d.intervals.clear();
+      d.explanation.clear();  // said again as a damping_error by summarise
       std::vector<Finding> as_damping = findings;
       as_damping[i] = d;
       const double c_d = chi2_of_model(extended_by(r, as_damping, as_damping.size()));
