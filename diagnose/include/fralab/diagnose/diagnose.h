@@ -261,6 +261,10 @@ struct Diagnosis {
   std::string metric = "rms over points of |ln(G_model/G_measured)| (nepers and radians combined)";
 };
 
+/// The diagnosis of `data` against `simulation` (docs/method/diagnosis.md, "The stages"). Where
+/// the simulation is a state model and stage 3a names entries of it, the diagnosis by the paths
+/// alone (stage 3a left out) is made too, and kept instead only when its chi2 plus ln 2N per
+/// fitted parameter is lower by more than one parameter's ln 2N.
 Diagnosis diagnose(const Model& simulation, const std::vector<MeasuredPair>& data,
                    const DiagnoseOptions& opt = {});
 
