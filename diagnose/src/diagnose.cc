@@ -173,10 +173,10 @@ int fitted_parameters(const std::vector<Finding>& fs) {
 
 // chi2 of the extended model over every fitted pair and the diagnosis's parameters.
 std::pair<double, int> criterion_of(const DiagnosisRun& r) {
-  std::vector<std::string> all;
+  std::vector<const PairFit*> all;
   for (const std::vector<PairFit>* set : {&r.original, &r.absent})
-    for (const PairFit& p : *set) all.push_back(p.pair);
-  return {chi2_of(r, r.d.extended, fitted_pairs(r, all)), fitted_parameters(r.d.findings)};
+    for (const PairFit& p : *set) all.push_back(&p);
+  return {chi2_of(r, r.d.extended, all), fitted_parameters(r.d.findings)};
 }
 
 }  // namespace

@@ -36,13 +36,6 @@ std::vector<Root> as_roots(const std::vector<Cd>& r) {
   return out;
 }
 
-Cd response(const StateSpace& ss, int i, int j, Cd s) {
-  const Eigen::Index n = ss.A.rows();
-  const Eigen::MatrixXcd M = s * Eigen::MatrixXcd::Identity(n, n) - ss.A.cast<Cd>();
-  const Eigen::VectorXcd x = M.partialPivLu().solve(ss.B.col(j).cast<Cd>());
-  return (ss.C.row(i).cast<Cd>() * x)(0) + (ss.D.size() ? ss.D(i, j) : 0.0);
-}
-
 Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string& key,
                        bool optional_empty) {
   if (!doc.contains(key)) {
@@ -124,6 +117,14 @@ void StateSpace::validate(const std::string& source) const {
   }
 }
 
+Eigen::MatrixXcd state_space_response(const StateSpace& ss, Cd s) {
+  Eigen::MatrixXcd M = -ss.A.cast<Cd>();
+  M.diagonal().array() += s;
+  Eigen::MatrixXcd g = ss.C.cast<Cd>() * M.partialPivLu().solve(ss.B.cast<Cd>());
+  if (ss.D.size()) g += ss.D.cast<Cd>();
+  return g;
+}
+
 std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std::string& source) {
   const Eigen::Index n = ss.A.rows();
   const Eigen::VectorXd b = ss.B.col(j);
@@ -201,7 +202,7 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std
   std::vector<Cd> want(ws.size());
   double peak = 0;
   for (size_t k = 0; k < ws.size(); ++k) {
-    want[k] = response(ss, i, j, Cd(0, ws[k]));
+    want[k] = state_space_response(ss, Cd(0, ws[k]))(i, j);
     peak = std::max(peak, std::abs(want[k]));
   }
   for (size_t k = 0; k < ws.size(); ++k)

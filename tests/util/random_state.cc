@@ -132,15 +132,6 @@ std::vector<double> state_grid(const RandomCase& c) {
   return w;
 }
 
-// C (jwI - A)^-1 B + D.
-Eigen::MatrixXcd response(const StateSpace& ss, double w) {
-  Eigen::MatrixXcd M = -ss.A.cast<C>();
-  M.diagonal().array() += C(0, w);
-  Eigen::MatrixXcd g = ss.C.cast<C>() * M.partialPivLu().solve(ss.B.cast<C>());
-  if (ss.D.size()) g += ss.D.cast<C>();
-  return g;
-}
-
 }  // namespace
 
 std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
@@ -158,7 +149,8 @@ bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double re
   double chi2 = 0;
   size_t n = 0;
   for (double w : state_grid(c)) {
-    const Eigen::MatrixXcd g = response(truth, w), h = response(undone, w);
+    const Eigen::MatrixXcd g = state_space_response(truth, C(0, w)),
+                           h = state_space_response(undone, C(0, w));
     for (Eigen::Index a = 0; a < g.rows(); ++a)
       for (Eigen::Index b = 0; b < g.cols(); ++b) {
         if (std::abs(g(a, b)) == 0) continue;

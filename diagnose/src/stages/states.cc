@@ -71,6 +71,7 @@ class StateEval {
         at_[k].w.push_back(it->second);
       }
     }
+    for (const PairFit& p : r.pairs) points_ += p.w.size();
     ok_ = responses(sim, &g_sim_);
   }
   bool ok() const { return ok_; }
@@ -82,14 +83,8 @@ class StateEval {
     if (n == 0 || !ss.A.allFinite()) return false;
     const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
     if (es.info() != Eigen::Success || !(es.eigenvalues().real().maxCoeff() < 0)) return false;
-    const Eigen::MatrixXcd B = ss.B.cast<C>(), Cm = ss.C.cast<C>();
     g->resize(w_.size());
-    for (size_t q = 0; q < w_.size(); ++q) {
-      Eigen::MatrixXcd M = -ss.A.cast<C>();
-      M.diagonal().array() += C(0, w_[q]);
-      (*g)[q] = Cm * M.partialPivLu().solve(B);
-      if (ss.D.size()) (*g)[q] += ss.D.cast<C>();
-    }
+    for (size_t q = 0; q < w_.size(); ++q) (*g)[q] = state_space_response(ss, C(0, w_[q]));
     return true;
   }
 
@@ -133,11 +128,7 @@ class StateEval {
     return residuals(ss, &res) ? res.squaredNorm() : INFINITY;
   }
 
-  size_t points() const {
-    size_t n = 0;
-    for (const PairFit& p : r_.pairs) n += p.w.size();
-    return n;
-  }
+  size_t points() const { return points_; }
 
  private:
   struct PairAt {
@@ -148,6 +139,7 @@ class StateEval {
   std::vector<double> w_;
   std::vector<PairAt> at_;
   std::vector<Eigen::MatrixXcd> g_sim_;
+  size_t points_ = 0;  // every prepared pair's points
   bool ok_ = false;
 };
 
@@ -224,12 +216,10 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
 std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim,
                                     const StateSpace& base, const StateEntry& e) {
   const double v0 = entry_value(sim, e);
-  const double x0 = to_x(e, v0, v0);
-  const double lo = is_rate(e) ? x0 - std::log(kSpan) : -kSpan;
-  const double hi = is_rate(e) ? x0 + std::log(kSpan) : kSpan;
-  // A rate's coordinate is centred on its value; another entry's spans +-kSpan times it around it.
-  const double shift = is_rate(e) ? 0 : x0;
-  auto chi2_at = [&](double x) { return ev.chi2(with_entry(base, e, to_v(e, v0, x + shift))); };
+  // Around the simulated value: a rate within a factor kSpan, another entry within kSpan |v0|.
+  const double x0 = to_x(e, v0, v0), span = is_rate(e) ? std::log(kSpan) : kSpan;
+  const double lo = x0 - span, hi = x0 + span;
+  auto chi2_at = [&](double x) { return ev.chi2(with_entry(base, e, to_v(e, v0, x))); };
   std::vector<double> xs(kScan), cs(kScan);
   size_t best = 0;
   for (int q = 0; q < kScan; ++q) {
@@ -241,8 +231,8 @@ std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim,
   const double a = xs[best > 0 ? best - 1 : 0], b = xs[std::min(best + 1, xs.size() - 1)];
   const double x = detail::brent_minimum(chi2_at, a, b, kStateBrentBits);
   const double c = chi2_at(x);
-  return c < cs[best] ? std::make_pair(to_v(e, v0, x + shift), c)
-                      : std::make_pair(to_v(e, v0, xs[best] + shift), cs[best]);
+  return c < cs[best] ? std::make_pair(to_v(e, v0, x), c)
+                      : std::make_pair(to_v(e, v0, xs[best]), cs[best]);
 }
 
 // The residuals of a set of entries at coordinates x, for Eigen's Levenberg-Marquardt.

@@ -38,6 +38,10 @@ struct StateSpace {
   void validate(const std::string& source) const;
 };
 
+/// The state model's frequency response at s (rad/s, s = jw on the axis): C (sI - A)^-1 B + D,
+/// outputs x inputs, delays left out. Precondition: s is not an eigenvalue of A.
+Eigen::MatrixXcd state_space_response(const StateSpace& ss, std::complex<double> s);
+
 /// The transfer function of the path from input j to output i (no value when it is zero at every
 /// frequency). Precondition: validate() passed. InputError naming the path when it has a zero at
 /// s = 0 (fralab's transfer functions are in DC-gain form).
