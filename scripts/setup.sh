@@ -9,13 +9,14 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       nlohmann-json3-dev libcli11-dev zlib1g-dev libmatio-dev libsndfile1-dev libcmark-gfm-dev
       libcmark-gfm-extensions-dev libboost-dev gnuplot-nox iproute2
       util-linux nftables)
-# --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check).
+# --test: also what only the tests use (Octave's invfreqs, the identifier's side-by-side check;
+# Octave's control package: a state model fralab writes built with `ss` there).
 # clang and its runtime: the fuzz build (libFuzzer, ASan, UBSan; scripts/fuzz.sh); clang-format:
 # the format test (scripts/check_format.sh).
 # chromium: report.html checked in a real browser (headless); python3-scipy: the .mat export
 # loaded by scipy.io.loadmat.
 if [ "${1:-}" = "--test" ]; then
-  PKGS+=(octave octave-signal clang clang-format libclang-rt-14-dev chromium python3-scipy)
+  PKGS+=(octave octave-signal octave-control clang clang-format libclang-rt-14-dev chromium python3-scipy)
 fi
 missing=()
 for p in "${PKGS[@]}"; do

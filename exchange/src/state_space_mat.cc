@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "fralab/core/error.h"
+#include "fralab/exchange/mat_file.h"
 
 namespace fralab {
 namespace {
@@ -171,8 +172,78 @@ StateSpace read_state_space_mat(const std::string& path) {
 std::optional<Json> state_space_document_if_mat(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext != ".mat") return std::nullopt;
-  return state_space_document(read_state_space_mat(path),
-                              std::filesystem::path(path).stem().string());
+  const StateSpace ss = read_state_space_mat(path);
+  Json doc = state_space_document(ss, std::filesystem::path(path).stem().string());
+  std::unique_ptr<mat_t, StateMatCloser> mat(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
+  StateVarPtr rest(mat ? Mat_VarRead(mat.get(), "fralab_ss") : nullptr);
+  if (!rest) return doc;
+  const std::string where = path + ": fralab_ss";
+  Json given;
+  try {
+    given = Json::parse(char_row(rest.get(), 0, where));
+  } catch (const Json::exception& e) {
+    throw InputError(where + ": not JSON text (" + e.what() + ")");
+  }
+  if (!given.is_object()) throw InputError(where + ": not a fralab-ss/1 document's keys");
+  // The channels as the document gives them, in the matrices' order, with the matrices' delays.
+  for (const char* key : {"inputs", "outputs"}) {
+    const Json& have = doc[key];
+    if (!given.contains(key) || !given[key].is_array() || given[key].size() != have.size())
+      throw InputError(where + ": its " + key + " are not the matrices' " +
+                       std::to_string(have.size()));
+    for (size_t k = 0; k < have.size(); ++k) {
+      Json ch = given[key][k];
+      if (!ch.is_object() || ch.value("name", "") != have[k]["name"])
+        throw InputError(where + ": " + key + "[" + std::to_string(k) + "] is not " +
+                         have[k]["name"].get<std::string>());
+      ch.erase("delay_s");
+      if (have[k].contains("delay_s")) ch["delay_s"] = have[k]["delay_s"];
+      given[key][k] = ch;
+    }
+  }
+  for (const char* key : {"format", "states", "A", "B", "C", "D", "delay_s"}) {
+    given.erase(key);
+    if (doc.contains(key)) given[key] = doc[key];
+  }
+  return given;
+}
+
+void write_state_space_mat(const std::string& path, const Json& doc) {
+  const StateSpace ss = state_space_from_json(doc, path);
+  ss.validate(path);
+  auto mat = [](const Eigen::MatrixXd& x) {
+    return MatValue::matrix(size_t(x.rows()), size_t(x.cols()),
+                            std::vector<double>(x.data(), x.data() + x.size()));
+  };
+  std::vector<std::pair<std::string, MatValue>> vars = {
+      {"A", mat(ss.A)},
+      {"B", mat(ss.B)},
+      {"C", mat(ss.C)},
+      {"D", mat(ss.D)},
+      {"StateName", MatValue::str_list(ss.states)},
+      {"InputName", MatValue::str_list(ss.inputs)},
+      {"OutputName", MatValue::str_list(ss.outputs)},
+      {"InputDelay", MatValue::column(ss.input_delay_s)},
+      {"OutputDelay", MatValue::column(ss.output_delay_s)},
+      {"delay_s", mat(ss.path_delay_s.size() ? ss.path_delay_s
+                                             : Eigen::MatrixXd::Zero(ss.C.rows(), ss.B.cols()))}};
+  MatValue actuators = MatValue::structure();
+  for (size_t k = 0; k < ss.inputs.size(); ++k) {
+    const Json& in = doc["inputs"][k];
+    if (!in.contains("actuator") || !is_mat_name(ss.inputs[k])) continue;
+    const Tf t = tf_from_json(in["actuator"]["tf"], {path, "/inputs/" + std::to_string(k)});
+    MatValue a = MatValue::structure();
+    const std::vector<double> num = t.numerator_coefficients(), den = t.denominator_coefficients();
+    a.add("num", MatValue::matrix(1, num.size(), num));
+    a.add("den", MatValue::matrix(1, den.size(), den));
+    a.add("delay_s", MatValue::scalar(t.delay_s));
+    actuators.add(ss.inputs[k], a);
+  }
+  if (!actuators.field_names.empty()) vars.emplace_back("actuators", actuators);
+  Json rest = doc;
+  for (const char* key : {"A", "B", "C", "D", "states"}) rest.erase(key);
+  vars.emplace_back("fralab_ss", MatValue::str(rest.dump(-1, ' ', true)));
+  write_mat_file(path, vars);
 }
 
 }  // namespace fralab

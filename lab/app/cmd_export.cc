@@ -1,6 +1,7 @@
 // `fralab export`: results for MATLAB, Octave, Python and spreadsheets (exchange/results_export.h),
 // or a run's tape as a time series and its schedule (exchange/tape_series.h), which `fralab
-// import` turns back into the same tape.
+// import` turns back into the same tape; or a model as a state model (plant/realisation.h), for
+// MATLAB, Octave and fralab (`--simulation`, `--engine`).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -9,8 +10,11 @@
 #include "fralab/core/error.h"
 #include "fralab/exchange/envelope_export.h"
 #include "fralab/exchange/results_export.h"
+#include "fralab/exchange/state_space_mat.h"
 #include "fralab/exchange/tape_series.h"
+#include "fralab/lab/envelope.h"
 #include "fralab/lcm/tape_file.h"
+#include "fralab/plant/realisation.h"
 
 namespace fs = std::filesystem;
 
@@ -19,7 +23,7 @@ namespace fralab {
 namespace {
 
 struct ExportCommand {
-  std::string from, tape, run_id, to = "mat", out, schedule_out;
+  std::string from, tape, model, run_id, to = "mat", out, schedule_out;
 };
 
 // Units of the tape's channels from the engine.json a measure directory keeps beside its tape.
@@ -31,10 +35,31 @@ void units_from_engine(const std::string& tape, TimeSeries* s) {
   }
 }
 
+// A model (a file, a state model .mat, an embedded J85 model) as a state model: .mat or
+// fralab-ss/1 JSON.
+void export_model(const ExportCommand& c) {
+  if (c.to != "mat" && c.to != "json") throw InputError("--to " + c.to + ": mat or json");
+  const Model m = load_model_or_scheduled(c.model);
+  const StateSpace ss = model_state_space(m);
+  const Json doc = model_state_space_document(m, ss);
+  const std::string out =
+      !c.out.empty() ? c.out : fs::path(c.model).stem().string() + "_ss." + c.to;
+  if (c.to == "mat")
+    write_state_space_mat(out, doc);
+  else
+    json_save_file(out, doc);
+  std::printf("fralab: %s as a state model: %lld states, %zu inputs, %zu outputs to %s\n",
+              c.model.c_str(), static_cast<long long>(ss.A.rows()), ss.inputs.size(),
+              ss.outputs.size(), out.c_str());
+}
+
 void run(const ExportCommand& c) {
+  if (int(!c.from.empty()) + int(!c.tape.empty()) + int(!c.model.empty()) != 1)
+    throw InputError(
+        "give one of --from DIR (results), --tape TAPE (a time series) and --model MODEL (a "
+        "state model)");
+  if (!c.model.empty()) return export_model(c);
   if (c.to != "mat" && c.to != "csv") throw InputError("--to " + c.to + ": mat or csv");
-  if (c.from.empty() == c.tape.empty())
-    throw InputError("give one of --from DIR (results) and --tape TAPE (a time series)");
   if (!c.from.empty() && is_envelope_dir(c.from)) {
     if (c.to != "mat")
       throw InputError(c.from +
@@ -89,11 +114,14 @@ void add_export_command(CLI::App& app) {
                 "a measure directory (its frd/, tf/, transfer_matrix.json) or an envelope's "
                 "(envelope.json)");
   c->add_option("--tape", ec->tape, "a tape: its run as a time series and a schedule");
+  c->add_option("--model", ec->model,
+                "a model (fralab-model/1, fralab-ss/1, a state model .mat, or an embedded name "
+                "such as j85_95_sim) as a state model: A, B, C, D with named states");
   c->add_option("--run", ec->run_id, "with --tape: the run id (default: the tape's first run)");
-  c->add_option("--to,--format", ec->to, "mat (default) or csv");
+  c->add_option("--to,--format", ec->to, "mat (default) or csv; with --model mat or json");
   c->add_option("--out", ec->out,
                 "the .mat file or CSV folder (default DIR/fralab.mat, DIR/export; with --tape "
-                "TAPE.mat or TAPE.csv)");
+                "TAPE.mat or TAPE.csv; with --model MODEL_ss.mat or MODEL_ss.json here)");
   c->add_option("--schedule-out", ec->schedule_out,
                 "with --tape: the schedule (default OUT with .schedule.json)");
   c->callback([ec] { run(*ec); });

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -13,13 +14,16 @@
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/baseline.h"
 #include "fralab/diagnose/data_faults.h"
+#include "fralab/diagnose/extended_state_space.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/exchange/data_quality.h"
+#include "fralab/exchange/state_space_mat.h"
 #include "fralab/lab/data_check.h"
 #include "fralab/lab/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lcm/tape_file.h"
 #include "fralab/plant/embedded_models.h"
+#include "fralab/plant/realisation.h"
 
 namespace fralab {
 
@@ -269,6 +273,15 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
   save_model(c.out + "/extended_model.json", ext);
   load_model(c.out +
              "/extended_model.json");  // it must be a valid fralab-model/1 the plant can run
+  // The same as a state model, for the simulation's owner (fralab-ss/1 and .mat); a model that
+  // has none (no path with dynamics) is said, and the diagnosis stands.
+  try {
+    const Json ss = model_state_space_document(ext, extended_state_space(sim, d));
+    json_save_file(c.out + "/extended_model_ss.json", ss);
+    write_state_space_mat(c.out + "/extended_model.mat", ss);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "fralab: the extended model as a state model: %s\n", e.what());
+  }
   const bool plots = c.plots && render_diagnosis_plots(d, c.out);
   write_diagnosis_report(d, sim.name, data_name, plots, c.out, notes);
   write_report_html(c.out, "Diagnosis: " + sim.name);

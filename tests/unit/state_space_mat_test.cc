@@ -8,11 +8,13 @@
 #include <gtest/gtest.h>
 #include <matio.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "fralab/core/error.h"
 #include "fralab/exchange/mat_file.h"
+#include "fralab/plant/realisation.h"
 #include "test_util.h"
 
 namespace fralab {
@@ -116,6 +118,83 @@ TEST(StateSpaceMat, TheModelFromMatRespondsAsTheModelFromJson) {
     for (double w = 1e-2; w < 1e3; w *= 2)
       EXPECT_LT(std::abs(from_mat.paths[k].tf.at(w) - from_json.paths[k].tf.at(w)),
                 1e-9 * std::abs(from_json.paths[k].tf.at(w)));
+}
+
+// The J85 simulation as a state model (plant/realisation.h) written by fralab: its matrices,
+// names and delays read back bit for bit, and the channels (units, actuators) with them.
+TEST(StateSpaceMat, AModelWrittenAsAStateModelReadsBackBitForBitWithItsActuators) {
+  const Model m = load_model(source_path("models/j85_95_sim.json"));
+  const StateSpace want = model_state_space(m);
+  const std::string file = ::testing::TempDir() + "/j85_ss.mat";
+  write_state_space_mat(file, model_state_space_document(m, want));
+  const StateSpace got = read_state_space_mat(file);
+  expect_same(got, want, true, true);
+  EXPECT_EQ(got.path_delay_s, want.path_delay_s);
+  const Model back = parse_model(*state_space_document_if_mat(file), file);
+  ASSERT_EQ(back.inputs.size(), m.inputs.size());
+  for (size_t j = 0; j < m.inputs.size(); ++j) {
+    EXPECT_EQ(back.inputs[j].units, m.inputs[j].units);
+    EXPECT_EQ(back.inputs[j].full_scale, m.inputs[j].full_scale);
+    ASSERT_EQ(bool(back.inputs[j].actuator), bool(m.inputs[j].actuator)) << m.inputs[j].name;
+    if (m.inputs[j].actuator) {
+      EXPECT_EQ(back.inputs[j].actuator->at(7.0), m.inputs[j].actuator->at(7.0));
+    }
+  }
+  EXPECT_EQ(back.outputs[4].units, m.outputs[4].units);
+  std::filesystem::remove(file);
+}
+
+// The file as MATLAB's and Octave's users take it: Octave loads it, builds `ss` with its names
+// (the control package), and its frequency response with the delays is the model's.
+TEST(StateSpaceMat, OctaveBuildsItsStateModelAndRespondsAsTheModel) {
+  ASSERT_EQ(std::system("command -v octave-cli > /dev/null 2>&1 && octave-cli --eval "
+                        "'pkg load control' > /dev/null 2>&1"),
+            0)
+      << "octave-cli with the control package: scripts/setup.sh --test installs them";
+  const Model m = load_model(source_path("models/j85_95_sim.json"));
+  const std::string dir = ::testing::TempDir() + "/octave_ss";
+  std::filesystem::create_directories(dir);
+  write_state_space_mat(dir + "/j85.mat", model_state_space_document(m, model_state_space(m)));
+  // The model's responses: output, input (from 1), w rad/s, real, imaginary.
+  {
+    std::ofstream want(dir + "/want.txt");
+    want.precision(17);
+    for (double w = 1e-2; w < 1e3; w *= 1.5)
+      for (size_t i = 0; i < m.outputs.size(); ++i)
+        for (size_t j = 0; j < m.inputs.size(); ++j) {
+          const auto h = m.position_to_output(int(i), int(j), w);
+          want << i + 1 << ' ' << j + 1 << ' ' << w << ' ' << h.real() << ' ' << h.imag() << '\n';
+        }
+  }
+  std::ofstream(dir + "/check.m")
+      << "pkg load control\n"
+         "load('j85.mat');\n"
+         "sys = ss(A, B, C, D, 'StateName', StateName, 'InputName', InputName, "
+         "'OutputName', OutputName);\n"
+         "x = load('want.txt'); worst = 0;\n"
+         "for k = 1:rows(x)\n"
+         "  i = x(k,1); j = x(k,2); w = x(k,3); want = x(k,4) + 1i*x(k,5);\n"
+         "  H = freqresp(sys(i, j), w);\n"
+         "  H = H * exp(-1i*w*(InputDelay(j) + OutputDelay(i) + delay_s(i,j)));\n"
+         "  if abs(want) > 0, worst = max(worst, abs(H - want) / abs(want));\n"
+         "  else, worst = max(worst, abs(H)); end\n"
+         "end\n"
+         "printf('%.3e %d\\n', worst, numel(StateName));\n";
+  const std::string cmd = "cd " + dir + " && octave-cli --no-gui -q check.m 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  char line[4096];
+  std::string out;
+  while (fgets(line, sizeof line, p)) out += line;
+  ASSERT_EQ(pclose(p), 0) << out;
+  double worst = NAN;
+  int states = 0;
+  ASSERT_EQ(std::sscanf(out.c_str(), "%lf %d", &worst, &states), 2) << out;
+  EXPECT_LE(worst, 1e-9) << out;
+  int order = 0;  // one state per pole of the paths (they share none)
+  for (const ModelPath& path : m.paths) order += path.tf.den_order();
+  EXPECT_EQ(states, order);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(StateSpaceMat, BadFilesAreRefusedNamingTheFileAndTheVariable) {
