@@ -268,6 +268,10 @@ std::optional<Lti> around_core(const Model& m, const StateNamer& namer) {
         return std::nullopt;
     }
   }
+  // A factor that is 1 to rounding (the ratio of two factorings of one path) is 1.
+  for (auto* list : {&in, &out})
+    for (Tf& t : *list)
+      if (t.poles.empty() && t.zeros.empty() && std::abs(t.gain - 1) <= kSameRoot) t.gain = 1;
   std::vector<Lti> ib, ob;
   std::vector<int> ii, oi;
   for (Eigen::Index j = 0; j < ni; ++j) {

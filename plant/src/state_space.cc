@@ -125,7 +125,30 @@ Eigen::MatrixXcd state_space_response(const StateSpace& ss, Cd s) {
   return g;
 }
 
-std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std::string& source) {
+namespace {
+
+// What every path of a state model shares: A's eigenvalues, and the responses at the frequencies
+// each path's factored form is checked at (each mode's, a decade beyond the slowest and the
+// fastest, and 0).
+struct PathsCommon {
+  std::vector<Cd> poles;
+  std::vector<double> ws;
+  std::vector<Eigen::MatrixXcd> want;
+  explicit PathsCommon(const StateSpace& ss) {
+    const Eigen::Index n = ss.A.rows();
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
+    poles.assign(es.eigenvalues().data(), es.eigenvalues().data() + n);
+    ws = {0.0};
+    double lo = INFINITY, hi = 0;
+    for (const Cd& p : poles) lo = std::min(lo, std::abs(p)), hi = std::max(hi, std::abs(p));
+    for (const Cd& p : poles) ws.push_back(std::abs(p));
+    ws.push_back(lo / 10), ws.push_back(hi * 10);
+    for (double w : ws) want.push_back(state_space_response(ss, Cd(0, w)));
+  }
+};
+
+std::optional<Tf> factor_path(const StateSpace& ss, int i, int j, const std::string& source,
+                              const PathsCommon& common) {
   const Eigen::Index n = ss.A.rows();
   const Eigen::VectorXd b = ss.B.col(j);
   const Eigen::RowVectorXd c = ss.C.row(i);
@@ -145,8 +168,7 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std
     if (zero) return std::nullopt;
   }
   // Poles: A's eigenvalues.
-  const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
-  std::vector<Cd> poles(es.eigenvalues().data(), es.eigenvalues().data() + n);
+  const std::vector<Cd>& poles = common.poles;
   // Zeros: the finite generalised eigenvalues of ([A b; c d], [I 0; 0 0]).
   Eigen::MatrixXd M(n + 1, n + 1), N = Eigen::MatrixXd::Zero(n + 1, n + 1);
   M << ss.A, b, c, d;
@@ -194,23 +216,31 @@ std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std
   // The factored form must be the state model's response (a check, not an approximation): at
   // each of the modes' frequencies and a decade beyond the slowest and the fastest, within kAgree
   // of the path's largest magnitude there.
-  std::vector<double> ws = {0.0};
-  double lo = INFINITY, hi = 0;
-  for (const Cd& p : poles) lo = std::min(lo, std::abs(p)), hi = std::max(hi, std::abs(p));
-  for (const Cd& p : poles) ws.push_back(std::abs(p));
-  ws.push_back(lo / 10), ws.push_back(hi * 10);
-  std::vector<Cd> want(ws.size());
+  const std::vector<double>& ws = common.ws;
   double peak = 0;
-  for (size_t k = 0; k < ws.size(); ++k) {
-    want[k] = state_space_response(ss, Cd(0, ws[k]))(i, j);
-    peak = std::max(peak, std::abs(want[k]));
-  }
+  for (size_t k = 0; k < ws.size(); ++k) peak = std::max(peak, std::abs(common.want[k](i, j)));
   for (size_t k = 0; k < ws.size(); ++k)
-    if (std::abs(tf.rational(Cd(0, ws[k])) - want[k]) > kAgree * peak)
+    if (std::abs(tf.rational(Cd(0, ws[k])) - common.want[k](i, j)) > kAgree * peak)
       throw InputError(source + ": the path " + path + " could not be factored to agree with " +
                        "C (sI - A)^-1 B + D at " + std::to_string(ws[k]) +
                        " rad/s (nearly cancelling modes; give the model in a balanced form)");
   return tf;
+}
+
+}  // namespace
+
+std::optional<Tf> state_space_path(const StateSpace& ss, int i, int j, const std::string& source) {
+  return factor_path(ss, i, j, source, PathsCommon(ss));
+}
+
+std::vector<std::vector<std::optional<Tf>>> state_space_paths(const StateSpace& ss,
+                                                              const std::string& source) {
+  const PathsCommon common(ss);
+  std::vector<std::vector<std::optional<Tf>>> out(ss.outputs.size());
+  for (size_t i = 0; i < ss.outputs.size(); ++i)
+    for (size_t j = 0; j < ss.inputs.size(); ++j)
+      out[i].push_back(factor_path(ss, int(i), int(j), source, common));
+  return out;
 }
 
 std::optional<ModeParticipation> mode_participation(const StateSpace& ss, Cd s, double rel) {
@@ -280,9 +310,10 @@ Model parse_state_space_model(const Json& doc, const std::string& source) {
   for (const char* key : {"inputs", "outputs"})
     for (Json& ch : m[key]) ch.erase("delay_s");
   m["paths"] = Json::array();
-  for (int i = 0; i < int(ss.outputs.size()); ++i)
-    for (int j = 0; j < int(ss.inputs.size()); ++j)
-      if (const auto tf = state_space_path(ss, i, j, source))
+  const auto paths = state_space_paths(ss, source);
+  for (size_t i = 0; i < ss.outputs.size(); ++i)
+    for (size_t j = 0; j < ss.inputs.size(); ++j)
+      if (const auto& tf = paths[i][j])
         m["paths"].push_back({{"output", ss.outputs[size_t(i)]},
                               {"input", ss.inputs[size_t(j)]},
                               {"tf", tf_to_json(*tf)}});

@@ -114,11 +114,7 @@ StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v) {
 std::optional<std::vector<std::vector<std::optional<Tf>>>> state_paths(const StateSpace& ss) {
   try {
     ss.validate("state model");
-    std::vector<std::vector<std::optional<Tf>>> out(ss.outputs.size());
-    for (size_t i = 0; i < ss.outputs.size(); ++i)
-      for (size_t j = 0; j < ss.inputs.size(); ++j)
-        out[i].push_back(state_space_path(ss, int(i), int(j), "state model"));
-    return out;
+    return state_space_paths(ss, "state model");
   } catch (const InputError&) {
     return std::nullopt;
   }

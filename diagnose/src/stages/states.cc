@@ -52,7 +52,8 @@ using Paths = std::vector<std::vector<std::optional<Tf>>>;
 // distinct frequency, and the factor it puts on each pair over the simulation's.
 class StateEval {
  public:
-  StateEval(const DiagnosisRun& r, const StateSpace& sim, const Paths& sim_paths) : r_(r) {
+  StateEval(const DiagnosisRun& r, const StateSpace& sim, const Paths& sim_paths)
+      : r_(r), sim_(sim) {
     std::map<double, size_t> index;
     at_.resize(r.pairs.size());
     for (size_t k = 0; k < r.pairs.size(); ++k) {
@@ -72,20 +73,88 @@ class StateEval {
       }
     }
     for (const PairFit& p : r.pairs) points_ += p.w.size();
-    ok_ = responses(sim, &g_sim_);
+    ok_ = responses(sim, &g_sim_) && resolvent();
   }
   bool ok() const { return ok_; }
 
   // G(jw) = C (jwI - A)^-1 B + D at every distinct frequency; false when A has a mode outside the
   // open left half plane.
   bool responses(const StateSpace& ss, std::vector<Eigen::MatrixXcd>* g) const {
-    const Eigen::Index n = ss.A.rows();
-    if (n == 0 || !ss.A.allFinite()) return false;
-    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
-    if (es.info() != Eigen::Success || !(es.eigenvalues().real().maxCoeff() < 0)) return false;
+    if (!stable(ss)) return false;
     g->resize(w_.size());
     for (size_t q = 0; q < w_.size(); ++q) (*g)[q] = state_space_response(ss, C(0, w_[q]));
     return true;
+  }
+
+  // The responses of the simulation with entries e moved to values v (each from its simulated
+  // value by delta), from the simulation's resolvent R = (jwI - A)^-1 (X = C R, Y = R B,
+  // G = X B + D) at each distinct frequency, O(outputs x inputs) a frequency instead of a
+  // factorisation. With B' and C' the moved B and C (their entries added), the moved A
+  // A + U D V^T (U, V the A entries' row and column unit vectors, D their deltas) by Woodbury's
+  // identity:
+  //   G' = C' R B' + D + P D (I - S D)^-1 Q,  P = C' R U, Q = V^T R B', S = V^T R U,
+  // each of C' R B', P, Q and S a lookup in X, Y and R. The moved model's stability is not
+  // checked here (StateEval::stable).
+  std::vector<Eigen::MatrixXcd> moved_responses(const std::vector<StateEntry>& e,
+                                                const std::vector<double>& v) const {
+    std::vector<int> a;
+    std::vector<double> delta(e.size());
+    for (size_t k = 0; k < e.size(); ++k) {
+      delta[k] = v[k] - entry_value(sim_, e[k]);
+      if (e[k].matrix == 'A') a.push_back(int(k));
+    }
+    const Eigen::Index ka = Eigen::Index(a.size()), p = sim_.C.rows(), m = sim_.B.cols();
+    std::vector<Eigen::MatrixXcd> g = G_;
+    for (size_t q = 0; q < g.size(); ++q) {
+      const Eigen::MatrixXcd &R = R_[q], &X = X_[q], &Y = Y_[q];
+      // (C' R)(:, r) and (R B')(c, :).
+      auto cr = [&](int r) {
+        Eigen::VectorXcd col = X.col(r);
+        for (size_t k = 0; k < e.size(); ++k)
+          if (e[k].matrix == 'C') col(e[k].row) += delta[k] * R(e[k].col, r);
+        return col;
+      };
+      auto rb = [&](int c) {
+        Eigen::RowVectorXcd row = Y.row(c);
+        for (size_t k = 0; k < e.size(); ++k)
+          if (e[k].matrix == 'B') row(e[k].col) += delta[k] * R(c, e[k].row);
+        return row;
+      };
+      for (size_t k = 0; k < e.size(); ++k) {
+        if (e[k].matrix == 'B') g[q].col(e[k].col) += delta[k] * X.col(e[k].row);
+        if (e[k].matrix == 'C') g[q].row(e[k].row) += delta[k] * Y.row(e[k].col);
+      }
+      for (size_t k = 0; k < e.size(); ++k)
+        for (size_t l = 0; l < e.size(); ++l)
+          if (e[k].matrix == 'C' && e[l].matrix == 'B')
+            g[q](e[k].row, e[l].col) += delta[k] * delta[l] * R(e[k].col, e[l].row);
+      if (ka == 0) continue;
+      if (ka == 1) {  // one entry of A: Sherman-Morrison
+        const StateEntry& ex = e[size_t(a[0])];
+        const double d = delta[size_t(a[0])];
+        g[q].noalias() += (d / (1.0 - d * R(ex.col, ex.row))) * cr(ex.row) * rb(ex.col);
+        continue;
+      }
+      Eigen::MatrixXcd P(p, ka), Q(ka, m), S(ka, ka);
+      for (Eigen::Index x = 0; x < ka; ++x) {
+        const StateEntry& ex = e[size_t(a[size_t(x)])];
+        P.col(x) = cr(ex.row) * delta[size_t(a[size_t(x)])];
+        Q.row(x) = rb(ex.col);
+        for (Eigen::Index y = 0; y < ka; ++y) {
+          const StateEntry& ey = e[size_t(a[size_t(y)])];
+          S(x, y) = (x == y ? 1.0 : 0.0) - R(ex.col, ey.row) * delta[size_t(a[size_t(y)])];
+        }
+      }
+      g[q] += P * S.partialPivLu().solve(Q);
+    }
+    return g;
+  }
+
+  // A's modes in the open left half plane.
+  static bool stable(const StateSpace& ss) {
+    if (ss.A.rows() == 0 || !ss.A.allFinite()) return false;
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
+    return es.info() == Eigen::Success && es.eigenvalues().real().maxCoeff() < 0;
   }
 
   // On every prepared pair, the factor G_ss / G_sim at each point (1 where the path is not the
@@ -93,6 +162,11 @@ class StateEval {
   std::vector<std::vector<C>> ratio(const StateSpace& ss) const {
     std::vector<Eigen::MatrixXcd> g;
     if (!responses(ss, &g)) return {};
+    return ratio_of(g);
+  }
+
+  // The same from the responses g at every distinct frequency.
+  std::vector<std::vector<C>> ratio_of(const std::vector<Eigen::MatrixXcd>& g) const {
     std::vector<std::vector<C>> F(r_.pairs.size());
     for (size_t k = 0; k < r_.pairs.size(); ++k) {
       F[k].assign(r_.pairs[k].w.size(), C(1, 0));
@@ -100,7 +174,7 @@ class StateEval {
       if (i < 0) continue;
       for (size_t q = 0; q < F[k].size(); ++q) {
         const C s = g_sim_[at_[k].w[q]](i, j);
-        if (std::abs(s) > 0) F[k][q] = g[at_[k].w[q]](i, j) / s;
+        if (s != C(0, 0)) F[k][q] = g[at_[k].w[q]](i, j) / s;
       }
     }
     return F;
@@ -111,6 +185,17 @@ class StateEval {
   bool residuals(const StateSpace& ss, Eigen::VectorXd* res) const {
     const auto F = ratio(ss);
     if (F.empty()) return false;
+    residuals_of(F, res);
+    return true;
+  }
+
+  // The residuals with entries e at values v (moved_responses; stability unchecked).
+  void residuals_moved(const std::vector<StateEntry>& e, const std::vector<double>& v,
+                       Eigen::VectorXd* res) const {
+    residuals_of(ratio_of(moved_responses(e, v)), res);
+  }
+
+  void residuals_of(const std::vector<std::vector<C>>& F, Eigen::VectorXd* res) const {
     res->resize(Eigen::Index(2 * points()));
     Eigen::Index m = 0;
     for (size_t k = 0; k < r_.pairs.size(); ++k) {
@@ -120,7 +205,6 @@ class StateEval {
         (*res)(m++) = e.real(), (*res)(m++) = e.imag();
       }
     }
-    return true;
   }
 
   double chi2(const StateSpace& ss) const {
@@ -135,7 +219,25 @@ class StateEval {
     std::pair<Eigen::Index, Eigen::Index> path{-1, -1};  // (output, input) in the state model
     std::vector<size_t> w;                               // each point's distinct frequency
   };
+  // The simulation's resolvent (moved_responses); false when a frequency is one of its modes.
+  bool resolvent() {
+    const Eigen::Index n = sim_.A.rows();
+    for (auto* v : {&R_, &X_, &Y_, &G_}) v->resize(w_.size());
+    for (size_t q = 0; q < w_.size(); ++q) {
+      const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(
+          C(0, w_[q]) * Eigen::MatrixXcd::Identity(n, n) - sim_.A.cast<C>());
+      R_[q] = lu.inverse();
+      X_[q] = sim_.C.cast<C>() * R_[q];
+      Y_[q] = R_[q] * sim_.B.cast<C>();
+      G_[q] = X_[q] * sim_.B.cast<C>() + sim_.D.cast<C>();
+      if (!R_[q].allFinite()) return false;
+    }
+    return true;
+  }
+
   const DiagnosisRun& r_;
+  const StateSpace& sim_;
+  std::vector<Eigen::MatrixXcd> R_, X_, Y_, G_;
   std::vector<double> w_;
   std::vector<PairAt> at_;
   std::vector<Eigen::MatrixXcd> g_sim_;
@@ -212,14 +314,13 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
   return out;
 }
 
-// Entry e fitted alone on top of `base` (the set's entries in place): its value and chi2.
-std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim,
-                                    const StateSpace& base, const StateEntry& e) {
-  const double v0 = entry_value(sim, e);
-  // Around the simulated value: a rate within a factor kSpan, another entry within kSpan |v0|.
+// Entry e's value and chi2 at the least of chi2_at over its range: around the simulated value v0,
+// a rate within a factor kSpan, another entry within kSpan |v0|; a scan of kScan points, then
+// Brent's method between the best one's neighbours.
+template <class Chi2>
+std::pair<double, double> scan_entry(const StateEntry& e, double v0, const Chi2& chi2_at) {
   const double x0 = to_x(e, v0, v0), span = is_rate(e) ? std::log(kSpan) : kSpan;
   const double lo = x0 - span, hi = x0 + span;
-  auto chi2_at = [&](double x) { return ev.chi2(with_entry(base, e, to_v(e, v0, x))); };
   std::vector<double> xs(kScan), cs(kScan);
   size_t best = 0;
   for (int q = 0; q < kScan; ++q) {
@@ -235,6 +336,33 @@ std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim,
                       : std::make_pair(to_v(e, v0, xs[best]), cs[best]);
 }
 
+// Entry e (not in s) fitted alone on top of the set s (its entries at their values; base = s
+// applied to the simulation): its value and chi2. Each point by moved_responses; where the value
+// found leaves A unstable, the scan again with the unstable points refused.
+std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim, const EntrySet& s,
+                                    const StateSpace& base, const StateEntry& e) {
+  const double v0 = entry_value(sim, e);
+  std::vector<StateEntry> es = s.e;
+  std::vector<double> vs = s.v;
+  es.push_back(e), vs.push_back(v0);
+  Eigen::VectorXd res;
+  const auto fast = scan_entry(e, v0, [&](double x) {
+    vs.back() = to_v(e, v0, x);
+    ev.residuals_moved(es, vs, &res);
+    const double c = res.squaredNorm();
+    return std::isfinite(c) ? c : INFINITY;
+  });
+  if (!std::isfinite(fast.second) || StateEval::stable(with_entry(base, e, fast.first)))
+    return fast;
+  return scan_entry(e, v0, [&](double x) {
+    vs.back() = to_v(e, v0, x);
+    if (!StateEval::stable(with_entry(base, e, vs.back()))) return double(INFINITY);
+    ev.residuals_moved(es, vs, &res);
+    const double c = res.squaredNorm();
+    return std::isfinite(c) ? c : INFINITY;
+  });
+}
+
 // The residuals of a set of entries at coordinates x, for Eigen's Levenberg-Marquardt.
 struct SetResiduals : Eigen::DenseFunctor<double> {
   SetResiduals(const StateEval& ev, const StateSpace& sim, const EntrySet& s, int values)
@@ -243,7 +371,10 @@ struct SetResiduals : Eigen::DenseFunctor<double> {
     EntrySet t = s;
     for (size_t k = 0; k < t.e.size(); ++k)
       t.v[k] = to_v(t.e[k], entry_value(sim, t.e[k]), x(Eigen::Index(k)));
-    if (!ev.residuals(t.applied_to(sim), &fvec)) fvec.setConstant(values(), kUnstableResidual);
+    if (StateEval::stable(t.applied_to(sim)))
+      ev.residuals_moved(t.e, t.v, &fvec);
+    else
+      fvec.setConstant(values(), kUnstableResidual);
     return 0;
   }
   const StateEval& ev;
@@ -271,12 +402,20 @@ EntrySet fit_jointly(const StateEval& ev, const StateSpace& sim, EntrySet s) {
   return t.chi2 < s.chi2 ? t : s;
 }
 
-// The residuals of `s` with entry e (not in s) at coordinate x.
-Eigen::VectorXd residuals_at(const StateEval& ev, const StateSpace& sim, const StateSpace& base,
+// The residuals of the set s with entry e (in s or not) at coordinate x (moved_responses).
+Eigen::VectorXd residuals_at(const StateEval& ev, const StateSpace& sim, const EntrySet& s,
                              const StateEntry& e, double x) {
+  std::vector<StateEntry> es = s.e;
+  std::vector<double> vs = s.v;
+  const double v = to_v(e, entry_value(sim, e), x);
+  const auto it =
+      std::find_if(es.begin(), es.end(), [&](const StateEntry& y) { return same_entry(e, y); });
+  if (it == es.end())
+    es.push_back(e), vs.push_back(v);
+  else
+    vs[size_t(it - es.begin())] = v;
   Eigen::VectorXd res;
-  if (!ev.residuals(with_entry(base, e, to_v(e, entry_value(sim, e), x)), &res))
-    res.setConstant(Eigen::Index(2 * ev.points()), kUnstableResidual);
+  ev.residuals_moved(es, vs, &res);
   return res;
 }
 
@@ -285,14 +424,14 @@ Eigen::VectorXd residuals_at(const StateEval& ev, const StateSpace& sim, const S
 // kLinearStep in its coordinate), the candidate's derivative and r0 projected off the set's
 // derivatives, chi2 = |r0'|^2 - (j' . r0')^2 / |j'|^2. INFINITY where not stable.
 std::vector<double> linear_screen(const StateEval& ev, const StateSpace& sim, const EntrySet& s,
+                                  const StateSpace& base,
                                   const std::vector<StateEntry>& candidates) {
-  const StateSpace base = s.applied_to(sim);
   Eigen::VectorXd r0;
   std::vector<double> out(candidates.size(), INFINITY);
   if (!ev.residuals(base, &r0)) return out;
   auto derivative = [&](const StateEntry& e, double v) {
     const double x = to_x(e, entry_value(sim, e), v);
-    return Eigen::VectorXd((residuals_at(ev, sim, base, e, x + kLinearStep) - r0) / kLinearStep);
+    return Eigen::VectorXd((residuals_at(ev, sim, s, e, x + kLinearStep) - r0) / kLinearStep);
   };
   Eigen::MatrixXd Js(r0.size(), Eigen::Index(s.e.size()));
   for (size_t k = 0; k < s.e.size(); ++k) Js.col(Eigen::Index(k)) = derivative(s.e[k], s.v[k]);
@@ -325,11 +464,11 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
   std::vector<EntrySet> next;
   for (const EntrySet& s : beam) {
     const StateSpace base = s.applied_to(sim);
-    const std::vector<double> linear = linear_screen(ev, sim, s, candidates);
+    const std::vector<double> linear = linear_screen(ev, sim, s, base, candidates);
     std::vector<double> alone(candidates.size(), INFINITY), value(candidates.size(), 0);
     for (size_t c = 0; c < candidates.size(); ++c)
       if (!s.holds(candidates[c]))
-        std::tie(value[c], alone[c]) = fit_alone(ev, sim, base, candidates[c]);
+        std::tie(value[c], alone[c]) = fit_alone(ev, sim, s, base, candidates[c]);
     std::vector<bool> chosen(candidates.size(), false);
     for (const std::vector<double>* by :
          {static_cast<const std::vector<double>*>(&alone), &linear}) {

@@ -47,6 +47,10 @@ Eigen::MatrixXcd state_space_response(const StateSpace& ss, std::complex<double>
 /// s = 0 (fralab's transfer functions are in DC-gain form).
 std::optional<Tf> state_space_path(const StateSpace& ss, int output, int input,
                                    const std::string& source);
+/// Every path, outputs x inputs, as state_space_path gives each (A's eigenvalues and the checks'
+/// responses computed once for all).
+std::vector<std::vector<std::optional<Tf>>> state_space_paths(const StateSpace& ss,
+                                                              const std::string& source);
 
 /// A `fralab-ss/1` document as the model fralab runs: its inputs and outputs (the objects of
 /// `fralab-model/1`, with `delay_s`), its states, A, B, C and D (arrays of rows; D optional, zero)
