@@ -130,6 +130,53 @@ TEST(DiagnoseStates, SeveralEntriesChangedAtOnceAreEachNamed) {
       << d.error_before << " -> " << d.error_after;
 }
 
+// A state's time constant changed and a state the simulation lacks, where they overlap: T4 3 s ->
+// 4.5 s (every path) and a lag of 6 rad/s before the nozzle (every path from it), or B(4,2)
+// 1 -> 1.6 and a lag of 2 rad/s after `temp` (every path into it). Searched together as a set,
+// each is one finding: the entry, and the lag with the state it adds; fitted pair by pair, the
+// lag's misfit hid the entry (a lag and a gain found, the state missed).
+TEST(DiagnoseStates, AStateChangeAndALagTheSimulationLacksAreEachNamed) {
+  struct Case {
+    std::string matrix;
+    int row, col;
+    double value;
+    bool before_input;  // the lag before `nozzle`, else after `temp`
+    double corner;
+  };
+  for (const Case& c : {Case{"A", 1, 1, -1 / 4.5, true, 6.0}, Case{"B", 3, 1, 1.6, false, 2.0}}) {
+    const Model sim = parse_model(simulation_doc(), "ss.json");
+    Json truth_doc = simulation_doc();
+    truth_doc[c.matrix][c.row][c.col] = c.value;
+    Model truth = parse_model(truth_doc, "truth");
+    truth.state_space.reset();
+    Tf lag;
+    lag.poles = {Root::Real(-c.corner)};
+    for (ModelPath& p : truth.paths)
+      if (c.before_input ? p.input == "nozzle" : p.output == "temp") p.tf = p.tf * lag;
+    const Diagnosis d = diagnose(sim, measure(truth, 3));
+    const std::string json = diagnosis_to_json(d).dump(1);
+    ASSERT_EQ(d.findings.size(), 2u) << json;
+    const Finding* entry = nullptr;
+    const Finding* added = nullptr;
+    for (const Finding& f : d.findings)
+      (f.cause == CauseKind::kStateParameter ? entry : added) = &f;
+    ASSERT_NE(entry, nullptr) << json;
+    ASSERT_NE(added, nullptr) << json;
+    EXPECT_EQ(entry->text_parameters.at("matrix"), c.matrix);
+    EXPECT_EQ(entry->parameters.at("row"), c.row + 1);
+    EXPECT_EQ(entry->parameters.at("col"), c.col + 1);
+    EXPECT_NEAR(entry->parameters.at("to") / c.value, 1, kValueRel) << json;
+    EXPECT_EQ(added->cause, CauseKind::kMissingLag) << json;
+    EXPECT_EQ(added->scope, c.before_input ? Scope::kInput : Scope::kOutput) << json;
+    EXPECT_EQ(c.before_input ? added->input : added->output, c.before_input ? "nozzle" : "temp");
+    EXPECT_EQ(added->text_parameters.at("state"),
+              c.before_input ? "lag before nozzle" : "lag after temp");
+    EXPECT_NEAR(added->parameters.at("corner_rad_s") / c.corner, 1, kValueRel) << json;
+    EXPECT_LE(d.error_after, kErrorShare * d.error_before)
+        << d.error_before << " -> " << d.error_after;
+  }
+}
+
 // Nothing changed: no finding.
 TEST(DiagnoseStates, TheSameStateModelGivesNoFinding) {
   const Model sim = parse_model(simulation_doc(), "ss.json");

@@ -29,6 +29,35 @@ bool stable(const Eigen::MatrixXd& A) {
   return true;
 }
 
+// ss with a first-order lag of corner p (rad/s) before input k (before) or after output k: a new
+// last state x' = p (u_k - x) driving what u_k drove, or x' = p (y_k - x) read as y_k.
+StateSpace with_lag(const StateSpace& ss, bool before, int k, double p) {
+  const Eigen::Index n = ss.A.rows(), m = ss.B.cols(), q = ss.C.rows();
+  StateSpace out = ss;
+  out.A = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  out.A.topLeftCorner(n, n) = ss.A;
+  out.A(n, n) = -p;
+  out.B = Eigen::MatrixXd::Zero(n + 1, m);
+  out.B.topRows(n) = ss.B;
+  out.C = Eigen::MatrixXd::Zero(q, n + 1);
+  out.C.leftCols(n) = ss.C;
+  if (before) {
+    out.A.block(0, n, n, 1) = ss.B.col(k);
+    out.B.block(0, k, n, 1).setZero();
+    out.B(n, k) = p;
+    out.C.col(n) = ss.D.col(k);
+    out.D.col(k).setZero();
+  } else {
+    out.A.block(n, 0, 1, n) = p * ss.C.row(k);
+    out.B.row(n) = p * ss.D.row(k);
+    out.C.row(k).setZero();
+    out.C(k, n) = 1;
+    out.D.row(k).setZero();
+  }
+  out.states.push_back("L" + std::to_string(k + 1));
+  return out;
+}
+
 }  // namespace
 
 RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
@@ -106,6 +135,28 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     c.hidden.push_back(e);
     ++h;
   }
+  // A state the simulation lacks, in about one case in four: a first-order lag before an input
+  // or after an output that no hidden entry of B or C reads, its corner within A's modes.
+  if (u(g) < 0.25) {
+    const bool before = u(g) < 0.5;
+    const int k = int(g() % uint64_t(before ? ni : no));
+    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
+    const double lo = es.eigenvalues().cwiseAbs().minCoeff(),
+                 hi = es.eigenvalues().cwiseAbs().maxCoeff(), corner = logu(lo, hi);
+    bool read = false;
+    for (const auto& [m, i, j] : taken) read |= before ? m == 'B' && j == k : m == 'C' && i == k;
+    if (!read) {
+      truth = with_lag(truth, before, k, corner);
+      HiddenEffect e;
+      e.cause = CauseKind::kMissingLag;
+      e.scope = before ? Scope::kInput : Scope::kOutput;
+      (before ? e.input : e.output) = before ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)];
+      e.param = "corner_rad_s";
+      e.value = corner;
+      e.tol_rel = 0.02;
+      c.hidden.push_back(e);
+    }
+  }
   try {
     c.engine = parse_model(document(truth, "engine " + std::to_string(index)), c.name + "/engine");
   } catch (const InputError&) {
@@ -140,6 +191,26 @@ std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, 
 
 bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double rel_sigma) {
   const StateSpace& truth = *c.engine.state_space;
+  if (e.cause == CauseKind::kMissingLag) {  // undone: its column or row times (1 + jw / p)
+    const bool before = e.scope == Scope::kInput;
+    const auto& names = before ? truth.inputs : truth.outputs;
+    const Eigen::Index k =
+        std::find(names.begin(), names.end(), before ? e.input : e.output) - names.begin();
+    double chi2 = 0;
+    size_t n = 0;
+    for (double w : state_grid(c)) {
+      const Eigen::MatrixXcd g = state_space_response(truth, C(0, w));
+      for (Eigen::Index a = 0; a < g.rows(); ++a)
+        for (Eigen::Index b = 0; b < g.cols(); ++b) {
+          if (std::abs(g(a, b)) == 0) continue;
+          const bool on = before ? b == k : a == k;
+          const C h = on ? g(a, b) * C(1, w / e.value) : g(a, b);
+          chi2 += std::norm((g(a, b) - h) / (rel_sigma * std::abs(g(a, b))));
+          ++n;
+        }
+    }
+    return chi2 > std::log(2.0 * double(std::max<size_t>(n, 1)));
+  }
   const StateSpace& sim = *c.simulation.state_space;
   const char matrix = e.text.at("matrix")[0];
   const int i = int(e.exact.at("row")) - 1, j = int(e.exact.at("col")) - 1;

@@ -2,9 +2,11 @@
 // named states with dense coupling (modes shared by many paths), 1-3 inputs, 2-5 outputs, the
 // simulation given as a state model (plant/state_space.h); each case hides 0-3 changed entries in
 // the engine (a state's time constant, a coupling, how an input drives a state, how a state shows
-// at an output) and says which `state_parameter` finding must name each. Measured in-process
-// (exact responses, 0.2 % noise, a validation measurement), as random_modal.h. Deterministic in
-// the seed.
+// at an output), and in about one case in four a state the simulation lacks (a first-order lag
+// before an input or after an output, its corner within A's modes), and says which finding must
+// name each (`state_parameter` at the entry; `missing_lag` at the input or output). Measured
+// in-process (exact responses, 0.2 % noise, a validation measurement), as random_modal.h.
+// Deterministic in the seed.
 #pragma once
 
 #include <cstdint>

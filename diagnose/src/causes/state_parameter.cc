@@ -100,11 +100,44 @@ class StateParameter final : public CauseUnit {
 }  // namespace
 
 double entry_value(const StateSpace& ss, const StateEntry& e) {
+  if (e.added()) return 0;
   const Eigen::MatrixXd& m = e.matrix == 'A' ? ss.A : e.matrix == 'B' ? ss.B : ss.C;
   return m(e.row, e.col);
 }
 
 StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v) {
+  if (e.added()) {
+    if (!(v > 0)) return ss;
+    const Eigen::Index n = ss.A.rows(), m = ss.B.cols(), p = ss.C.rows();
+    const Eigen::MatrixXd D = ss.D.size() ? ss.D : Eigen::MatrixXd::Zero(p, m);
+    StateSpace out = ss;
+    out.A = Eigen::MatrixXd::Zero(n + 1, n + 1);
+    out.A.topLeftCorner(n, n) = ss.A;
+    out.A(n, n) = -1 / v;
+    out.B = Eigen::MatrixXd::Zero(n + 1, m);
+    out.C = Eigen::MatrixXd::Zero(p, n + 1);
+    out.D = D;
+    if (e.matrix == 'U') {
+      out.A.block(0, n, n, 1) = ss.B.col(e.col);
+      out.B.topRows(n) = ss.B;
+      out.B.block(0, e.col, n, 1).setZero();
+      out.B(n, e.col) = 1 / v;
+      out.C.leftCols(n) = ss.C;
+      out.C.col(n) = D.col(e.col);
+      out.D.col(e.col).setZero();
+      out.states.push_back("lag before " + ss.inputs[size_t(e.col)]);
+    } else {
+      out.A.block(n, 0, 1, n) = ss.C.row(e.row) / v;
+      out.B.topRows(n) = ss.B;
+      out.B.row(n) = D.row(e.row) / v;
+      out.C.leftCols(n) = ss.C;
+      out.C.row(e.row).setZero();
+      out.C(e.row, n) = 1;
+      out.D.row(e.row).setZero();
+      out.states.push_back("lag after " + ss.outputs[size_t(e.row)]);
+    }
+    return out;
+  }
   StateSpace out = ss;
   Eigen::MatrixXd& m = e.matrix == 'A' ? out.A : e.matrix == 'B' ? out.B : out.C;
   m(e.row, e.col) = v;

@@ -20,15 +20,20 @@
 
 namespace fralab::diag {
 
-/// An entry of A, B or C (row, col 0-based).
+/// An entry of A, B or C (row, col 0-based), or a state the simulation lacks: 'U', a first-order
+/// lag before input `col` (the column of B and D it drives), 'Y', one after output `row`, each
+/// valued by its time constant (s; 0: absent, the simulation's value).
 struct StateEntry {
   char matrix = 'A';
   int row = 0, col = 0;
+  bool added() const { return matrix == 'U' || matrix == 'Y'; }
 };
 
-/// The entry's value in `ss`.
+/// The entry's value in `ss` (0 for an added lag).
 double entry_value(const StateSpace& ss, const StateEntry& e);
-/// `ss` with the entry set to v.
+/// `ss` with the entry set to v. An added lag of time constant v > 0 is a new last state x_l:
+/// before input j, x_l' = (u_j - x_l) / v driving what u_j drove (B's and D's column j); after
+/// output i, x_l' = (y_i - x_l) / v read as output i. Apply the entries of A, B and C first.
 StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v);
 /// Every path of `ss` (outputs x inputs; nullopt: zero), delays included; nullopt as a whole when
 /// a path cannot be factored (an unstable or degenerate entry: not a candidate value).

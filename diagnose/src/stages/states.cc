@@ -1,9 +1,11 @@
 // Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
 // model (plant/state_space.h), its own entries are candidate causes, each fitted over every pair:
 // a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
-// coupling), of B (how an input drives a state) and of C (how a state shows at an output). One
-// changed state moves the poles, zeros and gains of every path it reaches; fitted pair by pair it
-// splits into pieces or is missed.
+// coupling), of B (how an input drives a state) and of C (how a state shows at an output), and a
+// state the simulation lacks, a first-order lag before an input or after an output (its time
+// constant over the band; found as a missing_lag naming the state it adds). One changed state
+// moves the poles, zeros and gains of every path it reaches; fitted pair by pair it splits into
+// pieces or is missed, or is hidden by another change it overlaps.
 //
 // On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated as
 // C (jwI - A)^-1 B + D (delays cancel in the ratio; the actuator's own pair and a path the
@@ -37,7 +39,7 @@ namespace {
 
 constexpr int kScan = 21;
 constexpr double kSpan = 4;
-constexpr int kMaxEntries = 3;
+constexpr int kMaxEntries = 4;
 constexpr int kStateBrentBits = 24;
 constexpr size_t kBeam = 4;
 constexpr size_t kScreened = 6;
@@ -105,6 +107,7 @@ class StateEval {
     }
     const Eigen::Index ka = Eigen::Index(a.size()), p = sim_.C.rows(), m = sim_.B.cols();
     std::vector<Eigen::MatrixXcd> g = G_;
+    std::vector<C> post_col(e.size(), C(1, 0)), post_row(e.size(), C(1, 0));
     for (size_t q = 0; q < g.size(); ++q) {
       const Eigen::MatrixXcd &R = R_[q], &X = X_[q], &Y = Y_[q];
       // (C' R)(:, r) and (R B')(c, :).
@@ -128,11 +131,23 @@ class StateEval {
         for (size_t l = 0; l < e.size(); ++l)
           if (e[k].matrix == 'C' && e[l].matrix == 'B')
             g[q](e[k].row, e[l].col) += delta[k] * delta[l] * R(e[k].col, e[l].row);
-      if (ka == 0) continue;
+      for (size_t k = 0; k < e.size(); ++k) {
+        if (!e[k].added() || !(v[k] > 0)) continue;
+        const C lag = 1.0 / C(1.0, w_[q] * v[k]);
+        if (e[k].matrix == 'U')
+          post_col[k] = lag;
+        else
+          post_row[k] = lag;
+      }
+      if (ka == 0) {
+        apply_lags(g[q], e, post_col, post_row);
+        continue;
+      }
       if (ka == 1) {  // one entry of A: Sherman-Morrison
         const StateEntry& ex = e[size_t(a[0])];
         const double d = delta[size_t(a[0])];
         g[q].noalias() += (d / (1.0 - d * R(ex.col, ex.row))) * cr(ex.row) * rb(ex.col);
+        apply_lags(g[q], e, post_col, post_row);
         continue;
       }
       Eigen::MatrixXcd P(p, ka), Q(ka, m), S(ka, ka);
@@ -146,8 +161,18 @@ class StateEval {
         }
       }
       g[q] += P * S.partialPivLu().solve(Q);
+      apply_lags(g[q], e, post_col, post_row);
     }
     return g;
+  }
+
+  // The added lags of e (post_col per input entry, post_row per output one) on the response.
+  static void apply_lags(Eigen::MatrixXcd& g, const std::vector<StateEntry>& e,
+                         const std::vector<C>& post_col, const std::vector<C>& post_row) {
+    for (size_t k = 0; k < e.size(); ++k) {
+      if (e[k].matrix == 'U') g.col(e[k].col) *= post_col[k];
+      if (e[k].matrix == 'Y') g.row(e[k].row) *= post_row[k];
+    }
   }
 
   // A's modes in the open left half plane.
@@ -181,7 +206,10 @@ class StateEval {
   }
 
   // The weighted residuals (real and imaginary parts, every pair's points in turn) of the pairs
-  // under ss on top of their factors before this stage; false when ss is not stable.
+  // under ss on top of their factors before this stage, in the logarithm: ln(measured / model)
+  // over the point's relative sigma (sigma / |measured|), as (measured - model) / sigma where the
+  // two are near, and where a change no entry makes leaves a large misfit on some pairs (a lag
+  // the set has not yet taken) not led by their largest points; false when ss is not stable.
   bool residuals(const StateSpace& ss, Eigen::VectorXd* res) const {
     const auto F = ratio(ss);
     if (F.empty()) return false;
@@ -201,7 +229,10 @@ class StateEval {
     for (size_t k = 0; k < r_.pairs.size(); ++k) {
       const PairFit& p = r_.pairs[k];
       for (size_t q = 0; q < p.w.size(); ++q) {
-        const C e = (p.meas[q] - p.sim[q] * p.factor[q] * F[k][q]) / p.sig[q];
+        const C model = p.sim[q] * p.factor[q] * F[k][q];
+        const C e = model != C(0, 0) && p.meas[q] != C(0, 0)
+                        ? std::log(p.meas[q] / model) * (std::abs(p.meas[q]) / p.sig[q])
+                        : (p.meas[q] - model) / p.sig[q];
         (*res)(m++) = e.real(), (*res)(m++) = e.imag();
       }
     }
@@ -213,6 +244,10 @@ class StateEval {
   }
 
   size_t points() const { return points_; }
+  // The least and greatest distinct frequency (rad/s).
+  std::pair<double, double> band() const {
+    return {*std::min_element(w_.begin(), w_.end()), *std::max_element(w_.begin(), w_.end())};
+  }
 
  private:
   struct PairAt {
@@ -262,7 +297,7 @@ double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>
   return n ? std::sqrt(s / double(n)) : 0;
 }
 
-bool is_rate(const StateEntry& e) { return e.matrix == 'A' && e.row == e.col; }
+bool is_rate(const StateEntry& e) { return e.added() || (e.matrix == 'A' && e.row == e.col); }
 
 // An entry's coordinate for the fits: ln |v| for a rate (its sign kept), v / |v0| otherwise.
 double to_x(const StateEntry& e, double v0, double v) {
@@ -285,9 +320,12 @@ struct EntrySet {
   bool holds(const StateEntry& x) const {
     return std::any_of(e.begin(), e.end(), [&](const StateEntry& y) { return same_entry(x, y); });
   }
+  // The entries of A, B and C first, then the added lags (with_entry).
   StateSpace applied_to(const StateSpace& sim) const {
     StateSpace ss = sim;
-    for (size_t k = 0; k < e.size(); ++k) ss = with_entry(ss, e[k], v[k]);
+    for (bool added : {false, true})
+      for (size_t k = 0; k < e.size(); ++k)
+        if (e[k].added() == added) ss = with_entry(ss, e[k], v[k]);
     return ss;
   }
   // The same entries whatever their order.
@@ -311,6 +349,8 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
   for (int i = 0; i < ss.C.rows(); ++i)
     for (int j = 0; j < ss.C.cols(); ++j)
       if (ss.C(i, j) != 0) out.push_back({'C', i, j});
+  for (int j = 0; j < ss.B.cols(); ++j) out.push_back({'U', 0, j});
+  for (int i = 0; i < ss.C.rows(); ++i) out.push_back({'Y', i, 0});
   return out;
 }
 
@@ -318,9 +358,13 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
 // a rate within a factor kSpan, another entry within kSpan |v0|; a scan of kScan points, then
 // Brent's method between the best one's neighbours.
 template <class Chi2>
-std::pair<double, double> scan_entry(const StateEntry& e, double v0, const Chi2& chi2_at) {
-  const double x0 = to_x(e, v0, v0), span = is_rate(e) ? std::log(kSpan) : kSpan;
-  const double lo = x0 - span, hi = x0 + span;
+std::pair<double, double> scan_entry(const StateEval& ev, const StateEntry& e, double v0,
+                                     const Chi2& chi2_at) {
+  const double x0 = e.added() ? 0 : to_x(e, v0, v0), span = is_rate(e) ? std::log(kSpan) : kSpan;
+  // An added lag: its time constant from a third of the band's top's to three of its bottom's.
+  const auto [w_lo, w_hi] = ev.band();
+  const double lo = e.added() ? std::log(1 / (3 * w_hi)) : x0 - span,
+               hi = e.added() ? std::log(3 / w_lo) : x0 + span;
   std::vector<double> xs(kScan), cs(kScan);
   size_t best = 0;
   for (int q = 0; q < kScan; ++q) {
@@ -346,7 +390,7 @@ std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim, 
   std::vector<double> vs = s.v;
   es.push_back(e), vs.push_back(v0);
   Eigen::VectorXd res;
-  const auto fast = scan_entry(e, v0, [&](double x) {
+  const auto fast = scan_entry(ev, e, v0, [&](double x) {
     vs.back() = to_v(e, v0, x);
     ev.residuals_moved(es, vs, &res);
     const double c = res.squaredNorm();
@@ -354,7 +398,7 @@ std::pair<double, double> fit_alone(const StateEval& ev, const StateSpace& sim, 
   });
   if (!std::isfinite(fast.second) || StateEval::stable(with_entry(base, e, fast.first)))
     return fast;
-  return scan_entry(e, v0, [&](double x) {
+  return scan_entry(ev, e, v0, [&](double x) {
     vs.back() = to_v(e, v0, x);
     if (!StateEval::stable(with_entry(base, e, vs.back()))) return double(INFINITY);
     ev.residuals_moved(es, vs, &res);
@@ -538,8 +582,27 @@ void states(DiagnosisRun& r) {
   const auto F = ev.ratio(best[k].applied_to(sim));
   for (size_t p = 0; p < r.pairs.size(); ++p)
     for (size_t q = 0; q < r.pairs[p].w.size(); ++q) r.pairs[p].factor[q] *= F[p][q];
-  for (size_t j = 0; j < best[k].e.size(); ++j)
-    r.state_findings.push_back(state_parameter_finding(sim, best[k].e[j], best[k].v[j], pairs));
+  for (size_t j = 0; j < best[k].e.size(); ++j) {
+    const StateEntry& e = best[k].e[j];
+    if (!e.added()) {
+      r.state_findings.push_back(state_parameter_finding(sim, e, best[k].v[j], pairs));
+      continue;
+    }
+    // A state the simulation lacks, before an input or after an output: a missing lag there.
+    Finding f;
+    f.cause = CauseKind::kMissingLag;
+    f.scope = e.matrix == 'U' ? Scope::kInput : Scope::kOutput;
+    (e.matrix == 'U' ? f.input : f.output) =
+        e.matrix == 'U' ? sim.inputs[size_t(e.col)] : sim.outputs[size_t(e.row)];
+    f.parameters["corner_rad_s"] = 1 / best[k].v[j];
+    // The state it adds, named (and, fitted over every pair of the channel, not regrouped).
+    f.text_parameters["state"] = with_entry(sim, e, best[k].v[j]).states.back();
+    for (const std::string& pair : pairs) {
+      const PairId id = PairId::parse(pair);
+      if (e.matrix == 'U' ? id.input == f.input : id.output == f.output) f.pairs.push_back(pair);
+    }
+    r.state_findings.push_back(std::move(f));
+  }
 }
 
 }  // namespace fralab::diag
