@@ -11,15 +11,9 @@ namespace {
 
 constexpr double kSameRoot = 1e-9;  // relative: a pole of the extended model is a finding's
 
-bool same(const Root& a, const Root& b) {
-  if (a.pair != b.pair) return false;
-  if (!a.pair) return std::abs(a.real - b.real) <= kSameRoot * std::abs(b.real);
-  return std::abs(a.wn - b.wn) <= kSameRoot * b.wn && std::abs(a.zeta - b.zeta) <= kSameRoot;
-}
-
 bool holds(const std::vector<Root>& roots, const Root& r) {
   for (const Root& x : roots)
-    if (same(x, r)) return true;
+    if (x.same_as(r, kSameRoot)) return true;
   return false;
 }
 
@@ -57,7 +51,7 @@ StateSpace extended_state_space(const Model& sim, const Diagnosis& d) {
   const StateNamer namer = [&](const StatePlace& place, const Root& pole) {
     const std::string name = default_state_name(place, pole);
     for (const Added& a : added) {
-      if (!same(a.pole, pole)) continue;
+      if (!a.pole.same_as(pole, kSameRoot)) continue;
       const bool here = place.kind == StatePlace::Kind::kPath
                             ? a.output == place.output && a.input == place.input
                         : place.kind == StatePlace::Kind::kInput ? a.input == place.input

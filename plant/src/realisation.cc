@@ -171,17 +171,11 @@ Lti wire(const std::vector<Lti>& blocks, const std::vector<int>& in, const std::
   return w;
 }
 
-bool same_root(const Root& a, const Root& b) {
-  if (a.pair != b.pair) return false;
-  if (!a.pair) return std::abs(a.real - b.real) <= kSameRoot * std::abs(b.real);
-  return std::abs(a.wn - b.wn) <= kSameRoot * b.wn && std::abs(a.zeta - b.zeta) <= kSameRoot;
-}
-
 // `from` taken out of `roots`; false when one of them is not there.
 bool take_out(std::vector<Root>& roots, const std::vector<Root>& from) {
   for (const Root& r : from) {
-    auto it =
-        std::find_if(roots.begin(), roots.end(), [&](const Root& x) { return same_root(x, r); });
+    auto it = std::find_if(roots.begin(), roots.end(),
+                           [&](const Root& x) { return x.same_as(r, kSameRoot); });
     if (it == roots.end()) return false;
     roots.erase(it);
   }
@@ -232,12 +226,13 @@ std::optional<Lti> around_core(const Model& m, const StateNamer& namer) {
   for (Eigen::Index i = 0; i < no; ++i)
     if (core.outputs[size_t(i)] != m.outputs[size_t(i)].name) return std::nullopt;
   const auto g = model_paths(m);
+  const auto core_paths = state_space_paths(core, m.name);
   // What the model adds to each path of the core.
   const size_t nos = static_cast<size_t>(no), nis = static_cast<size_t>(ni);
   std::vector<std::vector<std::optional<Tf>>> r(nos, std::vector<std::optional<Tf>>(nis));
   for (Eigen::Index i = 0; i < no; ++i)
     for (Eigen::Index j = 0; j < ni; ++j) {
-      const auto c = state_space_path(core, int(i), int(j), m.name);
+      const auto& c = core_paths[size_t(i)][size_t(j)];
       if (bool(c) != bool(g[size_t(i)][size_t(j)])) return std::nullopt;
       if (!c) continue;
       r[size_t(i)][size_t(j)] = ratio(*g[size_t(i)][size_t(j)], rational(*c));

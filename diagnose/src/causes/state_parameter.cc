@@ -15,19 +15,13 @@ StateEntry entry_of(const Finding& f) {
           int(f.parameters.at("col")) - 1};
 }
 
-bool same(const Root& a, const Root& b) {
-  if (a.pair != b.pair) return false;
-  if (!a.pair) return std::abs(a.real - b.real) <= kSameRoot * std::abs(b.real);
-  return std::abs(a.wn - b.wn) <= kSameRoot * b.wn && std::abs(a.zeta - b.zeta) <= kSameRoot;
-}
-
 // t, whose rational part holds `from`'s (where no other finding moved its roots), changed to hold
 // `to`'s: each root of `from` taken out of t (or, when another finding moved it, cancelled by the
 // same root on the other side), `to`'s roots put in, the gain scaled by to's over from's.
 void replace(Tf& t, const Tf& from, const Tf& to) {
   auto take = [&](std::vector<Root>& side, std::vector<Root>& other, const Root& r) {
     for (auto it = side.begin(); it != side.end(); ++it)
-      if (same(*it, r)) {
+      if (it->same_as(r, kSameRoot)) {
         side.erase(it);
         return;
       }

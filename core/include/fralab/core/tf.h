@@ -9,6 +9,7 @@
 // with phi in radians; a lag has phi < 0 and the delay contributes -w * delay_s exactly.
 #pragma once
 
+#include <cmath>
 #include <complex>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ struct Root {
   }
   /// The root(s) in the s-plane (one for a real root, the pair's two for a pair).
   std::vector<Complex> locations() const;
+  /// The same root as b to within rel: of one kind, a real root within rel |b.real|, a pair's wn
+  /// within rel b.wn and its zeta within rel (absolute).
+  bool same_as(const Root& b, double rel) const {
+    if (pair != b.pair) return false;
+    if (!pair) return std::abs(real - b.real) <= rel * std::abs(b.real);
+    return std::abs(wn - b.wn) <= rel * b.wn && std::abs(zeta - b.zeta) <= rel;
+  }
   /// Strictly in the open left half plane.
   bool stable() const { return pair ? (zeta > 0.0) : (real < 0.0); }
   /// Human form: "real -2.83" or "pair wn 49.6 zeta 0.021".
