@@ -284,27 +284,41 @@ Model extend_model(const Model& sim, const std::vector<Finding>& findings) {
   return m;
 }
 
+namespace {
+// A finding's cause, scope, channels, parameters (text ones among them), explanation, errors,
+// pairs, intervals, and a missing path's tf.
+Json finding_json(const Finding& f) {
+  Json p = Json::object();
+  for (const auto& [k, v] : f.parameters) p[k] = v;
+  for (const auto& [k, v] : f.text_parameters) p[k] = v;
+  Json j{{"cause", to_string(f.cause)},
+         {"scope", to_string(f.scope)},
+         {"output", f.output.empty() ? Json(nullptr) : Json(f.output)},
+         {"input", f.input.empty() ? Json(nullptr) : Json(f.input)},
+         {"parameters", p},
+         {"explanation", f.explanation},
+         {"error_before", f.error_before},
+         {"error_after", f.error_after},
+         {"pairs", f.pairs},
+         {"intervals", intervals_json(f)}};
+  if (f.tf) j["tf"] = tf_to_json(*f.tf);
+  return j;
+}
+}  // namespace
+
 Json diagnosis_to_json(const Diagnosis& d) {
   Json j{{"format", "fralab-diagnosis/1"}, {"findings", Json::array()}};
   for (const auto& f : d.findings) {
-    Json p = Json::object();
-    for (const auto& [k, v] : f.parameters) p[k] = v;
-    for (const auto& [k, v] : f.text_parameters) p[k] = v;
-    j["findings"].push_back({{"cause", to_string(f.cause)},
-                             {"scope", to_string(f.scope)},
-                             {"output", f.output.empty() ? Json(nullptr) : Json(f.output)},
-                             {"input", f.input.empty() ? Json(nullptr) : Json(f.input)},
-                             {"parameters", p},
-                             {"explanation", f.explanation},
-                             {"error_before", f.error_before},
-                             {"error_after", f.error_after},
-                             {"pairs", f.pairs},
-                             {"intervals", intervals_json(f)}});
-    if (f.tf) j["findings"].back()["tf"] = tf_to_json(*f.tf);
+    j["findings"].push_back(finding_json(f));
     if (f.level) {
       Json& lj = j["findings"].back()["level_dependence"] = level_json(*f.level);
       for (const LevelDependence& l : f.level_secondary) lj["secondary"].push_back(level_json(l));
     }
+  }
+  for (const StateAlternative& a : d.state_alternatives) {
+    Json fs = Json::array();
+    for (const Finding& f : a.findings) fs.push_back(finding_json(f));
+    j["state_alternatives"].push_back({{"findings", fs}, {"chi2_above", a.chi2_above}});
   }
   j["measurement_chain"] = chain_to_json(d.chain);
   j["dropped"] = Json::array();

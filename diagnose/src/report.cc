@@ -129,6 +129,20 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
       if (a.finding == int(&f - d.findings.data()))
         md << "  - Data alternative: " << a.text << ".\n";
   }
+  if (!d.state_alternatives.empty()) {
+    md << "\n## As well fitted (other entries of the state model the data cannot tell apart)\n\n";
+    for (const StateAlternative& a : d.state_alternatives) {
+      md << "-";
+      for (const Finding& f : a.findings) {
+        md << " **" << to_string(f.cause) << "**";
+        for (const auto& [k, v] : f.text_parameters) md << " " << k << " = " << v;
+        for (const auto& [k, v] : f.parameters) md << " " << k << " = " << v;
+        md << ";";
+      }
+      md << " chi2 above the named set's by " << a.chi2_above
+         << " (misfit units): check which the plant holds.\n";
+    }
+  }
   if (!d.dropped.empty()) {
     md << "\n## Dropped (fitted, but did not earn their place)\n\n";
     for (const auto& x : d.dropped) {

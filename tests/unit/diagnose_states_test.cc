@@ -8,9 +8,11 @@
 
 #include <numbers>
 #include <random>
+#include <set>
 
 #include "exact_measurement.h"
 #include "fralab/diagnose/diagnose.h"
+#include "fralab/diagnose/extended_state_space.h"
 #include "fralab/plant/state_space.h"
 #include "random_state.h"
 #include "test_util.h"
@@ -175,6 +177,98 @@ TEST(DiagnoseStates, AStateChangeAndALagTheSimulationLacksAreEachNamed) {
     EXPECT_LE(d.error_after, kErrorShare * d.error_before)
         << d.error_before << " -> " << d.error_after;
   }
+}
+
+// A delay the simulation lacks beside a changed entry: the delay named where the state model
+// takes it (an input's or an output's, added to the simulation's own), sized within 2 %.
+TEST(DiagnoseStates, AStateChangeAndADelayTheSimulationLacksAreEachNamed) {
+  struct Case {
+    std::string matrix;
+    int row, col;
+    double value;
+    std::string channels;  // "inputs" or "outputs"
+    int channel;
+    double added_s;  // the delay added to the channel's (its phase at 100 rad/s 1-2 rad)
+  };
+  for (const Case& c :
+       {Case{"A", 1, 1, -1 / 4.5, "inputs", 1, 0.02}, Case{"B", 3, 1, 1.6, "outputs", 1, 0.01}}) {
+    const Model sim = parse_model(simulation_doc(), "ss.json");
+    Json truth_doc = simulation_doc();
+    truth_doc[c.matrix][c.row][c.col] = c.value;
+    Json& ch = truth_doc[c.channels][c.channel];
+    const std::string name = ch["name"];
+    ch["delay_s"] = ch.value("delay_s", 0.0) + c.added_s;
+    const Diagnosis d = diagnose(sim, measure(parse_model(truth_doc, "truth"), 5));
+    const std::string json = diagnosis_to_json(d).dump(1);
+    ASSERT_EQ(d.findings.size(), 2u) << json;
+    const Finding* entry = nullptr;
+    const Finding* delay = nullptr;
+    for (const Finding& f : d.findings)
+      (f.cause == CauseKind::kStateParameter ? entry : delay) = &f;
+    ASSERT_NE(entry, nullptr) << json;
+    ASSERT_NE(delay, nullptr) << json;
+    EXPECT_EQ(entry->text_parameters.at("matrix"), c.matrix);
+    EXPECT_EQ(entry->parameters.at("row"), c.row + 1);
+    EXPECT_EQ(entry->parameters.at("col"), c.col + 1);
+    EXPECT_NEAR(entry->parameters.at("to") / c.value, 1, kValueRel) << json;
+    const bool at_input = c.channels == "inputs";
+    EXPECT_EQ(delay->cause, CauseKind::kTimeDelay) << json;
+    EXPECT_EQ(delay->scope, at_input ? Scope::kInput : Scope::kOutput) << json;
+    EXPECT_EQ(at_input ? delay->input : delay->output, name);
+    EXPECT_EQ(delay->text_parameters.at("delay"),
+              (at_input ? "InputDelay " : "OutputDelay ") + name);
+    EXPECT_NEAR(delay->parameters.at("delay_s") / c.added_s, 1, kValueRel) << json;
+    EXPECT_LE(d.error_after, kErrorShare * d.error_before)
+        << d.error_before << " -> " << d.error_after;
+    // The extended model as a state model: the simulation's states, the delay its input's or
+    // output's (the simulation's own plus the one found).
+    const StateSpace ext = extended_state_space(sim, d);
+    EXPECT_EQ(ext.states, sim.state_space->states);
+    const std::vector<double>& ext_d = at_input ? ext.input_delay_s : ext.output_delay_s;
+    const std::vector<double>& sim_d =
+        at_input ? sim.state_space->input_delay_s : sim.state_space->output_delay_s;
+    ASSERT_GT(ext_d.size(), size_t(c.channel)) << json;
+    EXPECT_NEAR(ext_d[size_t(c.channel)] - sim_d[size_t(c.channel)], c.added_s,
+                kValueRel * c.added_s);
+  }
+}
+
+// A state seen at one output only and driven by the input alone: how the input drives it, B(2,1),
+// and how it shows there, C(2,2), move that path's gain alike, so the data cannot tell them apart.
+// One is named and the other given as a set the data fit as well, sized alike, neither chosen in
+// silence.
+TEST(DiagnoseStates, EntriesTheDataCannotTellApartAreEachGiven) {
+  const Json sim_doc = Json::parse(R"({
+    "format": "fralab-ss/1", "name": "two states apart",
+    "states": [{"name": "fast"}, {"name": "slow"}],
+    "inputs": [{"name": "u", "units": "1", "full_scale": 1}],
+    "outputs": [{"name": "y1", "units": "1"}, {"name": "y2", "units": "1"}],
+    "A": [[-4, 0], [0, -0.5]], "B": [[2], [1]], "C": [[1, 0], [0, 1]]})");
+  constexpr double kFactor = 1.5;
+  Json truth_doc = sim_doc;
+  truth_doc["B"][1][0] = kFactor;
+  const Model sim = parse_model(sim_doc, "sim");
+  const Diagnosis d = diagnose(sim, measure(parse_model(truth_doc, "truth"), 9));
+  const std::string json = diagnosis_to_json(d).dump(1);
+  ASSERT_EQ(d.findings.size(), 1u) << json;
+  ASSERT_EQ(d.state_alternatives.size(), 1u) << json;
+  ASSERT_EQ(d.state_alternatives[0].findings.size(), 1u) << json;
+  const Finding& named = d.findings[0];
+  const Finding& other = d.state_alternatives[0].findings[0];
+  std::set<std::string> matrices;
+  for (const Finding* f : {&named, &other}) {
+    ASSERT_EQ(f->cause, CauseKind::kStateParameter) << json;
+    EXPECT_EQ(f->text_parameters.at("state"), "slow") << json;
+    matrices.insert(f->text_parameters.at("matrix"));
+    EXPECT_NEAR(f->parameters.at("to") / f->parameters.at("from"), kFactor, kValueRel * kFactor)
+        << json;
+  }
+  EXPECT_EQ(matrices, (std::set<std::string>{"B", "C"})) << json;
+  const double one_parameter = std::log(2.0 * 2 * 33);  // ln 2N: two paths of 33 points each
+  EXPECT_LE(std::abs(d.state_alternatives[0].chi2_above), one_parameter) << json;
+  EXPECT_TRUE(diagnosis_to_json(d).contains("state_alternatives"));
+  // Where the data tell the entries apart (ss.json's T4), no alternative is given.
+  EXPECT_TRUE(diagnose_changed("A", 1, 1, -1 / 4.5).state_alternatives.empty());
 }
 
 // Nothing changed: no finding.

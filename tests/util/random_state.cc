@@ -58,6 +58,21 @@ StateSpace with_lag(const StateSpace& ss, bool before, int k, double p) {
   return out;
 }
 
+// state_measurement's grid, rad/s: a decade beyond the simulation's modes each side, 10 a decade.
+std::vector<double> state_grid(const StateSpace& sim) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(sim.A, false);
+  double lo = INFINITY, hi = 0;
+  for (Eigen::Index k = 0; k < sim.A.rows(); ++k) {
+    lo = std::min(lo, std::abs(es.eigenvalues()(k)));
+    hi = std::max(hi, std::abs(es.eigenvalues()(k)));
+  }
+  lo /= 10, hi *= 10;
+  const int n = int(std::ceil(10 * std::log10(hi / lo))) + 1;
+  std::vector<double> w;
+  for (int j = 0; j < n; ++j) w.push_back(lo * std::pow(hi / lo, double(j) / (n - 1)));
+  return w;
+}
+
 }  // namespace
 
 RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
@@ -157,6 +172,25 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
       c.hidden.push_back(e);
     }
   }
+  // A delay the simulation lacks, in about one case in five: at an input or an output, its phase
+  // at the top of the measured band 0.2-2 rad.
+  if (u(g) < 0.2) {
+    const bool at_input = u(g) < 0.5;
+    const int k = int(g() % uint64_t(at_input ? ni : no));
+    const std::vector<double> w = state_grid(ss);
+    const double delay = logu(0.2, 2.0) / w.back();
+    std::vector<double>& d = at_input ? truth.input_delay_s : truth.output_delay_s;
+    d.assign(size_t(at_input ? ni : no), 0.0);
+    d[size_t(k)] = delay;
+    HiddenEffect e;
+    e.cause = CauseKind::kTimeDelay;
+    e.scope = at_input ? Scope::kInput : Scope::kOutput;
+    (at_input ? e.input : e.output) = at_input ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)];
+    e.param = "delay_s";
+    e.value = delay;
+    e.tol_rel = 0.02;
+    c.hidden.push_back(e);
+  }
   try {
     c.engine = parse_model(document(truth, "engine " + std::to_string(index)), c.name + "/engine");
   } catch (const InputError&) {
@@ -165,46 +199,29 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
   return c;
 }
 
-namespace {
-
-// state_measurement's grid, rad/s: a decade beyond the simulation's modes each side, 10 a decade.
-std::vector<double> state_grid(const RandomCase& c) {
-  const Eigen::MatrixXd& A = c.simulation.state_space->A;
-  const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
-  double lo = INFINITY, hi = 0;
-  for (Eigen::Index k = 0; k < A.rows(); ++k) {
-    lo = std::min(lo, std::abs(es.eigenvalues()(k)));
-    hi = std::max(hi, std::abs(es.eigenvalues()(k)));
-  }
-  lo /= 10, hi *= 10;
-  const int n = int(std::ceil(10 * std::log10(hi / lo))) + 1;
-  std::vector<double> w;
-  for (int j = 0; j < n; ++j) w.push_back(lo * std::pow(hi / lo, double(j) / (n - 1)));
-  return w;
-}
-
-}  // namespace
-
 std::vector<MeasuredPair> state_measurement(const RandomCase& c, uint64_t seed, double rel_sigma) {
-  return exact_measurement(c.engine, state_grid(c), seed, rel_sigma);
+  return exact_measurement(c.engine, state_grid(*c.simulation.state_space), seed, rel_sigma);
 }
 
 bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double rel_sigma) {
   const StateSpace& truth = *c.engine.state_space;
-  if (e.cause == CauseKind::kMissingLag) {  // undone: its column or row times (1 + jw / p)
+  // A lag undone: its column or row times (1 + jw / p); a delay: times exp(jw tau).
+  if (e.cause == CauseKind::kMissingLag || e.cause == CauseKind::kTimeDelay) {
     const bool before = e.scope == Scope::kInput;
     const auto& names = before ? truth.inputs : truth.outputs;
     const Eigen::Index k =
         std::find(names.begin(), names.end(), before ? e.input : e.output) - names.begin();
     double chi2 = 0;
     size_t n = 0;
-    for (double w : state_grid(c)) {
+    for (double w : state_grid(*c.simulation.state_space)) {
       const Eigen::MatrixXcd g = state_space_response(truth, C(0, w));
       for (Eigen::Index a = 0; a < g.rows(); ++a)
         for (Eigen::Index b = 0; b < g.cols(); ++b) {
           if (std::abs(g(a, b)) == 0) continue;
           const bool on = before ? b == k : a == k;
-          const C h = on ? g(a, b) * C(1, w / e.value) : g(a, b);
+          const C undo =
+              e.cause == CauseKind::kMissingLag ? C(1, w / e.value) : std::exp(C(0, w * e.value));
+          const C h = on ? g(a, b) * undo : g(a, b);
           chi2 += std::norm((g(a, b) - h) / (rel_sigma * std::abs(g(a, b))));
           ++n;
         }
@@ -219,7 +236,7 @@ bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double re
   m(i, j) = (matrix == 'A' ? sim.A : matrix == 'B' ? sim.B : sim.C)(i, j);
   double chi2 = 0;
   size_t n = 0;
-  for (double w : state_grid(c)) {
+  for (double w : state_grid(*c.simulation.state_space)) {
     const Eigen::MatrixXcd g = state_space_response(truth, C(0, w)),
                            h = state_space_response(undone, C(0, w));
     for (Eigen::Index a = 0; a < g.rows(); ++a)

@@ -4,9 +4,10 @@
 // the engine (a state's time constant, a coupling, how an input drives a state, how a state shows
 // at an output), and in about one case in four a state the simulation lacks (a first-order lag
 // before an input or after an output, its corner within A's modes), and says which finding must
-// name each (`state_parameter` at the entry; `missing_lag` at the input or output). Measured
-// in-process (exact responses, 0.2 % noise, a validation measurement), as random_modal.h.
-// Deterministic in the seed.
+// name each (`state_parameter` at the entry; `missing_lag` at the input or output); in about one
+// case in five a delay the simulation lacks at an input or an output, its phase at the band's
+// top 0.2-2 rad (`time_delay` there). Measured in-process (exact responses, 0.2 % noise, a
+// validation measurement), as random_modal.h. Deterministic in the seed.
 #pragma once
 
 #include <cstdint>

@@ -100,7 +100,15 @@ double entry_value(const StateSpace& ss, const StateEntry& e) {
 }
 
 StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v) {
-  if (e.added()) {
+  if (e.delay()) {
+    if (!(v > 0)) return ss;
+    StateSpace out = ss;
+    std::vector<double>& d = e.at_input() ? out.input_delay_s : out.output_delay_s;
+    d.resize(e.at_input() ? ss.inputs.size() : ss.outputs.size(), 0.0);
+    d[size_t(e.at_input() ? e.col : e.row)] += v;
+    return out;
+  }
+  if (e.lag()) {
     if (!(v > 0)) return ss;
     const Eigen::Index n = ss.A.rows(), m = ss.B.cols(), p = ss.C.rows();
     const Eigen::MatrixXd D = ss.D.size() ? ss.D : Eigen::MatrixXd::Zero(p, m);

@@ -20,20 +20,30 @@
 
 namespace fralab::diag {
 
-/// An entry of A, B or C (row, col 0-based), or a state the simulation lacks: 'U', a first-order
-/// lag before input `col` (the column of B and D it drives), 'Y', one after output `row`, each
-/// valued by its time constant (s; 0: absent, the simulation's value).
+/// An entry of A, B or C (row, col 0-based), or what the simulation lacks: 'U', a first-order
+/// lag (a state) before input `col` (the column of B and D it drives), 'Y', one after output
+/// `row`, each valued by its time constant (s); 'I', a delay added to input `col`'s, 'O', one
+/// added to output `row`'s, each valued by the delay (s). An added lag or delay of 0 is absent,
+/// the simulation's value.
 struct StateEntry {
   char matrix = 'A';
   int row = 0, col = 0;
-  bool added() const { return matrix == 'U' || matrix == 'Y'; }
+  /// A lag the simulation lacks (a state it adds).
+  bool lag() const { return matrix == 'U' || matrix == 'Y'; }
+  /// A delay the simulation lacks.
+  bool delay() const { return matrix == 'I' || matrix == 'O'; }
+  /// Either: not an entry of the simulation's matrices, valued from 0.
+  bool added() const { return lag() || delay(); }
+  /// At an input ('U', 'I'; else at an output, or an entry of the matrices).
+  bool at_input() const { return matrix == 'U' || matrix == 'I'; }
 };
 
-/// The entry's value in `ss` (0 for an added lag).
+/// The entry's value in `ss` (0 for an added lag or delay).
 double entry_value(const StateSpace& ss, const StateEntry& e);
 /// `ss` with the entry set to v. An added lag of time constant v > 0 is a new last state x_l:
 /// before input j, x_l' = (u_j - x_l) / v driving what u_j drove (B's and D's column j); after
-/// output i, x_l' = (y_i - x_l) / v read as output i. Apply the entries of A, B and C first.
+/// output i, x_l' = (y_i - x_l) / v read as output i. An added delay v > 0 is added to the
+/// input's or the output's delay. Apply the entries of A, B and C first.
 StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v);
 /// Every path of `ss` (outputs x inputs; nullopt: zero), delays included; nullopt as a whole when
 /// a path cannot be factored (an unstable or degenerate entry: not a candidate value).

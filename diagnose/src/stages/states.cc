@@ -1,24 +1,26 @@
 // Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
 // model (plant/state_space.h), its own entries are candidate causes, each fitted over every pair:
 // a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
-// coupling), of B (how an input drives a state) and of C (how a state shows at an output), and a
+// coupling), of B (how an input drives a state) and of C (how a state shows at an output), a
 // state the simulation lacks, a first-order lag before an input or after an output (its time
-// constant over the band; found as a missing_lag naming the state it adds). One changed state
+// constant over the band; found as a missing_lag naming the state it adds), and a delay it lacks
+// at an input or an output (found as a time_delay there). One changed state
 // moves the poles, zeros and gains of every path it reaches; fitted pair by pair it splits into
 // pieces or is missed, or is hidden by another change it overlaps.
 //
 // On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated as
-// C (jwI - A)^-1 B + D (delays cancel in the ratio; the actuator's own pair and a path the
-// simulation lacks: 1). Several entries changed at once are searched as sets, a beam of kBeam sets
-// per size: each set of k entries is extended by every other entry fitted alone on top of it (a
-// scan of kScan points, a diagonal entry of A over its logarithm within a factor kSpan either way
-// keeping its sign, another entry over +-kSpan times its value, then Brent's method between the
-// scan's neighbours), the kScreened best of those are fitted jointly with the set's entries
-// (Levenberg-Marquardt, Eigen's), and the kBeam best sets of k + 1 go on. Fitted one at a time, a
-// first entry that stands in for two changed ones would stay; fitted as sets, the entries that
-// changed fit together. The best set of each size is taken while the next size lowers chi2 by more
-// than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion) and
-// lowers the error of the pairs. The accepted entries' factor stays on the pairs, so the stages
+// C (jwI - A)^-1 B + D times e^{-jw tau} for the input's and output's delays added to the
+// simulation's (the simulation's own delays cancel in the ratio; the actuator's own pair and a
+// path the simulation lacks: 1). Several entries changed at once are searched as sets, a beam of
+// kBeam sets per size: each set of k entries is extended by every other entry fitted alone on top
+// of it (a scan of kScan points, a diagonal entry of A over its logarithm within a factor kSpan
+// either way keeping its sign, another entry over +-kSpan times its value, then Brent's method
+// between the scan's neighbours), the kScreened best of those are fitted jointly with the set's
+// entries (Levenberg-Marquardt, Eigen's), and the kBeam best sets of k + 1 go on. Fitted one at a
+// time, a first entry that stands in for two changed ones would stay; fitted as sets, the entries
+// that changed fit together. The best set of each size is taken while the next size lowers chi2 by
+// more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
+// and lowers the error of the pairs. The accepted entries' factor stays on the pairs, so the stages
 // after it fit what they leave.
 #include <Eigen/Dense>
 #include <algorithm>
@@ -40,6 +42,9 @@ namespace {
 constexpr int kScan = 21;
 constexpr double kSpan = 4;
 constexpr int kMaxEntries = 4;
+// An added delay's search range: its phase at the band's top, rad (beyond pi the logarithm's
+// phase wraps; a delay that large is a path stage's to find).
+constexpr std::pair<double, double> kDelayPhase{0.003, 3.0};
 constexpr int kStateBrentBits = 24;
 constexpr size_t kBeam = 4;
 constexpr size_t kScreened = 6;
@@ -79,12 +84,24 @@ class StateEval {
   }
   bool ok() const { return ok_; }
 
-  // G(jw) = C (jwI - A)^-1 B + D at every distinct frequency; false when A has a mode outside the
-  // open left half plane.
+  // G(jw) = C (jwI - A)^-1 B + D at every distinct frequency, each column and row times
+  // e^{-jw tau} for the delay ss adds to the simulation's at that input or output; false when A
+  // has a mode outside the open left half plane.
   bool responses(const StateSpace& ss, std::vector<Eigen::MatrixXcd>* g) const {
     if (!stable(ss)) return false;
     g->resize(w_.size());
-    for (size_t q = 0; q < w_.size(); ++q) (*g)[q] = state_space_response(ss, C(0, w_[q]));
+    auto added = [](const std::vector<double>& d, const std::vector<double>& d0, size_t k) {
+      return (k < d.size() ? d[k] : 0.0) - (k < d0.size() ? d0[k] : 0.0);
+    };
+    for (size_t q = 0; q < w_.size(); ++q) {
+      Eigen::MatrixXcd& gq = (*g)[q] = state_space_response(ss, C(0, w_[q]));
+      for (Eigen::Index j = 0; j < gq.cols(); ++j)
+        if (const double t = added(ss.input_delay_s, sim_.input_delay_s, size_t(j)); t != 0)
+          gq.col(j) *= std::exp(C(0, -w_[q] * t));
+      for (Eigen::Index i = 0; i < gq.rows(); ++i)
+        if (const double t = added(ss.output_delay_s, sim_.output_delay_s, size_t(i)); t != 0)
+          gq.row(i) *= std::exp(C(0, -w_[q] * t));
+    }
     return true;
   }
 
@@ -133,11 +150,8 @@ class StateEval {
             g[q](e[k].row, e[l].col) += delta[k] * delta[l] * R(e[k].col, e[l].row);
       for (size_t k = 0; k < e.size(); ++k) {
         if (!e[k].added() || !(v[k] > 0)) continue;
-        const C lag = 1.0 / C(1.0, w_[q] * v[k]);
-        if (e[k].matrix == 'U')
-          post_col[k] = lag;
-        else
-          post_row[k] = lag;
+        const C f = e[k].lag() ? 1.0 / C(1.0, w_[q] * v[k]) : std::exp(C(0, -w_[q] * v[k]));
+        (e[k].at_input() ? post_col : post_row)[k] = f;
       }
       if (ka == 0) {
         apply_lags(g[q], e, post_col, post_row);
@@ -166,12 +180,16 @@ class StateEval {
     return g;
   }
 
-  // The added lags of e (post_col per input entry, post_row per output one) on the response.
+  // The added lags and delays of e (post_col per input entry, post_row per output one) on the
+  // response.
   static void apply_lags(Eigen::MatrixXcd& g, const std::vector<StateEntry>& e,
                          const std::vector<C>& post_col, const std::vector<C>& post_row) {
     for (size_t k = 0; k < e.size(); ++k) {
-      if (e[k].matrix == 'U') g.col(e[k].col) *= post_col[k];
-      if (e[k].matrix == 'Y') g.row(e[k].row) *= post_row[k];
+      if (!e[k].added()) continue;
+      if (e[k].at_input())
+        g.col(e[k].col) *= post_col[k];
+      else
+        g.row(e[k].row) *= post_row[k];
     }
   }
 
@@ -320,7 +338,7 @@ struct EntrySet {
   bool holds(const StateEntry& x) const {
     return std::any_of(e.begin(), e.end(), [&](const StateEntry& y) { return same_entry(x, y); });
   }
-  // The entries of A, B and C first, then the added lags (with_entry).
+  // The entries of A, B and C first, then the added lags and delays (with_entry).
   StateSpace applied_to(const StateSpace& sim) const {
     StateSpace ss = sim;
     for (bool added : {false, true})
@@ -351,6 +369,8 @@ std::vector<StateEntry> candidates_of(const StateSpace& ss) {
       if (ss.C(i, j) != 0) out.push_back({'C', i, j});
   for (int j = 0; j < ss.B.cols(); ++j) out.push_back({'U', 0, j});
   for (int i = 0; i < ss.C.rows(); ++i) out.push_back({'Y', i, 0});
+  for (int j = 0; j < ss.B.cols(); ++j) out.push_back({'I', 0, j});
+  for (int i = 0; i < ss.C.rows(); ++i) out.push_back({'O', i, 0});
   return out;
 }
 
@@ -361,10 +381,15 @@ template <class Chi2>
 std::pair<double, double> scan_entry(const StateEval& ev, const StateEntry& e, double v0,
                                      const Chi2& chi2_at) {
   const double x0 = e.added() ? 0 : to_x(e, v0, v0), span = is_rate(e) ? std::log(kSpan) : kSpan;
-  // An added lag: its time constant from a third of the band's top's to three of its bottom's.
+  // An added lag: its time constant from a third of the band's top's to three of its bottom's;
+  // an added delay: its phase at the band's top from kDelayPhase.first to .second rad.
   const auto [w_lo, w_hi] = ev.band();
-  const double lo = e.added() ? std::log(1 / (3 * w_hi)) : x0 - span,
-               hi = e.added() ? std::log(3 / w_lo) : x0 + span;
+  const double lo = e.lag()     ? std::log(1 / (3 * w_hi))
+                    : e.delay() ? std::log(kDelayPhase.first / w_hi)
+                                : x0 - span,
+               hi = e.lag()     ? std::log(3 / w_lo)
+                    : e.delay() ? std::log(kDelayPhase.second / w_hi)
+                                : x0 + span;
   std::vector<double> xs(kScan), cs(kScan);
   size_t best = 0;
   for (int q = 0; q < kScan; ++q) {
@@ -543,6 +568,42 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
   return out;
 }
 
+// The findings of set s over `pairs` (the X:O pairs): an entry of A, B or C a state_parameter;
+// a state the simulation lacks, before an input or after an output, a missing lag there; a delay
+// it lacks, a time delay there.
+std::vector<Finding> findings_of(const StateSpace& sim, const EntrySet& s,
+                                 const std::vector<std::string>& pairs) {
+  std::vector<Finding> out;
+  for (size_t j = 0; j < s.e.size(); ++j) {
+    const StateEntry& e = s.e[j];
+    if (!e.added()) {
+      out.push_back(state_parameter_finding(sim, e, s.v[j], pairs));
+      continue;
+    }
+    Finding f;
+    f.cause = e.lag() ? CauseKind::kMissingLag : CauseKind::kTimeDelay;
+    f.scope = e.at_input() ? Scope::kInput : Scope::kOutput;
+    (e.at_input() ? f.input : f.output) =
+        e.at_input() ? sim.inputs[size_t(e.col)] : sim.outputs[size_t(e.row)];
+    // What it adds to the state model, named (and, fitted over every pair of the channel, not
+    // regrouped): the lag's state, or the delay as its InputDelay or OutputDelay.
+    if (e.lag()) {
+      f.parameters["corner_rad_s"] = 1 / s.v[j];
+      f.text_parameters["state"] = with_entry(sim, e, s.v[j]).states.back();
+    } else {
+      f.parameters["delay_s"] = s.v[j];
+      f.text_parameters["delay"] =
+          (e.at_input() ? "InputDelay " : "OutputDelay ") + (e.at_input() ? f.input : f.output);
+    }
+    for (const std::string& pair : pairs) {
+      const PairId id = PairId::parse(pair);
+      if (e.at_input() ? id.input == f.input : id.output == f.output) f.pairs.push_back(pair);
+    }
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
 }  // namespace
 
 void states(DiagnosisRun& r) {
@@ -560,11 +621,14 @@ void states(DiagnosisRun& r) {
 
   EntrySet none;
   none.chi2 = ev.chi2(sim);
+  // beams[k - 1]: the sets of k entries kept, best first.
   std::vector<EntrySet> best{none}, beam{none};
+  std::vector<std::vector<EntrySet>> beams;
   for (int size = 1; size <= kMaxEntries; ++size) {
     beam = extend(ev, sim, candidates, beam);
     if (beam.empty()) break;
     best.push_back(beam.front());
+    beams.push_back(beam);
   }
   // The largest set each of whose sizes earned its place over the one before, and that the
   // simulation's own factoring takes (as the finding's model will).
@@ -582,26 +646,13 @@ void states(DiagnosisRun& r) {
   const auto F = ev.ratio(best[k].applied_to(sim));
   for (size_t p = 0; p < r.pairs.size(); ++p)
     for (size_t q = 0; q < r.pairs[p].w.size(); ++q) r.pairs[p].factor[q] *= F[p][q];
-  for (size_t j = 0; j < best[k].e.size(); ++j) {
-    const StateEntry& e = best[k].e[j];
-    if (!e.added()) {
-      r.state_findings.push_back(state_parameter_finding(sim, e, best[k].v[j], pairs));
-      continue;
-    }
-    // A state the simulation lacks, before an input or after an output: a missing lag there.
-    Finding f;
-    f.cause = CauseKind::kMissingLag;
-    f.scope = e.matrix == 'U' ? Scope::kInput : Scope::kOutput;
-    (e.matrix == 'U' ? f.input : f.output) =
-        e.matrix == 'U' ? sim.inputs[size_t(e.col)] : sim.outputs[size_t(e.row)];
-    f.parameters["corner_rad_s"] = 1 / best[k].v[j];
-    // The state it adds, named (and, fitted over every pair of the channel, not regrouped).
-    f.text_parameters["state"] = with_entry(sim, e, best[k].v[j]).states.back();
-    for (const std::string& pair : pairs) {
-      const PairId id = PairId::parse(pair);
-      if (e.matrix == 'U' ? id.input == f.input : id.output == f.output) f.pairs.push_back(pair);
-    }
-    r.state_findings.push_back(std::move(f));
+  r.state_findings = findings_of(sim, best[k], pairs);
+  // The other sets of as many entries that the criterion cannot tell from the one named.
+  const double s = std::max(1.0, best[k].chi2 / double(std::max<size_t>(n, 1)));
+  for (const EntrySet& t : beams[k - 1]) {
+    if (t.key() == best[k].key() || earned(t.chi2, best[k].chi2, n, 1) > 0) continue;
+    if (!state_paths(t.applied_to(sim))) continue;
+    r.d.state_alternatives.push_back({findings_of(sim, t, pairs), (t.chi2 - best[k].chi2) / s});
   }
 }
 

@@ -249,11 +249,20 @@ struct Unexplained {
   std::string explanation;
 };
 
+/// Another set of a state model simulation's entries that fits the data as well as the set stage
+/// 3a names: as many entries, its chi2 above the named set's by no more than one parameter's
+/// ln 2N in units of the misfit level (the stage's criterion cannot tell the two apart).
+struct StateAlternative {
+  std::vector<Finding> findings;  // each entry as stage 3a names it, value as fitted there
+  double chi2_above = 0;          // its chi2 minus the named set's, in units of the misfit level
+};
+
 struct Diagnosis {
   MeasurementChain chain;  // what the comparison used
   std::vector<DroppedFinding> dropped;
   std::vector<Unexplained> unexplained;
   std::vector<Finding> findings;
+  std::vector<StateAlternative> state_alternatives;  // stage 3a's, when its findings are kept
   Model extended;
   std::vector<PairReport> pairs;
   double error_before = 0, error_after = 0;
