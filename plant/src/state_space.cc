@@ -105,6 +105,29 @@ void StateSpace::validate(const std::string& source) const {
   all.insert(all.end(), path_delay_s.data(), path_delay_s.data() + path_delay_s.size());
   for (double d : all)
     if (!(d >= 0) || !std::isfinite(d)) fail("a delay is negative or not finite");
+  std::set<std::string> named;
+  for (const NamedParameter& np : parameters) {
+    const std::string what = "parameter \"" + np.name + "\"";
+    if (np.name.empty()) fail("a parameter's name is empty");
+    if (!named.insert(np.name).second) fail(what + " is given twice");
+    if (!std::isfinite(np.value) || np.value == 0) fail(what + ": its value is zero or not finite");
+    if (np.entries.empty()) fail(what + " sets no entry");
+    for (const NamedParameter::Entry& e : np.entries) {
+      const Eigen::MatrixXd* mat = e.matrix == 'A'   ? &A
+                                   : e.matrix == 'B' ? &B
+                                   : e.matrix == 'C' ? &C
+                                   : e.matrix == 'D' ? &D
+                                                     : nullptr;
+      const std::string entry = std::string(1, e.matrix) + "(" + std::to_string(e.row + 1) + ", " +
+                                std::to_string(e.col + 1) + ")";
+      if (!mat) fail(what + ": an entry's matrix is not A, B, C or D");
+      if (e.row < 0 || e.col < 0 || e.row >= mat->rows() || e.col >= mat->cols())
+        fail(what + ": its entry " + entry + " is outside " + std::string(1, e.matrix) + " (" +
+             size_str(*mat) + ")");
+      if ((*mat)(e.row, e.col) == 0)
+        fail(what + ": its entry " + entry + " is 0, which no value of the parameter moves");
+    }
+  }
   const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
   if (es.info() != Eigen::Success) fail("A: its eigenvalues could not be computed");
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -115,6 +138,20 @@ void StateSpace::validate(const std::string& source) const {
            "j rad/s, not in the open left half plane (an unstable or marginal mode: fralab's "
            "simulations are stable)");
   }
+}
+
+StateSpace with_parameter(const StateSpace& ss, size_t k, double p) {
+  StateSpace out = ss;
+  NamedParameter& np = out.parameters[k];
+  for (const NamedParameter::Entry& e : np.entries) {
+    Eigen::MatrixXd& m = e.matrix == 'A'   ? out.A
+                         : e.matrix == 'B' ? out.B
+                         : e.matrix == 'C' ? out.C
+                                           : out.D;
+    m(e.row, e.col) *= e.inverse ? np.value / p : p / np.value;
+  }
+  np.value = p;
+  return out;
 }
 
 Eigen::MatrixXcd state_space_response(const StateSpace& ss, Cd s) {
@@ -290,6 +327,35 @@ StateSpace state_space_from_json(const Json& doc, const std::string& source) {
   names("outputs", ss.outputs, &ss.output_delay_s);
   if (ss.D.size() == 0)
     ss.D = Eigen::MatrixXd::Zero(Eigen::Index(ss.outputs.size()), Eigen::Index(ss.inputs.size()));
+  const Json& params = json_array_member(doc, root, "parameters", true);
+  for (size_t k = 0; k < params.size(); ++k) {
+    const JsonWhere at = root / "parameters" / k;
+    json_require_object(params[k], at);
+    NamedParameter np;
+    np.name = json_string_member(params[k], at, "name");
+    np.units = params[k].contains("units") ? json_string_member(params[k], at, "units") : "";
+    np.value = json_number_member(params[k], at, "value");
+    const Json& entries = json_array_member(params[k], at, "entries");
+    for (size_t q = 0; q < entries.size(); ++q) {
+      const JsonWhere eq = at / "entries" / q;
+      json_require_object(entries[q], eq);
+      const std::string m = json_string_member(entries[q], eq, "matrix");
+      if (m.size() != 1 || std::string("ABCD").find(m[0]) == std::string::npos)
+        json_fail(eq / "matrix", "\"" + m + "\" is not A, B, C or D");
+      const std::string form = entries[q].contains("form")
+                                   ? json_string_member(entries[q], eq, "form")
+                                   : std::string("proportional");
+      if (form != "proportional" && form != "inverse")
+        json_fail(eq / "form", "\"" + form + "\" is not proportional or inverse");
+      const double row = json_number_member(entries[q], eq, "row"),
+                   col = json_number_member(entries[q], eq, "col");
+      if (row != std::floor(row) || col != std::floor(col) || row < 1 || col < 1 || row > 1e6 ||
+          col > 1e6)
+        json_fail(eq, "row and col are whole numbers from 1");
+      np.entries.push_back({m[0], int(row) - 1, int(col) - 1, form == "inverse"});
+    }
+    ss.parameters.push_back(std::move(np));
+  }
   return ss;
 }
 
@@ -353,6 +419,16 @@ Json state_space_document(const StateSpace& ss, const std::string& name) {
   doc["C"] = rows(ss.C);
   doc["D"] = rows(ss.D);
   if (ss.path_delay_s.size()) doc["delay_s"] = rows(ss.path_delay_s);
+  for (const NamedParameter& np : ss.parameters) {
+    Json entries = Json::array();
+    for (const NamedParameter::Entry& e : np.entries)
+      entries.push_back({{"matrix", std::string(1, e.matrix)},
+                         {"row", e.row + 1},
+                         {"col", e.col + 1},
+                         {"form", e.inverse ? "inverse" : "proportional"}});
+    doc["parameters"].push_back(
+        {{"name", np.name}, {"units", np.units}, {"value", np.value}, {"entries", entries}});
+  }
   return doc;
 }
 

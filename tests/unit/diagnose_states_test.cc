@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "exact_measurement.h"
 #include "fralab/diagnose/diagnose.h"
@@ -269,6 +270,34 @@ TEST(DiagnoseStates, EntriesTheDataCannotTellApartAreEachGiven) {
   EXPECT_TRUE(diagnosis_to_json(d).contains("state_alternatives"));
   // Where the data tell the entries apart (ss.json's T4), no alternative is given.
   EXPECT_TRUE(diagnose_changed("A", 1, 1, -1 / 4.5).state_alternatives.empty());
+}
+
+// Parameters the file names (tests/data/state_space/parameters.json) are candidates in their own
+// right: N's inertia (the inverse of N's row of A and its B entry) moved is one finding naming
+// it, not three entries; T4's time constant, a parameter setting A(2,2) alone, is named by the
+// parameter, not the entry.
+TEST(DiagnoseStates, ANamedParameterIsOneFindingNamingIt) {
+  Json sim_doc = simulation_doc();
+  sim_doc["parameters"] =
+      json_load_file(testing::source_path("tests/data/state_space/parameters.json"));
+  const Model sim = parse_model(sim_doc, "sim");
+  for (const auto& [name, k, to] : {std::tuple{"J_spool", 0, 2.8}, std::tuple{"tau_T4", 1, 4.5}}) {
+    Model truth = sim;
+    truth.state_space.reset();
+    const StateSpace moved = with_parameter(*sim.state_space, size_t(k), to);
+    const Model moved_model = parse_model(state_space_document(moved, "truth"), "truth");
+    truth.paths = moved_model.paths;
+    const Diagnosis d = diagnose(sim, measure(truth, 13));
+    const std::string json = diagnosis_to_json(d).dump(1);
+    ASSERT_EQ(d.findings.size(), 1u) << json;
+    const Finding& f = d.findings[0];
+    EXPECT_EQ(f.cause, CauseKind::kStateParameter) << json;
+    EXPECT_EQ(f.text_parameters.at("parameter"), name) << json;
+    EXPECT_EQ(f.text_parameters.count("matrix"), 0u) << json;
+    EXPECT_NEAR(f.parameters.at("to") / to, 1, kValueRel) << json;
+    EXPECT_LE(d.error_after, kErrorShare * d.error_before)
+        << d.error_before << " -> " << d.error_after;
+  }
 }
 
 // Nothing changed: no finding.

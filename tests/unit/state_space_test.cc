@@ -124,7 +124,60 @@ void expect_refused(const std::function<void(Json&)>& spoil, const std::string& 
   }
 }
 
+// The four-state model with two named parameters (tests/data/state_space/parameters.json): N's
+// inertia, the inverse of N's row of A and B, and T4's time constant, the inverse of A(2,2).
+Json with_parameters(Json d) {
+  d["parameters"] = json_load_file(source_path("tests/data/state_space/parameters.json"));
+  return d;
+}
+
+TEST(StateSpace, ANamedParameterSetsItsEntriesAndReadsBack) {
+  const StateSpace ss = state_space_from_json(with_parameters(four_state_doc()), "ss.json");
+  ss.validate("ss.json");
+  ASSERT_EQ(ss.parameters.size(), 2u);
+  EXPECT_EQ(ss.parameters[0].name, "J_spool");
+  EXPECT_EQ(ss.parameters[0].units, "kg m2");
+  // J 2 -> 4: N's row of A and its B entry halve, nothing else moves.
+  const StateSpace moved = with_parameter(ss, 0, 4.0);
+  EXPECT_EQ(moved.parameters[0].value, 4.0);
+  EXPECT_DOUBLE_EQ(moved.A(0, 0), ss.A(0, 0) / 2);
+  EXPECT_DOUBLE_EQ(moved.A(0, 1), ss.A(0, 1) / 2);
+  EXPECT_DOUBLE_EQ(moved.B(0, 0), ss.B(0, 0) / 2);
+  EXPECT_EQ(moved.A.bottomRows(3), ss.A.bottomRows(3));
+  EXPECT_EQ(moved.C, ss.C);
+  // tau_T4 3 -> 4.5 s: A(2,2) -1/3 -> -1/4.5.
+  EXPECT_DOUBLE_EQ(with_parameter(ss, 1, 4.5).A(1, 1), -1 / 4.5);
+  // Written and read back: the same parameters.
+  const StateSpace back = state_space_from_json(state_space_document(ss, "x"), "back.json");
+  ASSERT_EQ(back.parameters.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(back.parameters[k].name, ss.parameters[k].name);
+    EXPECT_EQ(back.parameters[k].units, ss.parameters[k].units);
+    EXPECT_EQ(back.parameters[k].value, ss.parameters[k].value);
+    ASSERT_EQ(back.parameters[k].entries.size(), ss.parameters[k].entries.size());
+    for (size_t q = 0; q < ss.parameters[k].entries.size(); ++q) {
+      EXPECT_EQ(back.parameters[k].entries[q].matrix, ss.parameters[k].entries[q].matrix);
+      EXPECT_EQ(back.parameters[k].entries[q].row, ss.parameters[k].entries[q].row);
+      EXPECT_EQ(back.parameters[k].entries[q].col, ss.parameters[k].entries[q].col);
+      EXPECT_EQ(back.parameters[k].entries[q].inverse, ss.parameters[k].entries[q].inverse);
+    }
+  }
+}
+
 TEST(StateSpace, BadModelsAreRefusedNamingTheFileAndWhatIsWrong) {
+  expect_refused([](Json& d) { d = with_parameters(d), d["parameters"][0]["value"] = 0; },
+                 "parameter \"J_spool\": its value is zero");
+  expect_refused(
+      [](Json& d) { d = with_parameters(d), d["parameters"][1]["entries"][0]["row"] = 5; },
+      "its entry A(5, 2) is outside A (4 x 4)");
+  expect_refused(
+      [](Json& d) { d = with_parameters(d), d["parameters"][1]["entries"][0]["col"] = 4; },
+      "its entry A(2, 4) is 0");
+  expect_refused(
+      [](Json& d) { d = with_parameters(d), d["parameters"][1]["entries"][0]["form"] = "square"; },
+      "/parameters/1/entries/0/form");
+  expect_refused([](Json& d) { d = with_parameters(d), d["parameters"][1]["name"] = "J_spool"; },
+                 "given twice");
   expect_refused([](Json& d) { d["B"].erase(0); }, "B is 3 x 2, expected 4 x 2");
   expect_refused([](Json& d) { d["C"][0].push_back(1); }, "/C/1");
   expect_refused([](Json& d) { d["A"][1][1] = 0.5; }, "not in the open left half plane");

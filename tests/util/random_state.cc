@@ -29,6 +29,19 @@ bool stable(const Eigen::MatrixXd& A) {
   return true;
 }
 
+// A hidden effect at input (at_input) or output `name`, its parameter to be found within 2 %.
+HiddenEffect channel_effect(CauseKind cause, bool at_input, const std::string& name,
+                            const char* param, double value) {
+  HiddenEffect e;
+  e.cause = cause;
+  e.scope = at_input ? Scope::kInput : Scope::kOutput;
+  (at_input ? e.input : e.output) = name;
+  e.param = param;
+  e.value = value;
+  e.tol_rel = 0.02;
+  return e;
+}
+
 // ss with a first-order lag of corner p (rad/s) before input k (before) or after output k: a new
 // last state x' = p (u_k - x) driving what u_k drove, or x' = p (y_k - x) read as y_k.
 StateSpace with_lag(const StateSpace& ss, bool before, int k, double p) {
@@ -107,6 +120,20 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     for (int q = 0, m = 1 + int(g() % 3); q < m; ++q)
       ss.C(i, int(g() % uint64_t(n))) = (u(g) < 0.8 ? 1 : -1) * logu(0.3, 3);
   ss.D = Eigen::MatrixXd::Zero(no, ni);
+  // Named parameters, in about half the cases (a stream of their own, so that the rest of a case
+  // is drawn as without them): a state's inertia J_Sk, 0.5-5, setting the inverse of its row of
+  // A and of B, for each state with probability 0.3.
+  std::mt19937_64 gp(seed * 3000017u + uint64_t(index) * 11u + 5u);
+  if (u(gp) < 0.5)
+    for (int k = 0; k < n; ++k) {
+      if (u(gp) >= 0.3) continue;
+      NamedParameter np{"J_S" + std::to_string(k + 1), "kg m2", 0.5 * std::pow(10.0, u(gp)), {}};
+      for (int j = 0; j < n; ++j)
+        if (ss.A(k, j) != 0) np.entries.push_back({'A', k, j, true});
+      for (int j = 0; j < ni; ++j)
+        if (ss.B(k, j) != 0) np.entries.push_back({'B', k, j, true});
+      ss.parameters.push_back(std::move(np));
+    }
   RandomCase c;
   c.name = "case" + std::to_string(index);
   try {
@@ -150,6 +177,28 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     c.hidden.push_back(e);
     ++h;
   }
+  // One named parameter moved by a factor 1.3-2 either way, in half the cases that name some,
+  // where no hidden entry lies in what it sets.
+  if (!ss.parameters.empty() && u(gp) < 0.5) {
+    const size_t k = size_t(gp() % ss.parameters.size());
+    bool free = true;
+    for (const NamedParameter::Entry& x : ss.parameters[k].entries)
+      free &=
+          std::find(taken.begin(), taken.end(), std::tuple{x.matrix, x.row, x.col}) == taken.end();
+    const double was = ss.parameters[k].value, factor = 1.3 * std::pow(2.0 / 1.3, u(gp)),
+                 to = u(gp) < 0.5 ? was * factor : was / factor;
+    if (free && stable(with_parameter(truth, k, to).A)) {
+      truth = with_parameter(truth, k, to);
+      HiddenEffect e;
+      e.cause = CauseKind::kStateParameter;
+      e.scope = Scope::kPlant;
+      e.param = "to";
+      e.value = to;
+      e.tol_rel = 0.02;
+      e.text["parameter"] = ss.parameters[k].name;
+      c.hidden.push_back(e);
+    }
+  }
   // A state the simulation lacks, in about one case in four: a first-order lag before an input
   // or after an output that no hidden entry of B or C reads, its corner within A's modes.
   if (u(g) < 0.25) {
@@ -162,14 +211,9 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     for (const auto& [m, i, j] : taken) read |= before ? m == 'B' && j == k : m == 'C' && i == k;
     if (!read) {
       truth = with_lag(truth, before, k, corner);
-      HiddenEffect e;
-      e.cause = CauseKind::kMissingLag;
-      e.scope = before ? Scope::kInput : Scope::kOutput;
-      (before ? e.input : e.output) = before ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)];
-      e.param = "corner_rad_s";
-      e.value = corner;
-      e.tol_rel = 0.02;
-      c.hidden.push_back(e);
+      c.hidden.push_back(channel_effect(CauseKind::kMissingLag, before,
+                                        before ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)],
+                                        "corner_rad_s", corner));
     }
   }
   // A delay the simulation lacks, in about one case in five: at an input or an output, its phase
@@ -182,14 +226,9 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     std::vector<double>& d = at_input ? truth.input_delay_s : truth.output_delay_s;
     d.assign(size_t(at_input ? ni : no), 0.0);
     d[size_t(k)] = delay;
-    HiddenEffect e;
-    e.cause = CauseKind::kTimeDelay;
-    e.scope = at_input ? Scope::kInput : Scope::kOutput;
-    (at_input ? e.input : e.output) = at_input ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)];
-    e.param = "delay_s";
-    e.value = delay;
-    e.tol_rel = 0.02;
-    c.hidden.push_back(e);
+    c.hidden.push_back(channel_effect(CauseKind::kTimeDelay, at_input,
+                                      at_input ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)],
+                                      "delay_s", delay));
   }
   try {
     c.engine = parse_model(document(truth, "engine " + std::to_string(index)), c.name + "/engine");
@@ -229,11 +268,17 @@ bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double re
     return chi2 > std::log(2.0 * double(std::max<size_t>(n, 1)));
   }
   const StateSpace& sim = *c.simulation.state_space;
-  const char matrix = e.text.at("matrix")[0];
-  const int i = int(e.exact.at("row")) - 1, j = int(e.exact.at("col")) - 1;
   StateSpace undone = truth;
-  Eigen::MatrixXd& m = matrix == 'A' ? undone.A : matrix == 'B' ? undone.B : undone.C;
-  m(i, j) = (matrix == 'A' ? sim.A : matrix == 'B' ? sim.B : sim.C)(i, j);
+  if (e.text.count("parameter")) {  // a named parameter back at the simulation's value
+    for (size_t k = 0; k < sim.parameters.size(); ++k)
+      if (sim.parameters[k].name == e.text.at("parameter"))
+        undone = with_parameter(truth, k, sim.parameters[k].value);
+  } else {
+    const char matrix = e.text.at("matrix")[0];
+    const int i = int(e.exact.at("row")) - 1, j = int(e.exact.at("col")) - 1;
+    Eigen::MatrixXd& m = matrix == 'A' ? undone.A : matrix == 'B' ? undone.B : undone.C;
+    m(i, j) = (matrix == 'A' ? sim.A : matrix == 'B' ? sim.B : sim.C)(i, j);
+  }
   double chi2 = 0;
   size_t n = 0;
   for (double w : state_grid(*c.simulation.state_space)) {

@@ -6,7 +6,9 @@
 // before an input or after an output, its corner within A's modes), and says which finding must
 // name each (`state_parameter` at the entry; `missing_lag` at the input or output); in about one
 // case in five a delay the simulation lacks at an input or an output, its phase at the band's
-// top 0.2-2 rad (`time_delay` there). Measured in-process (exact responses, 0.2 % noise, a
+// top 0.2-2 rad (`time_delay` there). In about half the cases the simulation names parameters
+// (a state's inertia J_Sk: the inverse of its row of A and B), one of which is moved in half of
+// those (`state_parameter` naming it). Measured in-process (exact responses, 0.2 % noise, a
 // validation measurement), as random_modal.h. Deterministic in the seed.
 #pragma once
 

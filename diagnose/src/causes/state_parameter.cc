@@ -1,7 +1,9 @@
 #include "state_parameter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
+#include <tuple>
 
 #include "fralab/core/error.h"
 
@@ -10,9 +12,23 @@ namespace {
 
 constexpr double kSameRoot = 1e-9;  // a path's root is the state model's: within this (relative)
 
-StateEntry entry_of(const Finding& f) {
+StateEntry entry_of(const StateSpace& ss, const Finding& f) {
+  if (const auto it = f.text_parameters.find("parameter"); it != f.text_parameters.end()) {
+    for (size_t k = 0; k < ss.parameters.size(); ++k)
+      if (ss.parameters[k].name == it->second) return {'P', int(k), 0};
+    throw InputError("state_parameter: the simulation has no parameter \"" + it->second + "\"");
+  }
   return {f.text_parameters.at("matrix")[0], int(f.parameters.at("row")) - 1,
           int(f.parameters.at("col")) - 1};
+}
+
+// The entries of A, B and C that e sets ((matrix, row, col)).
+std::vector<std::tuple<char, int, int>> set_by(const StateSpace& ss, const StateEntry& e) {
+  if (!e.named()) return {{e.matrix, e.row, e.col}};
+  std::vector<std::tuple<char, int, int>> out;
+  for (const NamedParameter::Entry& x : ss.parameters[size_t(e.row)].entries)
+    out.emplace_back(x.matrix, x.row, x.col);
+  return out;
 }
 
 // t, whose rational part holds `from`'s (where no other finding moved its roots), changed to hold
@@ -50,7 +66,7 @@ class StateParameter final : public CauseUnit {
   void apply(Model& m, const Finding& f) const override {
     if (!m.state_space) throw InputError("state_parameter: the simulation is not a state model");
     const StateSpace& ss = *m.state_space;
-    const StateEntry e = entry_of(f);
+    const StateEntry e = entry_of(ss, f);
     const StateSpace moved = with_entry(ss, e, f.parameters.at("to"));
     const auto before = state_paths(ss), after = state_paths(moved);
     if (!before || !after) return;  // not a stable state model at that value: left unchanged
@@ -71,9 +87,14 @@ class StateParameter final : public CauseUnit {
   }
   std::string explain(const Finding& f) const override {
     const auto& tp = f.text_parameters;
+    const std::string move = fmt(f.parameters.at("from")) + " -> " + fmt(f.parameters.at("to"));
+    if (tp.count("parameter"))
+      return "the parameter " + tp.at("parameter") + " " + move +
+             (tp.count("units") ? " " + tp.at("units") : std::string()) + " (in the states " +
+             tp.at("state") +
+             "): one parameter of the state model, fitted over every path it reaches";
     const std::string entry = tp.at("matrix") + "(" + fmt(f.parameters.at("row")) + ", " +
                               fmt(f.parameters.at("col")) + ")";
-    const std::string move = fmt(f.parameters.at("from")) + " -> " + fmt(f.parameters.at("to"));
     std::string what;
     if (tp.at("matrix") == "A" && f.parameters.count("time_constant_from_s"))
       what = "the state " + tp.at("state") + "'s own rate " + entry + " " + move +
@@ -93,13 +114,23 @@ class StateParameter final : public CauseUnit {
 
 }  // namespace
 
+bool overlap(const StateSpace& ss, const StateEntry& a, const StateEntry& b) {
+  if (a.added() || b.added()) return a.matrix == b.matrix && a.row == b.row && a.col == b.col;
+  for (const auto& x : set_by(ss, a))
+    for (const auto& y : set_by(ss, b))
+      if (x == y) return true;
+  return false;
+}
+
 double entry_value(const StateSpace& ss, const StateEntry& e) {
+  if (e.named()) return ss.parameters[size_t(e.row)].value;
   if (e.added()) return 0;
   const Eigen::MatrixXd& m = e.matrix == 'A' ? ss.A : e.matrix == 'B' ? ss.B : ss.C;
   return m(e.row, e.col);
 }
 
 StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v) {
+  if (e.named()) return std::isfinite(v) && v != 0 ? with_parameter(ss, size_t(e.row), v) : ss;
   if (e.delay()) {
     if (!(v > 0)) return ss;
     StateSpace out = ss;
@@ -161,6 +192,22 @@ Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, doubl
   f.cause = CauseKind::kStateParameter;
   f.scope = Scope::kPlant;
   f.pairs = pairs;
+  if (e.named()) {
+    const NamedParameter& np = ss.parameters[size_t(e.row)];
+    f.parameters = {{"from", np.value}, {"to", to}};
+    f.text_parameters["parameter"] = np.name;
+    if (!np.units.empty()) f.text_parameters["units"] = np.units;
+    std::vector<std::string> states;
+    for (const NamedParameter::Entry& x : np.entries) {
+      if (x.matrix == 'D') continue;
+      const std::string& st = ss.states[size_t(x.matrix == 'C' ? x.col : x.row)];
+      if (std::find(states.begin(), states.end(), st) == states.end()) states.push_back(st);
+    }
+    std::string joined;
+    for (const std::string& st : states) joined += (joined.empty() ? "" : ", ") + st;
+    f.text_parameters["state"] = joined;
+    return f;
+  }
   f.parameters = {{"from", entry_value(ss, e)}, {"to", to}, {"row", e.row + 1}, {"col", e.col + 1}};
   f.text_parameters["matrix"] = std::string(1, e.matrix);
   if (e.matrix == 'A') {

@@ -20,7 +20,9 @@
 
 namespace fralab::diag {
 
-/// An entry of A, B or C (row, col 0-based), or what the simulation lacks: 'U', a first-order
+/// An entry of A, B or C (row, col 0-based); 'P', the owner's named parameter `row`
+/// (StateSpace::parameters, valued by the parameter, setting its entries); or what the
+/// simulation lacks: 'U', a first-order
 /// lag (a state) before input `col` (the column of B and D it drives), 'Y', one after output
 /// `row`, each valued by its time constant (s); 'I', a delay added to input `col`'s, 'O', one
 /// added to output `row`'s, each valued by the delay (s). An added lag or delay of 0 is absent,
@@ -36,9 +38,15 @@ struct StateEntry {
   bool added() const { return lag() || delay(); }
   /// At an input ('U', 'I'; else at an output, or an entry of the matrices).
   bool at_input() const { return matrix == 'U' || matrix == 'I'; }
+  /// A named parameter.
+  bool named() const { return matrix == 'P'; }
 };
 
-/// The entry's value in `ss` (0 for an added lag or delay).
+/// Whether a and b set a common entry of A, B or C (an entry and a named parameter setting it,
+/// two parameters setting one entry, or the same entry): their moves do not add.
+bool overlap(const StateSpace& ss, const StateEntry& a, const StateEntry& b);
+
+/// The entry's value in `ss` (0 for an added lag or delay; a named parameter's value).
 double entry_value(const StateSpace& ss, const StateEntry& e);
 /// `ss` with the entry set to v. An added lag of time constant v > 0 is a new last state x_l:
 /// before input j, x_l' = (u_j - x_l) / v driving what u_j drove (B's and D's column j); after
@@ -49,7 +57,9 @@ StateSpace with_entry(const StateSpace& ss, const StateEntry& e, double v);
 /// a path cannot be factored (an unstable or degenerate entry: not a candidate value).
 std::optional<std::vector<std::vector<std::optional<Tf>>>> state_paths(const StateSpace& ss);
 
-/// A finding of the entry moved from its value in `ss` to `to`, scope plant, over `pairs`.
+/// A finding of the entry moved from its value in `ss` to `to`, scope plant, over `pairs`: an
+/// entry's matrix, row, col and state; a named parameter's name, units and the states its
+/// entries set.
 Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, double to,
                                 const std::vector<std::string>& pairs);
 

@@ -1,6 +1,7 @@
 // Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
 // model (plant/state_space.h), its own entries are candidate causes, each fitted over every pair:
-// a diagonal entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
+// a parameter its owner named (the entries of A, B, C and D it sets, moved together), a diagonal
+// entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
 // coupling), of B (how an input drives a state) and of C (how a state shows at an output), a
 // state the simulation lacks, a first-order lag before an input or after an output (its time
 // constant over the band; found as a missing_lag naming the state it adds), and a delay it lacks
@@ -41,7 +42,7 @@ namespace {
 
 constexpr int kScan = 21;
 constexpr double kSpan = 4;
-constexpr int kMaxEntries = 4;
+constexpr int kMaxEntries = 6;  // entries, lags, delays and parameters in one set
 // An added delay's search range: its phase at the band's top, rad (beyond pi the logarithm's
 // phase wraps; a delay that large is a path stage's to find).
 constexpr std::pair<double, double> kDelayPhase{0.003, 3.0};
@@ -114,8 +115,24 @@ class StateEval {
   //   G' = C' R B' + D + P D (I - S D)^-1 Q,  P = C' R U, Q = V^T R B', S = V^T R U,
   // each of C' R B', P, Q and S a lookup in X, Y and R. The moved model's stability is not
   // checked here (StateEval::stable).
-  std::vector<Eigen::MatrixXcd> moved_responses(const std::vector<StateEntry>& e,
-                                                const std::vector<double>& v) const {
+  std::vector<Eigen::MatrixXcd> moved_responses(const std::vector<StateEntry>& moved,
+                                                const std::vector<double>& moved_v) const {
+    // A named parameter as the entries it sets (their moves add: no set holds two that
+    // overlap), each valued as it sets it; the added lags and delays as they are.
+    std::vector<StateEntry> e;
+    std::vector<double> v;
+    for (size_t k = 0; k < moved.size(); ++k) {
+      if (!moved[k].named()) {
+        e.push_back(moved[k]), v.push_back(moved_v[k]);
+        continue;
+      }
+      const NamedParameter& np = sim_.parameters[size_t(moved[k].row)];
+      for (const NamedParameter::Entry& x : np.entries) {
+        e.push_back({x.matrix, x.row, x.col});
+        v.push_back(entry_value(sim_, e.back()) *
+                    (x.inverse ? np.value / moved_v[k] : moved_v[k] / np.value));
+      }
+    }
     std::vector<int> a;
     std::vector<double> delta(e.size());
     for (size_t k = 0; k < e.size(); ++k) {
@@ -143,6 +160,7 @@ class StateEval {
       for (size_t k = 0; k < e.size(); ++k) {
         if (e[k].matrix == 'B') g[q].col(e[k].col) += delta[k] * X.col(e[k].row);
         if (e[k].matrix == 'C') g[q].row(e[k].row) += delta[k] * Y.row(e[k].col);
+        if (e[k].matrix == 'D') g[q](e[k].row, e[k].col) += delta[k];
       }
       for (size_t k = 0; k < e.size(); ++k)
         for (size_t l = 0; l < e.size(); ++l)
@@ -315,7 +333,9 @@ double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>
   return n ? std::sqrt(s / double(n)) : 0;
 }
 
-bool is_rate(const StateEntry& e) { return e.added() || (e.matrix == 'A' && e.row == e.col); }
+bool is_rate(const StateEntry& e) {
+  return e.added() || e.named() || (e.matrix == 'A' && e.row == e.col);
+}
 
 // An entry's coordinate for the fits: ln |v| for a rate (its sign kept), v / |v0| otherwise.
 double to_x(const StateEntry& e, double v0, double v) {
@@ -335,8 +355,9 @@ struct EntrySet {
   std::vector<double> v;
   double chi2 = INFINITY;
 
-  bool holds(const StateEntry& x) const {
-    return std::any_of(e.begin(), e.end(), [&](const StateEntry& y) { return same_entry(x, y); });
+  // Whether x sets an entry one of the set's sets (or is one of them).
+  bool overlaps(const StateSpace& sim, const StateEntry& x) const {
+    return std::any_of(e.begin(), e.end(), [&](const StateEntry& y) { return overlap(sim, x, y); });
   }
   // The entries of A, B and C first, then the added lags and delays (with_entry).
   StateSpace applied_to(const StateSpace& sim) const {
@@ -355,18 +376,27 @@ struct EntrySet {
   }
 };
 
-// The state model's nonzero entries of A, B and C.
+// The state model's named parameters, its nonzero entries of A, B and C (but an entry a
+// parameter sets alone, which is that parameter), and the lags and delays it may lack.
 std::vector<StateEntry> candidates_of(const StateSpace& ss) {
   std::vector<StateEntry> out;
+  for (size_t k = 0; k < ss.parameters.size(); ++k) out.push_back({'P', int(k), 0});
+  auto entry = [&](char m, int i, int j) {
+    for (const NamedParameter& np : ss.parameters)
+      if (np.entries.size() == 1 && np.entries[0].matrix == m && np.entries[0].row == i &&
+          np.entries[0].col == j)
+        return;
+    out.push_back({m, i, j});
+  };
   for (int i = 0; i < ss.A.rows(); ++i)
     for (int j = 0; j < ss.A.cols(); ++j)
-      if (ss.A(i, j) != 0) out.push_back({'A', i, j});
+      if (ss.A(i, j) != 0) entry('A', i, j);
   for (int i = 0; i < ss.B.rows(); ++i)
     for (int j = 0; j < ss.B.cols(); ++j)
-      if (ss.B(i, j) != 0) out.push_back({'B', i, j});
+      if (ss.B(i, j) != 0) entry('B', i, j);
   for (int i = 0; i < ss.C.rows(); ++i)
     for (int j = 0; j < ss.C.cols(); ++j)
-      if (ss.C(i, j) != 0) out.push_back({'C', i, j});
+      if (ss.C(i, j) != 0) entry('C', i, j);
   for (int j = 0; j < ss.B.cols(); ++j) out.push_back({'U', 0, j});
   for (int i = 0; i < ss.C.rows(); ++i) out.push_back({'Y', i, 0});
   for (int j = 0; j < ss.B.cols(); ++j) out.push_back({'I', 0, j});
@@ -512,7 +542,7 @@ std::vector<double> linear_screen(const StateEval& ev, const StateSpace& sim, co
   };
   const Eigen::VectorXd r = off(r0);
   for (size_t c = 0; c < candidates.size(); ++c) {
-    if (s.holds(candidates[c])) continue;
+    if (s.overlaps(sim, candidates[c])) continue;
     const Eigen::VectorXd j = off(derivative(candidates[c], entry_value(sim, candidates[c])));
     const double jj = j.squaredNorm();
     if (!std::isfinite(jj) || j.cwiseAbs().maxCoeff() >= kUnstableResidual / kLinearStep / 2)
@@ -536,7 +566,7 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
     const std::vector<double> linear = linear_screen(ev, sim, s, base, candidates);
     std::vector<double> alone(candidates.size(), INFINITY), value(candidates.size(), 0);
     for (size_t c = 0; c < candidates.size(); ++c)
-      if (!s.holds(candidates[c]))
+      if (!s.overlaps(sim, candidates[c]))
         std::tie(value[c], alone[c]) = fit_alone(ev, sim, s, base, candidates[c]);
     std::vector<bool> chosen(candidates.size(), false);
     for (const std::vector<double>* by :
@@ -629,6 +659,8 @@ void states(DiagnosisRun& r) {
     if (beam.empty()) break;
     best.push_back(beam.front());
     beams.push_back(beam);
+    // A size that did not earn its place ends the sets taken below: no larger one is searched.
+    if (earned(best[best.size() - 2].chi2, best.back().chi2, n, 1) <= 0) break;
   }
   // The largest set each of whose sizes earned its place over the one before, and that the
   // simulation's own factoring takes (as the finding's model will).

@@ -24,19 +24,39 @@ namespace fralab {
 
 inline constexpr const char* kStateSpaceFormat = "fralab-ss/1";
 
+/// A parameter of the model its owner names (an inertia, a time constant, a gain), and the
+/// entries of A, B, C and D it sets: each proportional to it (`inverse` false: entry = its value
+/// at `value` x p / value) or to its inverse (true: x value / p). Set to p, every entry scales.
+struct NamedParameter {
+  struct Entry {
+    char matrix = 'A';     // 'A', 'B', 'C' or 'D'
+    int row = 0, col = 0;  // 0-based
+    bool inverse = false;
+  };
+  std::string name, units;
+  double value = 1;  // at the matrices as given; finite, nonzero
+  std::vector<Entry> entries;
+};
+
 /// The matrices and names of a state model. Sizes: A n x n, B n x m, C p x n, D p x m; states n
 /// names, inputs m, outputs p; delays (s, >= 0) one per input and one per output, and one per path
-/// (path_delay_s, p x m: a delay not common to an input or an output); each empty: none.
+/// (path_delay_s, p x m: a delay not common to an input or an output); each empty: none; the
+/// owner's named parameters, if any.
 struct StateSpace {
   Eigen::MatrixXd A, B, C, D;
   std::vector<std::string> states, inputs, outputs;
   std::vector<double> input_delay_s, output_delay_s;
   Eigen::MatrixXd path_delay_s;
+  std::vector<NamedParameter> parameters;
   /// InputError naming `source` and the matrix or name that is wrong: sizes that disagree, a
   /// value that is not finite, a mode not in the open left half plane, a name empty or given
-  /// twice, a negative delay.
+  /// twice, a negative delay, a parameter's value zero or its entry outside its matrix or zero.
   void validate(const std::string& source) const;
 };
+
+/// ss with named parameter k set to p (every entry it sets scaled; its value p). Precondition:
+/// p finite, nonzero.
+StateSpace with_parameter(const StateSpace& ss, size_t k, double p);
 
 /// The state model's frequency response at s (rad/s, s = jw on the axis): C (sI - A)^-1 B + D,
 /// outputs x inputs, delays left out. Precondition: s is not an eigenvalue of A.
