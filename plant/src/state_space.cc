@@ -6,6 +6,7 @@
 #include <complex>
 #include <memory>
 #include <set>
+#include <tuple>
 
 #include "fralab/core/error.h"
 
@@ -112,6 +113,7 @@ void StateSpace::validate(const std::string& source) const {
     if (!named.insert(np.name).second) fail(what + " is given twice");
     if (!std::isfinite(np.value) || np.value == 0) fail(what + ": its value is zero or not finite");
     if (np.entries.empty()) fail(what + " sets no entry");
+    std::set<std::tuple<char, int, int>> set;
     for (const NamedParameter::Entry& e : np.entries) {
       const Eigen::MatrixXd* mat = e.matrix == 'A'   ? &A
                                    : e.matrix == 'B' ? &B
@@ -126,6 +128,8 @@ void StateSpace::validate(const std::string& source) const {
              size_str(*mat) + ")");
       if ((*mat)(e.row, e.col) == 0)
         fail(what + ": its entry " + entry + " is 0, which no value of the parameter moves");
+      if (!set.emplace(e.matrix, e.row, e.col).second)
+        fail(what + ": its entry " + entry + " is given twice");
     }
   }
   const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);

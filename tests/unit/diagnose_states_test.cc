@@ -275,13 +275,17 @@ TEST(DiagnoseStates, EntriesTheDataCannotTellApartAreEachGiven) {
 // Parameters the file names (tests/data/state_space/parameters.json) are candidates in their own
 // right: N's inertia (the inverse of N's row of A and its B entry) moved is one finding naming
 // it, not three entries; T4's time constant, a parameter setting A(2,2) alone, is named by the
-// parameter, not the entry.
+// parameter, not the entry; a transducer's gain setting entries of C and D likewise.
 TEST(DiagnoseStates, ANamedParameterIsOneFindingNamingIt) {
   Json sim_doc = simulation_doc();
   sim_doc["parameters"] =
       json_load_file(testing::source_path("tests/data/state_space/parameters.json"));
+  // And pres's transducer gain, setting its row of C and of D (the feedthrough from fuel).
+  sim_doc["parameters"].push_back(Json::parse(R"({"name": "k_pres", "value": 1, "entries": [
+      {"matrix": "C", "row": 3, "col": 4}, {"matrix": "D", "row": 3, "col": 1}]})"));
   const Model sim = parse_model(sim_doc, "sim");
-  for (const auto& [name, k, to] : {std::tuple{"J_spool", 0, 2.8}, std::tuple{"tau_T4", 1, 4.5}}) {
+  for (const auto& [name, k, to] : {std::tuple{"J_spool", 0, 2.8}, std::tuple{"tau_T4", 1, 4.5},
+                                    std::tuple{"k_pres", 2, 1.5}}) {
     Model truth = sim;
     truth.state_space.reset();
     const StateSpace moved = with_parameter(*sim.state_space, size_t(k), to);

@@ -178,6 +178,11 @@ TEST(StateSpace, BadModelsAreRefusedNamingTheFileAndWhatIsWrong) {
       "/parameters/1/entries/0/form");
   expect_refused([](Json& d) { d = with_parameters(d), d["parameters"][1]["name"] = "J_spool"; },
                  "given twice");
+  expect_refused(
+      [](Json& d) {
+        d = with_parameters(d), d["parameters"][0]["entries"][1] = d["parameters"][0]["entries"][0];
+      },
+      "its entry A(1, 1) is given twice");
   expect_refused([](Json& d) { d["B"].erase(0); }, "B is 3 x 2, expected 4 x 2");
   expect_refused([](Json& d) { d["C"][0].push_back(1); }, "/C/1");
   expect_refused([](Json& d) { d["A"][1][1] = 0.5; }, "not in the open left half plane");

@@ -125,7 +125,10 @@ bool overlap(const StateSpace& ss, const StateEntry& a, const StateEntry& b) {
 double entry_value(const StateSpace& ss, const StateEntry& e) {
   if (e.named()) return ss.parameters[size_t(e.row)].value;
   if (e.added()) return 0;
-  const Eigen::MatrixXd& m = e.matrix == 'A' ? ss.A : e.matrix == 'B' ? ss.B : ss.C;
+  const Eigen::MatrixXd& m = e.matrix == 'A'   ? ss.A
+                             : e.matrix == 'B' ? ss.B
+                             : e.matrix == 'C' ? ss.C
+                                               : ss.D;
   return m(e.row, e.col);
 }
 

@@ -20,7 +20,8 @@
 
 namespace fralab::diag {
 
-/// An entry of A, B or C (row, col 0-based); 'P', the owner's named parameter `row`
+/// An entry of A, B or C (row, col 0-based; of D only as a named parameter sets it, never a
+/// candidate of its own); 'P', the owner's named parameter `row`
 /// (StateSpace::parameters, valued by the parameter, setting its entries); or what the
 /// simulation lacks: 'U', a first-order
 /// lag (a state) before input `col` (the column of B and D it drives), 'Y', one after output

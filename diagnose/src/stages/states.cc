@@ -1,13 +1,13 @@
 // Stage 3a, states (docs/method/diagnosis.md, "The stages", 3a): where the simulation is a state
 // model (plant/state_space.h), its own entries are candidate causes, each fitted over every pair:
 // a parameter its owner named (the entries of A, B, C and D it sets, moved together), a diagonal
-// entry of A (a state's time constant), a nonzero entry of A off the diagonal (a
-// coupling), of B (how an input drives a state) and of C (how a state shows at an output), a
-// state the simulation lacks, a first-order lag before an input or after an output (its time
-// constant over the band; found as a missing_lag naming the state it adds), and a delay it lacks
-// at an input or an output (found as a time_delay there). One changed state
-// moves the poles, zeros and gains of every path it reaches; fitted pair by pair it splits into
-// pieces or is missed, or is hidden by another change it overlaps.
+// entry of A (a state's time constant), a nonzero entry of A off the diagonal (a coupling), of B
+// (how an input drives a state) and of C (how a state shows at an output), a state the simulation
+// lacks, a first-order lag before an input or after an output (its time constant over the band;
+// found as a missing_lag naming the state it adds), and a delay it lacks at an input or an output
+// (found as a time_delay there). One changed state moves the poles, zeros and gains of every path
+// it reaches; fitted pair by pair it splits into pieces or is missed, or is hidden by another
+// change it overlaps.
 //
 // On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated as
 // C (jwI - A)^-1 B + D times e^{-jw tau} for the input's and output's delays added to the
@@ -21,8 +21,10 @@
 // time, a first entry that stands in for two changed ones would stay; fitted as sets, the entries
 // that changed fit together. The best set of each size is taken while the next size lowers chi2 by
 // more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
-// and lowers the error of the pairs. The accepted entries' factor stays on the pairs, so the stages
-// after it fit what they leave.
+// and lowers the error of the pairs (the search ends at the first size that does not). The
+// accepted entries' factor stays on the pairs, so the stages after it fit what they leave; the
+// other sets of as many entries the criterion cannot tell from them are given beside
+// (Diagnosis::state_alternatives).
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -598,7 +600,8 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
   return out;
 }
 
-// The findings of set s over `pairs` (the X:O pairs): an entry of A, B or C a state_parameter;
+// The findings of set s over `pairs` (the X:O pairs): an entry of A, B or C or a named parameter
+// a state_parameter;
 // a state the simulation lacks, before an input or after an output, a missing lag there; a delay
 // it lacks, a time delay there.
 std::vector<Finding> findings_of(const StateSpace& sim, const EntrySet& s,
