@@ -2,7 +2,8 @@
 // parameter (its cause's unit names it) gets a 1-sigma interval, where chi2 over the finding's
 // pairs, every other finding in place and this parameter alone moved, rises by
 // s = max(1, chi2_min / N) above its minimum (and so each other parameter its cause reports, as a
-// moved pair's damping); a finding whose simulated value (or absence) does
+// moved pair's damping; the state model's entries keep the intervals stage 5b gave them, the set's
+// other entries free); a finding whose simulated value (or absence) does
 // not raise chi2 by more than s is dropped, said why; so are a lag and a lead at one place that
 // cancel each other.
 #include <algorithm>
@@ -110,7 +111,8 @@ void resolve(DiagnosisRun& r) {
     } else {
       c_sim = chi2_of_model(extended_by(r, findings, i));  // the simulation lacks it: without it
     }
-    if (!key.empty()) {
+    // An interval the joint stage gave (the state model's entries, fitted as a set) stands.
+    if (!key.empty() && !f.intervals.count(key)) {
       auto chi2_at = [&](double v) {
         std::vector<Finding> moved = findings;
         moved[i].parameters[key] = v;
@@ -121,7 +123,7 @@ void resolve(DiagnosisRun& r) {
     // The other parameters the cause reports an interval for (a moved pair's damping), each moved
     // alone the same way; scales, so positive.
     for (const SecondaryParameter& sp : unit.secondary_parameters(f)) {
-      if (!f.parameters.count(sp.key)) continue;
+      if (!f.parameters.count(sp.key) || f.intervals.count(sp.key)) continue;
       auto chi2_at = [&](double v) {
         std::vector<Finding> moved = findings;
         moved[i].parameters[sp.key] = v;

@@ -133,8 +133,12 @@ void fit_causes(DiagnosisRun& r);
 /// become one finding there; the rest stay with their path.
 void scope(DiagnosisRun& r);
 /// 5b. Findings that share pairs get their primary parameters refined together, every finding in
-/// place (joint.cc).
+/// place; the state model's entries (of_the_state_model) get their 1-sigma intervals there, the
+/// others free (joint.cc).
 void joint(DiagnosisRun& r);
+/// Whether f is one of stage 3a's: an entry or named parameter of the state model, or a state or
+/// delay it lacks (a missing_lag naming its `state`, a time_delay naming its `delay`).
+bool of_the_state_model(const Finding& f);
 /// The parameters of the findings fs[group] (each primary one, and those besides it the data
 /// resolve) refined together by Levenberg-Marquardt on chi2 over `pairs`, every other finding of
 /// fs in place; left as they were when that does not lower chi2 or there are fewer than

@@ -9,7 +9,7 @@
 // it reaches; fitted pair by pair it splits into pieces or is missed, or is hidden by another
 // change it overlaps.
 //
-// On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated as
+// On each pair the factor G_moved(jw) / G_sim(jw) of its path, both evaluated (state_eval.h) as
 // C (jwI - A)^-1 B + D times e^{-jw tau} for the input's and output's delays added to the
 // simulation's (the simulation's own delays cancel in the ratio; the actuator's own pair and a
 // path the simulation lacks: 1). Several entries changed at once are searched as sets, a beam of
@@ -17,14 +17,16 @@
 // of it (a scan of kScan points, a diagonal entry of A over its logarithm within a factor kSpan
 // either way keeping its sign, another entry over +-kSpan times its value, then Brent's method
 // between the scan's neighbours), the kScreened best of those are fitted jointly with the set's
-// entries (Levenberg-Marquardt, Eigen's), and the kBeam best sets of k + 1 go on. Fitted one at a
-// time, a first entry that stands in for two changed ones would stay; fitted as sets, the entries
-// that changed fit together. The best set of each size is taken while the next size lowers chi2 by
-// more than ln 2N in units of the misfit level s = max(1, chi2 / N) (the modes stage's criterion)
-// and lowers the error of the pairs (the search ends at the first size that does not). The
-// accepted entries' factor stays on the pairs, so the stages after it fit what they leave; the
-// other sets of as many entries the criterion cannot tell from them are given beside
-// (Diagnosis::state_alternatives).
+// entries (Levenberg-Marquardt, Eigen's), and the kBeam best sets of k + 1 go on; the best of
+// them is then improved by swaps (each entry taken out and the best-screened others fitted in its
+// place, while chi2 falls). Fitted one at a time, a first entry that stands in for two changed
+// ones would stay; fitted as sets, the entries that changed fit together, and a swap takes out a
+// first entry that steered the search wrong once those it stood in for are in the set. The best set
+// of each size is taken while the next size lowers chi2 by more than ln 2N in units of the misfit
+// level s = max(1, chi2 / N) (the modes stage's criterion) and lowers the error of the pairs (the
+// search ends at the first size that does not). The accepted entries' factor stays on the pairs, so
+// the stages after it fit what they leave; the other sets of as many entries the criterion cannot
+// tell from them are given beside (Diagnosis::state_alternatives).
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -37,7 +39,7 @@
 #include "../causes/state_parameter.h"
 #include "fralab/core/numerics.h"
 #include "fralab/core/pair_id.h"
-#include "stages.h"
+#include "state_eval.h"
 
 namespace fralab::diag {
 namespace {
@@ -51,272 +53,11 @@ constexpr std::pair<double, double> kDelayPhase{0.003, 3.0};
 constexpr int kStateBrentBits = 24;
 constexpr size_t kBeam = 4;
 constexpr size_t kScreened = 6;
+constexpr int kSwapRounds = 3;
 // The step of the linear screen's derivatives, in an entry's coordinate (ln |v| or v / |v0|).
 constexpr double kLinearStep = 0.05;
 // A residual standing for an unstable state model (Levenberg-Marquardt then refuses the step).
 constexpr double kUnstableResidual = 1e8;
-
-using Paths = std::vector<std::vector<std::optional<Tf>>>;
-
-// The prepared pairs' points as the state model sees them: the response of a state model at every
-// distinct frequency, and the factor it puts on each pair over the simulation's.
-class StateEval {
- public:
-  StateEval(const DiagnosisRun& r, const StateSpace& sim, const Paths& sim_paths)
-      : r_(r), sim_(sim) {
-    std::map<double, size_t> index;
-    at_.resize(r.pairs.size());
-    for (size_t k = 0; k < r.pairs.size(); ++k) {
-      const PairFit& p = r.pairs[k];
-      const PairId id = PairId::parse(p.pair);
-      if (id.actuator()) continue;
-      const auto oi = std::find(sim.outputs.begin(), sim.outputs.end(), id.output);
-      const auto ii = std::find(sim.inputs.begin(), sim.inputs.end(), id.input);
-      if (oi == sim.outputs.end() || ii == sim.inputs.end()) continue;
-      const size_t i = size_t(oi - sim.outputs.begin()), j = size_t(ii - sim.inputs.begin());
-      if (!sim_paths[i][j]) continue;
-      at_[k].path = {Eigen::Index(i), Eigen::Index(j)};
-      for (double w : p.w) {
-        const auto it = index.emplace(w, w_.size()).first;
-        if (it->second == w_.size()) w_.push_back(w);
-        at_[k].w.push_back(it->second);
-      }
-    }
-    for (const PairFit& p : r.pairs) points_ += p.w.size();
-    ok_ = responses(sim, &g_sim_) && resolvent();
-  }
-  bool ok() const { return ok_; }
-
-  // G(jw) = C (jwI - A)^-1 B + D at every distinct frequency, each column and row times
-  // e^{-jw tau} for the delay ss adds to the simulation's at that input or output; false when A
-  // has a mode outside the open left half plane.
-  bool responses(const StateSpace& ss, std::vector<Eigen::MatrixXcd>* g) const {
-    if (!stable(ss)) return false;
-    g->resize(w_.size());
-    auto added = [](const std::vector<double>& d, const std::vector<double>& d0, size_t k) {
-      return (k < d.size() ? d[k] : 0.0) - (k < d0.size() ? d0[k] : 0.0);
-    };
-    for (size_t q = 0; q < w_.size(); ++q) {
-      Eigen::MatrixXcd& gq = (*g)[q] = state_space_response(ss, C(0, w_[q]));
-      for (Eigen::Index j = 0; j < gq.cols(); ++j)
-        if (const double t = added(ss.input_delay_s, sim_.input_delay_s, size_t(j)); t != 0)
-          gq.col(j) *= std::exp(C(0, -w_[q] * t));
-      for (Eigen::Index i = 0; i < gq.rows(); ++i)
-        if (const double t = added(ss.output_delay_s, sim_.output_delay_s, size_t(i)); t != 0)
-          gq.row(i) *= std::exp(C(0, -w_[q] * t));
-    }
-    return true;
-  }
-
-  // The responses of the simulation with entries e moved to values v (each from its simulated
-  // value by delta), from the simulation's resolvent R = (jwI - A)^-1 (X = C R, Y = R B,
-  // G = X B + D) at each distinct frequency, O(outputs x inputs) a frequency instead of a
-  // factorisation. With B' and C' the moved B and C (their entries added), the moved A
-  // A + U D V^T (U, V the A entries' row and column unit vectors, D their deltas) by Woodbury's
-  // identity:
-  //   G' = C' R B' + D + P D (I - S D)^-1 Q,  P = C' R U, Q = V^T R B', S = V^T R U,
-  // each of C' R B', P, Q and S a lookup in X, Y and R. The moved model's stability is not
-  // checked here (StateEval::stable).
-  std::vector<Eigen::MatrixXcd> moved_responses(const std::vector<StateEntry>& moved,
-                                                const std::vector<double>& moved_v) const {
-    // A named parameter as the entries it sets (their moves add: no set holds two that
-    // overlap), each valued as it sets it; the added lags and delays as they are.
-    std::vector<StateEntry> e;
-    std::vector<double> v;
-    for (size_t k = 0; k < moved.size(); ++k) {
-      if (!moved[k].named()) {
-        e.push_back(moved[k]), v.push_back(moved_v[k]);
-        continue;
-      }
-      const NamedParameter& np = sim_.parameters[size_t(moved[k].row)];
-      for (const NamedParameter::Entry& x : np.entries) {
-        e.push_back({x.matrix, x.row, x.col});
-        v.push_back(entry_value(sim_, e.back()) *
-                    (x.inverse ? np.value / moved_v[k] : moved_v[k] / np.value));
-      }
-    }
-    std::vector<int> a;
-    std::vector<double> delta(e.size());
-    for (size_t k = 0; k < e.size(); ++k) {
-      delta[k] = v[k] - entry_value(sim_, e[k]);
-      if (e[k].matrix == 'A') a.push_back(int(k));
-    }
-    const Eigen::Index ka = Eigen::Index(a.size()), p = sim_.C.rows(), m = sim_.B.cols();
-    std::vector<Eigen::MatrixXcd> g = G_;
-    std::vector<C> post_col(e.size(), C(1, 0)), post_row(e.size(), C(1, 0));
-    for (size_t q = 0; q < g.size(); ++q) {
-      const Eigen::MatrixXcd &R = R_[q], &X = X_[q], &Y = Y_[q];
-      // (C' R)(:, r) and (R B')(c, :).
-      auto cr = [&](int r) {
-        Eigen::VectorXcd col = X.col(r);
-        for (size_t k = 0; k < e.size(); ++k)
-          if (e[k].matrix == 'C') col(e[k].row) += delta[k] * R(e[k].col, r);
-        return col;
-      };
-      auto rb = [&](int c) {
-        Eigen::RowVectorXcd row = Y.row(c);
-        for (size_t k = 0; k < e.size(); ++k)
-          if (e[k].matrix == 'B') row(e[k].col) += delta[k] * R(c, e[k].row);
-        return row;
-      };
-      for (size_t k = 0; k < e.size(); ++k) {
-        if (e[k].matrix == 'B') g[q].col(e[k].col) += delta[k] * X.col(e[k].row);
-        if (e[k].matrix == 'C') g[q].row(e[k].row) += delta[k] * Y.row(e[k].col);
-        if (e[k].matrix == 'D') g[q](e[k].row, e[k].col) += delta[k];
-      }
-      for (size_t k = 0; k < e.size(); ++k)
-        for (size_t l = 0; l < e.size(); ++l)
-          if (e[k].matrix == 'C' && e[l].matrix == 'B')
-            g[q](e[k].row, e[l].col) += delta[k] * delta[l] * R(e[k].col, e[l].row);
-      for (size_t k = 0; k < e.size(); ++k) {
-        if (!e[k].added() || !(v[k] > 0)) continue;
-        const C f = e[k].lag() ? 1.0 / C(1.0, w_[q] * v[k]) : std::exp(C(0, -w_[q] * v[k]));
-        (e[k].at_input() ? post_col : post_row)[k] = f;
-      }
-      if (ka == 0) {
-        apply_lags(g[q], e, post_col, post_row);
-        continue;
-      }
-      if (ka == 1) {  // one entry of A: Sherman-Morrison
-        const StateEntry& ex = e[size_t(a[0])];
-        const double d = delta[size_t(a[0])];
-        g[q].noalias() += (d / (1.0 - d * R(ex.col, ex.row))) * cr(ex.row) * rb(ex.col);
-        apply_lags(g[q], e, post_col, post_row);
-        continue;
-      }
-      Eigen::MatrixXcd P(p, ka), Q(ka, m), S(ka, ka);
-      for (Eigen::Index x = 0; x < ka; ++x) {
-        const StateEntry& ex = e[size_t(a[size_t(x)])];
-        P.col(x) = cr(ex.row) * delta[size_t(a[size_t(x)])];
-        Q.row(x) = rb(ex.col);
-        for (Eigen::Index y = 0; y < ka; ++y) {
-          const StateEntry& ey = e[size_t(a[size_t(y)])];
-          S(x, y) = (x == y ? 1.0 : 0.0) - R(ex.col, ey.row) * delta[size_t(a[size_t(y)])];
-        }
-      }
-      g[q] += P * S.partialPivLu().solve(Q);
-      apply_lags(g[q], e, post_col, post_row);
-    }
-    return g;
-  }
-
-  // The added lags and delays of e (post_col per input entry, post_row per output one) on the
-  // response.
-  static void apply_lags(Eigen::MatrixXcd& g, const std::vector<StateEntry>& e,
-                         const std::vector<C>& post_col, const std::vector<C>& post_row) {
-    for (size_t k = 0; k < e.size(); ++k) {
-      if (!e[k].added()) continue;
-      if (e[k].at_input())
-        g.col(e[k].col) *= post_col[k];
-      else
-        g.row(e[k].row) *= post_row[k];
-    }
-  }
-
-  // A's modes in the open left half plane.
-  static bool stable(const StateSpace& ss) {
-    if (ss.A.rows() == 0 || !ss.A.allFinite()) return false;
-    const Eigen::EigenSolver<Eigen::MatrixXd> es(ss.A, false);
-    return es.info() == Eigen::Success && es.eigenvalues().real().maxCoeff() < 0;
-  }
-
-  // On every prepared pair, the factor G_ss / G_sim at each point (1 where the path is not the
-  // state model's); empty when ss is not stable.
-  std::vector<std::vector<C>> ratio(const StateSpace& ss) const {
-    std::vector<Eigen::MatrixXcd> g;
-    if (!responses(ss, &g)) return {};
-    return ratio_of(g);
-  }
-
-  // The same from the responses g at every distinct frequency.
-  std::vector<std::vector<C>> ratio_of(const std::vector<Eigen::MatrixXcd>& g) const {
-    std::vector<std::vector<C>> F(r_.pairs.size());
-    for (size_t k = 0; k < r_.pairs.size(); ++k) {
-      F[k].assign(r_.pairs[k].w.size(), C(1, 0));
-      const auto [i, j] = at_[k].path;
-      if (i < 0) continue;
-      for (size_t q = 0; q < F[k].size(); ++q) {
-        const C s = g_sim_[at_[k].w[q]](i, j);
-        if (s != C(0, 0)) F[k][q] = g[at_[k].w[q]](i, j) / s;
-      }
-    }
-    return F;
-  }
-
-  // The weighted residuals (real and imaginary parts, every pair's points in turn) of the pairs
-  // under ss on top of their factors before this stage, in the logarithm: ln(measured / model)
-  // over the point's relative sigma (sigma / |measured|), as (measured - model) / sigma where the
-  // two are near, and where a change no entry makes leaves a large misfit on some pairs (a lag
-  // the set has not yet taken) not led by their largest points; false when ss is not stable.
-  bool residuals(const StateSpace& ss, Eigen::VectorXd* res) const {
-    const auto F = ratio(ss);
-    if (F.empty()) return false;
-    residuals_of(F, res);
-    return true;
-  }
-
-  // The residuals with entries e at values v (moved_responses; stability unchecked).
-  void residuals_moved(const std::vector<StateEntry>& e, const std::vector<double>& v,
-                       Eigen::VectorXd* res) const {
-    residuals_of(ratio_of(moved_responses(e, v)), res);
-  }
-
-  void residuals_of(const std::vector<std::vector<C>>& F, Eigen::VectorXd* res) const {
-    res->resize(Eigen::Index(2 * points()));
-    Eigen::Index m = 0;
-    for (size_t k = 0; k < r_.pairs.size(); ++k) {
-      const PairFit& p = r_.pairs[k];
-      for (size_t q = 0; q < p.w.size(); ++q) {
-        const C model = p.sim[q] * p.factor[q] * F[k][q];
-        const C e = model != C(0, 0) && p.meas[q] != C(0, 0)
-                        ? std::log(p.meas[q] / model) * (std::abs(p.meas[q]) / p.sig[q])
-                        : (p.meas[q] - model) / p.sig[q];
-        (*res)(m++) = e.real(), (*res)(m++) = e.imag();
-      }
-    }
-  }
-
-  double chi2(const StateSpace& ss) const {
-    Eigen::VectorXd res;
-    return residuals(ss, &res) ? res.squaredNorm() : INFINITY;
-  }
-
-  size_t points() const { return points_; }
-  // The least and greatest distinct frequency (rad/s).
-  std::pair<double, double> band() const {
-    return {*std::min_element(w_.begin(), w_.end()), *std::max_element(w_.begin(), w_.end())};
-  }
-
- private:
-  struct PairAt {
-    std::pair<Eigen::Index, Eigen::Index> path{-1, -1};  // (output, input) in the state model
-    std::vector<size_t> w;                               // each point's distinct frequency
-  };
-  // The simulation's resolvent (moved_responses); false when a frequency is one of its modes.
-  bool resolvent() {
-    const Eigen::Index n = sim_.A.rows();
-    for (auto* v : {&R_, &X_, &Y_, &G_}) v->resize(w_.size());
-    for (size_t q = 0; q < w_.size(); ++q) {
-      const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(
-          C(0, w_[q]) * Eigen::MatrixXcd::Identity(n, n) - sim_.A.cast<C>());
-      R_[q] = lu.inverse();
-      X_[q] = sim_.C.cast<C>() * R_[q];
-      Y_[q] = R_[q] * sim_.B.cast<C>();
-      G_[q] = X_[q] * sim_.B.cast<C>() + sim_.D.cast<C>();
-      if (!R_[q].allFinite()) return false;
-    }
-    return true;
-  }
-
-  const DiagnosisRun& r_;
-  const StateSpace& sim_;
-  std::vector<Eigen::MatrixXcd> R_, X_, Y_, G_;
-  std::vector<double> w_;
-  std::vector<PairAt> at_;
-  std::vector<Eigen::MatrixXcd> g_sim_;
-  size_t points_ = 0;  // every prepared pair's points
-  bool ok_ = false;
-};
 
 // rms |ln(model / measured)| over every prepared pair with F on top of their factors.
 double state_error_with(const DiagnosisRun& r, const std::vector<std::vector<C>>& F) {
@@ -600,6 +341,42 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
   return out;
 }
 
+// Set s improved by swaps: each entry in turn taken out and the kScreened candidates the linear
+// screen ranks best on the others (each started from its value fitted alone there) fitted jointly
+// with them in its place, the best swap taken while it lowers chi2, at most kSwapRounds times. A
+// first entry that stood in for several changed ones and steered the sets built on it is so
+// replaced once the entries it stood in for are in the set.
+EntrySet swapped(const StateEval& ev, const StateSpace& sim,
+                 const std::vector<StateEntry>& candidates, EntrySet s) {
+  for (int round = 0; round < kSwapRounds && s.e.size() > 1; ++round) {
+    EntrySet best = s;
+    for (size_t j = 0; j < s.e.size(); ++j) {
+      EntrySet rest = s;
+      rest.e.erase(rest.e.begin() + std::ptrdiff_t(j));
+      rest.v.erase(rest.v.begin() + std::ptrdiff_t(j));
+      const StateSpace base = rest.applied_to(sim);
+      const std::vector<double> linear = linear_screen(ev, sim, rest, base, candidates);
+      std::vector<size_t> order(candidates.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::sort(order.begin(), order.end(),
+                [&](size_t a, size_t b) { return linear[a] < linear[b]; });
+      for (size_t k = 0; k < std::min(kScreened, order.size()); ++k) {
+        const StateEntry& c = candidates[order[k]];
+        if (!std::isfinite(linear[order[k]]) || same_entry(c, s.e[j])) continue;
+        const auto [v, chi2] = fit_alone(ev, sim, rest, base, c);
+        if (!std::isfinite(chi2)) continue;
+        EntrySet t = rest;
+        t.e.push_back(c), t.v.push_back(v);
+        t = fit_jointly(ev, sim, std::move(t));
+        if (t.chi2 < best.chi2) best = std::move(t);
+      }
+    }
+    if (!(best.chi2 < s.chi2)) break;
+    s = std::move(best);
+  }
+  return s;
+}
+
 // The findings of set s over `pairs` (the X:O pairs): an entry of A, B or C or a named parameter
 // a state_parameter;
 // a state the simulation lacks, before an input or after an output, a missing lag there; a delay
@@ -660,6 +437,11 @@ void states(DiagnosisRun& r) {
   for (int size = 1; size <= kMaxEntries; ++size) {
     beam = extend(ev, sim, candidates, beam);
     if (beam.empty()) break;
+    beam.front() = swapped(ev, sim, candidates, std::move(beam.front()));
+    const auto front = beam.front().key();
+    beam.erase(std::remove_if(beam.begin() + 1, beam.end(),
+                              [&](const EntrySet& t) { return t.key() == front; }),
+               beam.end());
     best.push_back(beam.front());
     beams.push_back(beam);
     // A size that did not earn its place ends the sets taken below: no larger one is searched.
