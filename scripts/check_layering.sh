@@ -18,7 +18,8 @@ declare -A allowed=(
   [identify]="core analyze identify"
   [diagnose]="core plant analyze identify diagnose"
   [exchange]="core plant analyze identify exchange"
-  [lab]="core lcm plant acquire analyze identify diagnose exchange lab"
+  [envelope]="core plant analyze identify diagnose exchange envelope"
+  [lab]="core lcm plant acquire analyze identify diagnose exchange envelope lab"
 )
 
 module_of_include() {  # the module an include names, or "" for a non-fralab header
@@ -32,6 +33,7 @@ module_of_include() {  # the module an include names, or "" for a non-fralab hea
     *'fralab/identify/'*) echo identify ;;
     *'fralab/diagnose/'*) echo diagnose ;;
     *'fralab/exchange/'*) echo exchange ;;
+    *'fralab/envelope/'*) echo envelope ;;
     *'fralab/lab/'*) echo lab ;;
     *) echo "" ;;
   esac

@@ -8,11 +8,11 @@
 
 #include "commands.h"
 #include "fralab/core/error.h"
+#include "fralab/envelope/envelope.h"
 #include "fralab/exchange/envelope_export.h"
 #include "fralab/exchange/results_export.h"
 #include "fralab/exchange/state_space_mat.h"
 #include "fralab/exchange/tape_series.h"
-#include "fralab/lab/envelope.h"
 #include "fralab/lcm/tape_file.h"
 #include "fralab/plant/realisation.h"
 

@@ -11,7 +11,7 @@
 
 #include "commands.h"
 #include "fralab/diagnose/diagnose.h"
-#include "fralab/lab/envelope.h"
+#include "fralab/envelope/envelope.h"
 #include "fralab/lab/monitor.h"
 #include "fralab/lcm/channels.h"
 #include "fralab/lcm/codec.h"

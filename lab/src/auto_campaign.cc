@@ -8,7 +8,7 @@
 #include "fralab/core/frd.h"
 #include "fralab/core/measure_dir.h"
 #include "fralab/diagnose/report.h"
-#include "fralab/lab/envelope.h"
+#include "fralab/envelope/envelope.h"
 #include "fralab/lab/run_lock.h"
 #include "fralab/lab/run_record.h"
 #include "fralab/plant/embedded_models.h"

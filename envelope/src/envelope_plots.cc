@@ -9,7 +9,7 @@
 
 #include "fralab/analyze/bode_plot.h"
 #include "fralab/core/text.h"
-#include "fralab/lab/envelope.h"
+#include "fralab/envelope/envelope.h"
 
 namespace fs = std::filesystem;
 
