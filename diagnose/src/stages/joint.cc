@@ -10,8 +10,8 @@
 // left as fitted (the joint problem is then its own). A refinement that does not lower chi2 leaves
 // the group as it was. The state model's entries, fitted as one set over every pair (stage 3a),
 // take their intervals here, each the marginal 1-sigma of the group's linearised covariance with
-// every other parameter free: moved alone (stage 6), two entries of one row on a one-input plant
-// came out 0.7 % wide where the data leave them 3 % apart.
+// every other parameter free: moved alone (stage 6), entries the data leave nearly interchangeable
+// (one input, one state's row) would get intervals far narrower than the data allow.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
