@@ -102,6 +102,7 @@ Model scheduled_model_of(const Json& j, const std::string& file, double x) {
   EnvelopeOptions o;
   o.schedule_by = json_string_member(j, w, "schedule_by");
   const Json& sims = json_array_member(j, w, "simulation");
+  if (sims.empty()) json_fail(w / "simulation", "no simulation: the set needs a model at least");
   std::string set;
   for (size_t i = 0; i < sims.size(); ++i)
     set += (set.empty() ? "" : ",") + json_string(sims[i], w / "simulation" / i);

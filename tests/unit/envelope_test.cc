@@ -246,6 +246,24 @@ TEST(Envelope, TheScheduledExtendedModelIsAModelAtAnyPointInItsRange) {
   fs::remove_all(d);
 }
 
+// A scheduled model whose simulation set is empty is refused naming the file and the key, not
+// read as a model of no name.
+TEST(Envelope, AScheduledModelWithoutASimulationIsRefusedNamingTheKey) {
+  const std::string d = fralab::testing::tmpdir("scheduled_empty", "fralab_env_");
+  json_save_file(d + "/scheduled_model.json", Json{{"format", "fralab-scheduled-model/1"},
+                                                   {"schedule_by", "speed_pct"},
+                                                   {"simulation", Json::array()},
+                                                   {"points", Json::array()}});
+  try {
+    scheduled_model_at(d + "/scheduled_model.json", 85);
+    ADD_FAILURE() << "an empty simulation set was read";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("scheduled_model.json"));
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("/simulation"));
+  }
+  fs::remove_all(d);
+}
+
 // The root migration's data: the spool's state as |root| = 1/tau at each speed (1/1.2, 1/0.55,
 // 1/0.36 rad/s) with its sigma; the findings' values per point. The pictures themselves when
 // gnuplot is there.
