@@ -48,16 +48,14 @@ using namespace fralab::testing;
 namespace {
 
 // Whether f names e at its place (cause, scope, entry) with a value beyond e's tolerance but e's
-// true value inside f's 2-sigma interval ([v - 2 (v - lo), v + 2 (hi - v)]): sized as closely as
-// the data allow, where they do not allow e's tolerance.
+// true value inside f's 2-sigma interval (two_sigma_interval, as the 2-sigma figure counts it):
+// sized as closely as the data allow, where they do not allow e's tolerance.
 bool named_at_resolution(const HiddenEffect& e, const Finding& f) {
   HiddenEffect anywhere = e;
   anywhere.tol_abs = INFINITY;
   if (e.matches(f) || !anywhere.matches(f)) return false;
-  const auto iv = f.intervals.find(e.param);
-  if (iv == f.intervals.end()) return false;
-  const double v = f.parameters.at(e.param);
-  return v - 2 * (v - iv->second[0]) <= e.value && e.value <= v + 2 * (iv->second[1] - v);
+  const auto two = two_sigma_interval(f, e.param);
+  return two && (*two)[0] <= e.value && e.value <= (*two)[1];
 }
 
 std::vector<Finding> read_findings(const std::string& file) {

@@ -264,6 +264,17 @@ bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value) {
   }
 }
 
+std::optional<std::array<double, 2>> two_sigma_interval(const Finding& f,
+                                                        const std::string& param) {
+  const auto v = f.parameters.find(param);
+  const auto iv = f.intervals.find(param);
+  if (v == f.parameters.end() || iv == f.intervals.end() || !std::isfinite(iv->second[0]) ||
+      !std::isfinite(iv->second[1]))
+    return std::nullopt;
+  return std::array<double, 2>{v->second - 2 * (v->second - iv->second[0]),
+                               v->second + 2 * (iv->second[1] - v->second)};
+}
+
 Score score(const RandomCase& c, const std::vector<Finding>& findings) {
   Score s;
   s.findings = int(findings.size());
@@ -290,19 +301,16 @@ Score score(const RandomCase& c, const std::vector<Finding>& findings) {
       continue;
     }
     ++s.found;
-    const auto v = match->parameters.find(h.param);
-    const auto iv = match->intervals.find(h.param);
-    if (v == match->parameters.end() || iv == match->intervals.end() ||
-        !std::isfinite(iv->second[0]) || !std::isfinite(iv->second[1]))
-      continue;
+    const auto two = two_sigma_interval(*match, h.param);
+    if (!two) continue;
     ++s.with_interval;
-    const double lo = v->second - 2 * (v->second - iv->second[0]),
-                 hi = v->second + 2 * (iv->second[1] - v->second);
+    const auto [lo, hi] = *two;
     if (h.value >= lo && h.value <= hi) {
       ++s.in_two_sigma;
     } else {
       std::ostringstream d;
-      d << h.describe() << ": found " << v->second << ", 2-sigma " << lo << " .. " << hi;
+      d << h.describe() << ": found " << match->parameters.at(h.param) << ", 2-sigma " << lo
+        << " .. " << hi;
       s.outside_two_sigma.push_back(d.str());
     }
   }

@@ -4,8 +4,10 @@
 // diagnosis must find (cause, place, parameter, tolerance). Deterministic in the seed.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,5 +60,8 @@ struct Score {
   std::vector<std::string> false_findings, missed, outside_two_sigma;
 };
 Score score(const RandomCase& c, const std::vector<Finding>& findings);
+/// f's 2-sigma interval on `param`, from its reported 1-sigma one [lo, hi] around its value v:
+/// [v - 2 (v - lo), v + 2 (hi - v)]; nullopt when f has no value or no two-sided interval there.
+std::optional<std::array<double, 2>> two_sigma_interval(const Finding& f, const std::string& param);
 
 }  // namespace fralab::testing

@@ -296,6 +296,14 @@ std::vector<double> linear_screen(const StateEval& ev, const StateSpace& sim, co
   return out;
 }
 
+// The indices of v, its least value first (a candidate's score by a screen).
+std::vector<size_t> least_first(const std::vector<double>& v) {
+  std::vector<size_t> order(v.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return v[a] < v[b]; });
+  return order;
+}
+
 // Every set of one more entry than those of `beam`: each new entry screened alone on top of the
 // set (fit_alone) and by a Gauss-Newton step with the set's entries (linear_screen); the
 // kScreened best by each fitted jointly with the set's entries; the kBeam best, distinct, best
@@ -314,10 +322,7 @@ std::vector<EntrySet> extend(const StateEval& ev, const StateSpace& sim,
     std::vector<bool> chosen(candidates.size(), false);
     for (const std::vector<double>* by :
          {static_cast<const std::vector<double>*>(&alone), &linear}) {
-      std::vector<size_t> order(candidates.size());
-      std::iota(order.begin(), order.end(), 0);
-      std::sort(order.begin(), order.end(),
-                [&](size_t a, size_t b) { return (*by)[a] < (*by)[b]; });
+      const std::vector<size_t> order = least_first(*by);
       for (size_t k = 0; k < std::min(kScreened, order.size()); ++k)
         if (std::isfinite((*by)[order[k]]) && std::isfinite(alone[order[k]]))
           chosen[order[k]] = true;
@@ -356,10 +361,7 @@ EntrySet swapped(const StateEval& ev, const StateSpace& sim,
       rest.v.erase(rest.v.begin() + std::ptrdiff_t(j));
       const StateSpace base = rest.applied_to(sim);
       const std::vector<double> linear = linear_screen(ev, sim, rest, base, candidates);
-      std::vector<size_t> order(candidates.size());
-      std::iota(order.begin(), order.end(), 0);
-      std::sort(order.begin(), order.end(),
-                [&](size_t a, size_t b) { return linear[a] < linear[b]; });
+      const std::vector<size_t> order = least_first(linear);
       for (size_t k = 0; k < std::min(kScreened, order.size()); ++k) {
         const StateEntry& c = candidates[order[k]];
         if (!std::isfinite(linear[order[k]]) || same_entry(c, s.e[j])) continue;
