@@ -4,7 +4,8 @@
 // (`fralab diagnose --levels`). On each, the findings' primary parameters and their fitted
 // secondary ones (a moved mode's damping) are fitted again together on the points of their pairs
 // (Levenberg-Marquardt, refine() of stage 5b), starting from the values at the nearest level
-// already fitted (the fitting measurement's first), with their linearised 1-sigma. When a value
+// already fitted (the fitting measurement's first), with their linearised 1-sigma (a finding the
+// joint fit leaves stuck or without a sigma is fitted alone, the others held). When a value
 // lies apart from the fitting measurement's by more than kApart times their sigmas combined, the
 // finding is not one linear cause: it is marked level-dependent, with each parameter per level and
 // its slope (Finding::level, Finding::level_secondary; a weighted straight line, the law, for three
@@ -210,8 +211,28 @@ void level(DiagnosisRun& r) {
         pairs.push_back(&*it);
         break;
       }
+    const std::vector<Finding> start = fs;
     ParameterSigmas sigmas;
     refine(r, fs, group, pairs, 1, &sigmas);
+    // A finding the group's fit left where it started or without a sigma (two findings the data
+    // cannot tell apart there make the group's normal equations singular) is fitted alone, the
+    // others held, so that one such pair does not cost every finding its comparison.
+    for (size_t i : group) {
+      const bool stuck = std::any_of(params[i].begin(), params[i].end(), [&](const Compared& c) {
+        const auto it = sigmas.find({i, c.key});
+        return it == sigmas.end() || !std::isfinite(it->second) ||
+               fs[i].parameters.at(c.key) == start[i].parameters.at(c.key);
+      });
+      if (!stuck) continue;
+      std::vector<Finding> alone = fs;
+      std::vector<const PairFit*> own;
+      for (const PairFit& p : pts[m][i].pairs) own.push_back(&p);
+      ParameterSigmas s;
+      refine(r, alone, {i}, own, 1, &s);
+      fs[i] = alone[i];
+      for (const Compared& c : params[i])
+        if (const auto it = s.find({i, c.key}); it != s.end()) sigmas[{i, c.key}] = it->second;
+    }
     for (size_t i : group)
       for (const Compared& c : params[i]) {
         const double v = fs[i].parameters.at(c.key);

@@ -7,15 +7,16 @@
 // Candidates: pairs (zeta <= kLightZeta) of the paths' poles inside the band of the pairs that
 // hold them, held (wn within kSameRoot) by every X:O pair of the plant, of one output, or of one
 // input (at least two pairs). A move is the factor D_from / D_to on each pair (ln wn by a grid
-// over +-kSearchRel in steps of a third of the damping, then the damping, then the two
-// alternately by Brent's method), or, when its chi2 is lower, the same move with each path's mode
-// shape kept (mode_residues.h). chi2 here is taken in the logarithm with each pair's gain left
-// free (pair_log_chi2): a calibration or a path gain, fitted by the later stages, is not taken up
-// by a mode, and a wrong neighbour's peak does not flatten the mode being fitted. Greedy, while a
-// move lowers chi2 by more than k ln 2N in units of its pairs' misfit level s = max(1, chi2 / N)
-// and lowers their error; then each mode fitted
-// again with the others in place, and the least useful dropped while it does not earn its place.
-// A frequency move below kBandShare of the half-power band is a damping_error.
+// over +-kSearchRel, between the neighbours of its pairs (ModeRange), in steps of a third of the
+// damping, then the damping, then the two alternately by Brent's method), or, when its chi2 is
+// lower, the same move with each path's mode shape kept (mode_residues.h; such moves of several
+// modes on one path add, as the modes' terms do, where the factors multiply: Moves). chi2 here is
+// taken in the logarithm with each pair's gain left free (pair_log_chi2): a calibration or a path
+// gain, fitted by the later stages, is not taken up by a mode, and a wrong neighbour's peak does
+// not flatten the mode being fitted. Greedy, while a move lowers chi2 by more than k ln 2N in units
+// of its pairs' misfit level s = max(1, chi2 / N) and lowers their error; then each mode fitted
+// again with the others in place, and the least useful dropped while it does not earn its place. A
+// frequency move below kBandShare of the half-power band is a damping_error.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -38,8 +39,12 @@ constexpr int kBackfitRounds = 2;   // each mode fitted again with the others in
 constexpr double kBandShare = 0.1;  // a frequency move below this share of the band is none
 constexpr int kMaxGrid = 400;       // the frequency grid's points at most (steps >= 0.05 %)
 constexpr int kBrentBits = 20;      // Brent's method's precision (bits)
+// A mode keeps its place among the modes of its pairs: its frequency stays this many times the
+// lighter damping (relative) from each neighbour's frequency as it now is (ModeRange).
+constexpr double kApartZetas = 0.25;
 
 struct SharedMode {
+  size_t id = 0;  // its index among the stage's candidates
   Root root;
   Scope scope = Scope::kPlant;
   std::string input, output;
@@ -129,6 +134,7 @@ std::vector<SharedMode> shared_modes(const DiagnosisRun& r) {
       }
       if (!(root.wn >= lo && root.wn <= hi)) continue;
       if (auto m = scope_of(r, holders)) {
+        m->id = out.size();
         m->root = root;
         prepare_residues(r, *m);
         out.push_back(*m);
@@ -145,6 +151,37 @@ struct MovedMode {
   std::vector<std::vector<C>> F;
   bool residues_kept = false;  // the move keeps each path's mode shape (mode_residues.h)
 };
+
+// Where a mode's ln wn is searched: within +-kSearchRel of the simulated, and between the
+// neighbours of its pairs as they now are (two modes moved onto one frequency are one mode
+// counted twice, whose split the data cannot tell), its damping within a factor kZetaSpan.
+struct ModeRange {
+  double lo = 0, hi = 0, lz_lo = 0, lz_hi = 0;
+  double clamp(double x) const { return std::clamp(x, lo, hi); }
+  double clamp_z(double x) const { return std::clamp(x, lz_lo, lz_hi); }
+};
+
+ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& now, size_t id) {
+  const SharedMode& m = all[id];
+  const double lw0 = std::log(m.root.wn);
+  ModeRange g{lw0 - kSearchRel, lw0 + kSearchRel, std::log(m.root.zeta / kZetaSpan),
+              std::log(m.root.zeta * kZetaSpan)};
+  for (const SharedMode& n : all) {
+    if (n.id == id || std::none_of(n.pairs.begin(), n.pairs.end(), [&](size_t k) {
+          return std::find(m.pairs.begin(), m.pairs.end(), k) != m.pairs.end();
+        }))
+      continue;
+    const double gap = kApartZetas * std::min(m.root.zeta, now[n.id].zeta);
+    const double ln = std::log(now[n.id].wn);
+    if (n.root.wn < m.root.wn)
+      g.lo = std::max(g.lo, ln + gap);
+    else
+      g.hi = std::min(g.hi, ln - gap);
+  }
+  if (!(g.lo < lw0 && lw0 < g.hi)) g.lo = std::min(g.lo, lw0), g.hi = std::max(g.hi, lw0);
+  if (!(g.lo < g.hi)) g.lo = g.hi = lw0;
+  return g;
+}
 
 // The mode's move to `to` at point q of its j-th pair: the factor D_from / D_to, or with the
 // path's mode shape kept (mode_residues.h; m.residue not empty).
@@ -167,6 +204,29 @@ std::vector<std::vector<C>> move_factors(const DiagnosisRun& r, const SharedMode
   return F;
 }
 
+// The moves taken so far, per pair of r: the pair's factor is base x mult x (1 + add), base its
+// factor before the stage. A move by the factor D_from / D_to multiplies (pole-zero factors
+// compose by product); a move with the mode shape kept adds its term to the path's partial
+// fractions, (R + delta) / R = 1 + delta / R with delta = r' / (s - p') - r / (s - p) + conj:
+// modes add, and the product of two neighbours' factors would count their overlap twice (a few
+// per cent near two modes whose half-power bands overlap).
+struct Moves {
+  std::vector<std::vector<C>> base, mult, add;
+  explicit Moves(const DiagnosisRun& r) {
+    for (const PairFit& p : r.pairs) {
+      base.push_back(p.factor);
+      mult.emplace_back(p.factor.size(), C(1));
+      add.emplace_back(p.factor.size(), C(0));
+    }
+  }
+  // Pair k's factor at point q with the move F on top (shape_kept: F = 1 + delta / R).
+  C with(size_t k, size_t q, C F, bool shape_kept) const {
+    return shape_kept ? base[k][q] * mult[k][q] * (C(1) + add[k][q] + (F - C(1)))
+                      : base[k][q] * mult[k][q] * (C(1) + add[k][q]) * F;
+  }
+  C now(size_t k, size_t q) const { return base[k][q] * mult[k][q] * (C(1) + add[k][q]); }
+};
+
 // chi2 of one pair in the logarithm, its gain profiled out: each point's term is
 // |ln(model / meas) - ln g|^2 (|meas| / sigma)^2, g the pair's real gain that minimises the sum
 // (the weighted mean of ln |model / meas|). Near the fit a point's term is its
@@ -188,26 +248,31 @@ double pair_log_chi2(const PairFit& p, Model&& model) {
   return sw > 0 ? std::max(0.0, swaa - swa * swa / sw) + swbb : 0.0;
 }
 
-// chi2 over the mode's pairs with F on top of their factors (none: their factors as they are).
-double chi2_with(const DiagnosisRun& r, const SharedMode& m,
-                 const std::vector<std::vector<C>>& F = {}) {
+// chi2 over the mode's pairs with the move F on top of their factors (none: their factors as
+// they are).
+double chi2_with(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
+                 const std::vector<std::vector<C>>& F = {}, bool shape_kept = false) {
   double c = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
-    const PairFit& p = r.pairs[m.pairs[j]];
-    c += pair_log_chi2(
-        p, [&](size_t q) { return p.sim[q] * p.factor[q] * (F.empty() ? C(1) : F[j][q]); });
+    const size_t k = m.pairs[j];
+    const PairFit& p = r.pairs[k];
+    c += pair_log_chi2(p, [&](size_t q) {
+      return p.sim[q] * (F.empty() ? mv.now(k, q) : mv.with(k, q, F[j][q], shape_kept));
+    });
   }
   return c;
 }
 
 // chi2 over the mode's pairs with the mode moved to `to`, as chi2_with of move_factors without
 // building them: the searches' inner loop.
-double chi2_moved(const DiagnosisRun& r, const SharedMode& m, const Root& to, bool shape_kept) {
+double chi2_moved(const DiagnosisRun& r, const Moves& mv, const SharedMode& m, const Root& to,
+                  bool shape_kept) {
   double c = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
-    const PairFit& p = r.pairs[m.pairs[j]];
+    const size_t k = m.pairs[j];
+    const PairFit& p = r.pairs[k];
     c += pair_log_chi2(p, [&](size_t q) {
-      return p.sim[q] * p.factor[q] * move_factor(m, j, q, p.w[q], to, shape_kept);
+      return p.sim[q] * mv.with(k, q, move_factor(m, j, q, p.w[q], to, shape_kept), shape_kept);
     });
   }
   return c;
@@ -220,19 +285,25 @@ size_t points_over(const DiagnosisRun& r, const SharedMode& m) {
   return n;
 }
 
+// The minimum of f over [a, b] by Brent's method; a when the interval is empty.
+double brent_in(const std::function<double(double)>& f, double a, double b) {
+  return b - a > 1e-12 ? detail::brent_minimum(f, a, b, kBrentBits) : a;
+}
+
 // From (lwn, lz): the frequency and the damping alternately by Brent's method (the frequency
-// within the damping's share either side, the damping within a factor e^0.5), at most kRounds,
-// until both settle. Then the move at the simulated damping (`kept`, chi2 at lz0) is replaced by
-// the free one when the damping lowers chi2 by one penalty in units of the misfit level.
-MovedMode settle(const std::function<double(double, double)>& total, double lwn, double lz,
-                 const MovedMode& kept, size_t n, bool shape_kept) {
+// within the damping's share either side, the damping within a factor e^0.5, both inside g), at
+// most kRounds, until both settle. Then the move at the simulated damping (`kept`, chi2 at lz0) is
+// replaced by the free one when the damping lowers chi2 by one penalty in units of the misfit
+// level.
+MovedMode settle(const std::function<double(double, double)>& total, const ModeRange& g, double lwn,
+                 double lz, const MovedMode& kept, size_t n, bool shape_kept) {
   for (int round = 0; round < kRounds; ++round) {
     const double lwn_was = lwn, lz_was = lz;
     const double step = std::max(1e-4, std::exp(lz));
-    lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
-                                kBrentBits);
-    lz = detail::brent_minimum([&](double x) { return total(lwn, x); }, lz - 0.5, lz + 0.5,
-                               kBrentBits);
+    lwn =
+        brent_in([&](double x) { return total(x, lz); }, g.clamp(lwn - step), g.clamp(lwn + step));
+    lz =
+        brent_in([&](double x) { return total(lwn, x); }, g.clamp_z(lz - 0.5), g.clamp_z(lz + 0.5));
     if (std::abs(lwn - lwn_was) < 1e-6 && std::abs(lz - lz_was) < 1e-4) break;
   }
   const double c2 = total(lwn, lz);
@@ -243,49 +314,49 @@ MovedMode settle(const std::function<double(double, double)>& total, double lwn,
 // The same move with each path's mode shape kept, from the factor's optimum (frequency and damping
 // alternately, as the factor's): it replaces `factor` when it has the lower chi2 (a structure's
 // mode moves with its shape, and its antiresonances with it).
-MovedMode with_residues_kept(const DiagnosisRun& r, const SharedMode& m, const MovedMode& factor,
-                             size_t n) {
+MovedMode with_residues_kept(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
+                             const ModeRange& g, const MovedMode& factor, size_t n) {
   auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
   if (m.residue.empty()) return factor;
-  auto total = [&](double lwn, double lz) { return chi2_moved(r, m, to(lwn, lz), true); };
+  auto total = [&](double lwn, double lz) { return chi2_moved(r, mv, m, to(lwn, lz), true); };
   double lwn = std::log(factor.wn), lz = std::log(m.root.zeta);
   const double step = std::max(1e-4, m.root.zeta);
-  lwn = detail::brent_minimum([&](double x) { return total(x, lz); }, lwn - step, lwn + step,
-                              kBrentBits);
+  lwn = brent_in([&](double x) { return total(x, lz); }, g.clamp(lwn - step), g.clamp(lwn + step));
   MovedMode best{std::exp(lwn), m.root.zeta, total(lwn, lz), 1, {}, true};
-  best = settle(total, lwn, std::log(factor.zeta), best, n, true);
+  best = settle(total, g, lwn, std::log(factor.zeta), best, n, true);
   if (!(best.chi2 < factor.chi2)) return factor;
   best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), true);
   return best;
 }
 
-MovedMode fit_mode(const DiagnosisRun& r, const SharedMode& m) {
+MovedMode fit_mode(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
+                   const ModeRange& g) {
   const Root& from = m.root;
   auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
-  auto total = [&](double lwn, double lz) { return chi2_moved(r, m, to(lwn, lz), false); };
-  const double lz0 = std::log(from.zeta), lw0 = std::log(from.wn);
-  const int grid =
-      std::min(kMaxGrid, int(std::ceil(2 * kSearchRel / std::min(0.01, from.zeta / 3))));
-  double lwn = minimise_1d([&](double x) { return total(x, lz0); }, lw0 - kSearchRel,
-                           lw0 + kSearchRel, grid);
+  auto total = [&](double lwn, double lz) { return chi2_moved(r, mv, m, to(lwn, lz), false); };
+  const double lz0 = std::log(from.zeta);
+  const int grid = std::max(
+      1, std::min(kMaxGrid, int(std::ceil((g.hi - g.lo) / std::min(0.01, from.zeta / 3)))));
+  double lwn =
+      g.hi > g.lo ? minimise_1d([&](double x) { return total(x, lz0); }, g.lo, g.hi, grid) : g.lo;
   MovedMode best{std::exp(lwn), from.zeta, total(lwn, lz0), 1, {}};
-  const double lz = minimise_1d([&](double x) { return total(lwn, x); }, lz0 - std::log(kZetaSpan),
-                                lz0 + std::log(kZetaSpan), 40);
+  const double lz = minimise_1d([&](double x) { return total(lwn, x); }, g.lz_lo, g.lz_hi, 40);
   const size_t n = points_over(r, m);
-  best = settle(total, lwn, lz, best, n, false);
+  best = settle(total, g, lwn, lz, best, n, false);
   best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), false);
-  return with_residues_kept(r, m, best, n);
+  return with_residues_kept(r, mv, m, g, best, n);
 }
 
-// The error metric over the mode's pairs, their current factors times F (empty: none).
-double error_with(const DiagnosisRun& r, const SharedMode& m,
-                  const std::vector<std::vector<C>>& F) {
+// The error metric over the mode's pairs, their current factors with the move F (empty: none).
+double error_with(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
+                  const std::vector<std::vector<C>>& F, bool shape_kept) {
   double s = 0;
   size_t n = 0;
   for (size_t j = 0; j < m.pairs.size(); ++j) {
-    const PairFit& p = r.pairs[m.pairs[j]];
+    const size_t k = m.pairs[j];
+    const PairFit& p = r.pairs[k];
     for (size_t q = 0; q < p.w.size(); ++q) {
-      const C model = p.sim[q] * p.factor[q] * (F.empty() ? C(1) : F[j][q]);
+      const C model = p.sim[q] * (F.empty() ? mv.now(k, q) : mv.with(k, q, F[j][q], shape_kept));
       s += std::norm(std::log(model / p.meas[q]));
       ++n;
     }
@@ -293,32 +364,42 @@ double error_with(const DiagnosisRun& r, const SharedMode& m,
   return n ? std::sqrt(s / double(n)) : 0.0;
 }
 
-// F on (or, inverse, off) each of the mode's pairs' factors.
-void apply_factor(DiagnosisRun& r, const SharedMode& m, const std::vector<std::vector<C>>& F,
+// The move f on (or, inverse, off) each of the mode's pairs (Moves), their factors updated.
+void apply_factor(DiagnosisRun& r, Moves& mv, const SharedMode& m, const MovedMode& f,
                   bool inverse) {
   for (size_t j = 0; j < m.pairs.size(); ++j) {
-    PairFit& p = r.pairs[m.pairs[j]];
-    for (size_t q = 0; q < p.w.size(); ++q) p.factor[q] *= inverse ? 1.0 / F[j][q] : F[j][q];
+    const size_t k = m.pairs[j];
+    PairFit& p = r.pairs[k];
+    for (size_t q = 0; q < p.w.size(); ++q) {
+      const C F = f.F[j][q];
+      if (f.residues_kept)
+        mv.add[k][q] += inverse ? C(1) - F : F - C(1);
+      else
+        mv.mult[k][q] *= inverse ? C(1) / F : F;
+      p.factor[q] = mv.now(k, q);
+    }
   }
 }
 
 // A damping change alone: the frequency moved by less than a tenth of the mode's half-power
 // band (zeta, relative), or its move does not lower chi2 by one penalty in units of the misfit
 // level. The finding is then the pair's damping_error, whose parameter is the damping.
-bool damping_only(const DiagnosisRun& r, const SharedMode& m, const MovedMode& f) {
+bool damping_only(const DiagnosisRun& r, const Moves& mv, const SharedMode& m, const MovedMode& f) {
   if (f.k < 2) return false;
   if (std::abs(f.wn / m.root.wn - 1) < kBandShare * m.root.zeta) return true;
   const double c_from =
-      chi2_with(r, m, move_factors(r, m, Root::Pair(m.root.wn, f.zeta), f.residues_kept));
+      chi2_with(r, mv, m, move_factors(r, m, Root::Pair(m.root.wn, f.zeta), f.residues_kept),
+                f.residues_kept);
   return earned(c_from, f.chi2, points_over(r, m), 1) <= 0;
 }
 
-Finding finding_of(const DiagnosisRun& r, const SharedMode& m, const MovedMode& fit) {
+Finding finding_of(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
+                   const MovedMode& fit) {
   Finding f;
   f.scope = m.scope;
   f.input = m.input;
   f.output = m.output;
-  if (damping_only(r, m, fit)) {
+  if (damping_only(r, mv, m, fit)) {
     f.cause = CauseKind::kDampingError;
     f.parameters = {{"wn_rad_s", m.root.wn}, {"from_zeta", m.root.zeta}, {"to_zeta", fit.zeta}};
     if (fit.residues_kept) f.text_parameters["form"] = "residue";
@@ -335,11 +416,30 @@ Finding finding_of(const DiagnosisRun& r, const SharedMode& m, const MovedMode& 
   return f;
 }
 
-}  // namespace
-
-void modes(DiagnosisRun& r) {
-  std::vector<SharedMode> left = shared_modes(r), taken;
+// The moves the stage takes, applied to the pairs' factors.
+struct Pass {
+  std::vector<SharedMode> taken;
   std::vector<MovedMode> fits;
+  Moves mv;
+};
+
+Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
+  const std::vector<SharedMode> all = left;
+  std::vector<Root> now;  // each candidate's pair as it now is
+  for (const SharedMode& m : all) now.push_back(m.root);
+  std::vector<SharedMode> taken;
+  std::vector<MovedMode> fits;
+  Moves mv(r);
+  auto fit = [&](const SharedMode& m) { return fit_mode(r, mv, m, range_of(all, now, m.id)); };
+  auto take = [&](const SharedMode& m, const MovedMode& f, bool inverse) {
+    apply_factor(r, mv, m, f, inverse);
+    now[m.id] = inverse ? m.root : Root::Pair(f.wn, f.zeta);
+  };
+  auto refit = [&](size_t j) {
+    take(taken[j], fits[j], true);
+    fits[j] = fit(taken[j]);
+    take(taken[j], fits[j], false);
+  };
   // A candidate whose move did not earn its place in a round is skipped in the next ones (each
   // round refits every candidate it tries); when none of the others earns its place, every
   // candidate is tried again once before the stage stops (a neighbour's move can make one worth
@@ -353,10 +453,11 @@ void modes(DiagnosisRun& r) {
     for (size_t c = 0; c < left.size(); ++c) {
       if (!worth[c]) continue;
       const SharedMode& m = left[c];
-      const double c0 = chi2_with(r, m);
-      MovedMode f = fit_mode(r, m);
+      const double c0 = chi2_with(r, mv, m);
+      MovedMode f = fit(m);
       const double gain = earned(c0, f.chi2, points_over(r, m), f.k);
-      worth[c] = gain > 0 && error_with(r, m, f.F) < error_with(r, m, {});
+      worth[c] =
+          gain > 0 && error_with(r, mv, m, f.F, f.residues_kept) < error_with(r, mv, m, {}, false);
       if (worth[c] && gain > best_gain) best = c, best_fit = std::move(f), best_gain = gain;
     }
     if (best == left.size()) {
@@ -366,7 +467,7 @@ void modes(DiagnosisRun& r) {
       continue;
     }
     full = false;
-    apply_factor(r, left[best], best_fit.F, false);
+    take(left[best], best_fit, false);
     taken.push_back(left[best]);
     fits.push_back(std::move(best_fit));
     left.erase(left.begin() + long(best));
@@ -374,13 +475,8 @@ void modes(DiagnosisRun& r) {
   }
   // Backfitting: each mode fitted again with every other one in place (modes moved towards each
   // other share their band, and the first one taken held part of the next), kBackfitRounds times.
-  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round) {
-    for (size_t j = 0; j < taken.size(); ++j) {
-      apply_factor(r, taken[j], fits[j].F, true);
-      fits[j] = fit_mode(r, taken[j]);
-      apply_factor(r, taken[j], fits[j].F, false);
-    }
-  }
+  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round)
+    for (size_t j = 0; j < taken.size(); ++j) refit(j);
   // Each must still earn its place with the others in place, as it did when taken: the least
   // useful is dropped while its removal raises chi2 by no more than its penalty in units of the
   // misfit level (a small move that made up for a neighbour taken before it was refitted), and
@@ -390,28 +486,31 @@ void modes(DiagnosisRun& r) {
     double worst_gain = 0;
     for (size_t j = 0; j < taken.size(); ++j) {
       // chi2 over its pairs with and without it, the others as they now are.
-      const double c_with = chi2_with(r, taken[j]);
-      apply_factor(r, taken[j], fits[j].F, true);
-      const double c0 = chi2_with(r, taken[j]);
-      apply_factor(r, taken[j], fits[j].F, false);
+      const double c_with = chi2_with(r, mv, taken[j]);
+      apply_factor(r, mv, taken[j], fits[j], true);
+      const double c0 = chi2_with(r, mv, taken[j]);
+      apply_factor(r, mv, taken[j], fits[j], false);
       const double gain = earned(c0, c_with, points_over(r, taken[j]), fits[j].k);
       if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
     }
     if (worst_gain > 0) break;
-    apply_factor(r, taken[worst], fits[worst].F, true);
+    take(taken[worst], fits[worst], true);
     taken.erase(taken.begin() + long(worst));
     fits.erase(fits.begin() + long(worst));
-    for (size_t j = 0; j < taken.size(); ++j) {
-      apply_factor(r, taken[j], fits[j].F, true);
-      fits[j] = fit_mode(r, taken[j]);
-      apply_factor(r, taken[j], fits[j].F, false);
-    }
+    for (size_t j = 0; j < taken.size(); ++j) refit(j);
   }
+  return {std::move(taken), std::move(fits), std::move(mv)};
+}
+
+}  // namespace
+
+void modes(DiagnosisRun& r) {
+  Pass pass = moves(r, shared_modes(r));
   // Each finding judged without its own factor on its pairs (the others in place).
-  for (size_t j = 0; j < taken.size(); ++j) {
-    apply_factor(r, taken[j], fits[j].F, true);
-    r.mode_findings.push_back(finding_of(r, taken[j], fits[j]));
-    apply_factor(r, taken[j], fits[j].F, false);
+  for (size_t j = 0; j < pass.taken.size(); ++j) {
+    apply_factor(r, pass.mv, pass.taken[j], pass.fits[j], true);
+    r.mode_findings.push_back(finding_of(r, pass.mv, pass.taken[j], pass.fits[j]));
+    apply_factor(r, pass.mv, pass.taken[j], pass.fits[j], false);
   }
 }
 
