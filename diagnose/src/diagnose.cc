@@ -153,7 +153,15 @@ void run_stages(DiagnosisRun& r, bool with_states) {
   bool moved = regroup(r);
   moved |= decompose(r);
   moved |= simpler_alternatives(r);
-  if (moved) joint(r);
+  if (moved) {
+    joint(r);
+    // What 5d and 5e replaced was fitted pair by pair; sized together, the same cause on every
+    // pair of a scope is one finding there, and gains or delays that add up on the paths are
+    // their inputs' and outputs'.
+    bool again = regroup(r);
+    again |= decompose(r);
+    if (again) joint(r);
+  }
   resolve(r);
   earn_place(r);
   level(r);

@@ -15,7 +15,9 @@
 // the other, diagnosed again, leaves fewer findings than the paths' own, or as many that fit the
 // two pairs better by more than one parameter's penalty. A scope's finding whose
 // pairs hold path findings beside it on fewer than half of them has those pairs diagnosed again
-// the same way, kept on a lower BIC.
+// the same way, kept on a lower BIC. A group whose rest pairs were diagnosed again stands on the
+// criterion over the scope's pairs (chi2 + k ln 2N, k the findings there) and falls where a rest
+// pair would undo its cause; an output's or an input's group is tried even from one pair.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -104,6 +106,21 @@ void group(DiagnosisRun& r, std::vector<bool>& used, const std::function<bool(co
   }
 }
 
+// Whether f undoes g where both apply: a lead on a lag's corner (or a lag on a lead's), within
+// consistent_rel, or a gain opposite to g's within consistent_gain_db.
+bool undoes(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
+  const bool corners = (f.cause == CauseKind::kMissingLead && g.cause == CauseKind::kMissingLag) ||
+                       (f.cause == CauseKind::kMissingLag && g.cause == CauseKind::kMissingLead);
+  if (corners) {
+    const double a = f.parameters.at("corner_rad_s"), b = g.parameters.at("corner_rad_s");
+    return std::abs(a - b) <= opt.consistent_rel * b;
+  }
+  if (f.cause == CauseKind::kGainMismatch && g.cause == CauseKind::kGainMismatch)
+    return std::abs(f.parameters.at("gain_db") + g.parameters.at("gain_db")) <=
+           opt.consistent_gain_db;
+  return false;
+}
+
 // The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
 // with the rest's own findings dropped (those on its pairs alone: a path's, or an output's when
 // the rest is that output's paths), the scope's finding sized on the pairs that found it together
@@ -111,7 +128,7 @@ void group(DiagnosisRun& r, std::vector<bool>& used, const std::function<bool(co
 // tolerance, and another finding on that pair what it took of the overlap, which the rest would
 // then want moved again), and each rest pair diagnosed again, alone, against the simulation
 // extended by all that (the whole diagnosis on that pair): the new findings, or nullopt when a
-// rest pair wants the scope's cause again.
+// rest pair wants the scope's cause again, or wants it undone (the cause is not there).
 std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
                                                     const std::vector<Finding>& with,
                                                     const std::vector<std::string>& rest) {
@@ -149,7 +166,7 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
     const Diagnosis dq = diagnose(ext, one, r.opt);
     for (const Finding& f : dq.findings)
       if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
-        if (f.cause == cause) return std::nullopt;
+        if (f.cause == cause || undoes(f, base.back(), r.opt)) return std::nullopt;
         out.push_back(f);
       }
   }
@@ -168,6 +185,16 @@ size_t path_findings_on(const std::vector<Finding>& fs, const std::string& q,
   size_t n = 0;
   for (size_t x = 0; x < fs.size(); ++x)
     n += x != skip && fs[x].scope == Scope::kPath && fs[x].pairs == std::vector<std::string>{q};
+  return n;
+}
+
+// The findings of fs on any of `pairs`.
+size_t findings_on(const std::vector<Finding>& fs, const std::vector<std::string>& pairs) {
+  size_t n = 0;
+  for (const Finding& f : fs)
+    n += std::any_of(f.pairs.begin(), f.pairs.end(), [&](const std::string& q) {
+      return std::find(pairs.begin(), pairs.end(), q) != pairs.end();
+    });
   return n;
 }
 
@@ -262,7 +289,11 @@ bool regroup(DiagnosisRun& r) {
       // place of both): the group is tried, and kept only when it explains the scope by fewer
       // findings than the paths' own, or by as many that fit better.
       const bool one_of_two = covered == 1 && rest.size() == 1 && !clear;
-      if (!rest.empty() && !one_of_two && (covered < 2 || covered < rest.size())) continue;
+      // Fewer pairs found the cause than not (an output's delay sized on one of its paths, taken
+      // on another for a lag, off the tolerance on a third): an output's or an input's group is
+      // tried with its rest diagnosed again, and kept on the criterion; the plant's is not.
+      const bool few = !rest.empty() && (covered < 2 || covered < rest.size());
+      if (few && !one_of_two && scope == Scope::kPlant) continue;
       Finding g;
       g.cause = fs[a].cause;
       g.scope = scope;
@@ -292,7 +323,7 @@ bool regroup(DiagnosisRun& r) {
         // own, fitted beside its own value of the cause, which may have taken part of them: a lag
         // fitted as a resonance beside a pole moved too little; or one whose own fit of the cause
         // took another effect in, as an output's gain) the rest pairs are diagnosed again.
-        bool ok = clear && quiet_over(r, fs, joined, rest);
+        bool ok = clear && !few && quiet_over(r, fs, joined, rest);
         if (!ok) {
           // Once per scope and cause in a pass: every finding of the group is a candidate that
           // forms the same group, and the pairs' diagnoses would only be run again.
@@ -302,7 +333,16 @@ bool regroup(DiagnosisRun& r) {
           // path finding of the cause to be grouped again).
           if (!again) continue;
           joined = std::move(*again);
-          ok = quiet_over(r, fs, joined, rest);
+          // The rest's new findings may only undo the group's cause there (a lead under a lag
+          // taken to the plant): the group stands when it explains the scope's pairs by the
+          // criterion, its findings on them against theirs before; by as many findings, only when
+          // it fits them better by more than one parameter's penalty.
+          const auto sp = fitted_pairs(r, scope_pairs);
+          const int dk = int(findings_on(joined, scope_pairs)) - int(findings_on(fs, scope_pairs));
+          ok = quiet_over(r, fs, joined, rest) &&
+               earned(chi2_of(r, extended_by(r, fs, fs.size()), sp),
+                      chi2_of(r, extended_by(r, joined, joined.size()), sp), points_of(sp),
+                      dk >= 0 ? dk + 1 : dk) > 0;
         }
         if (!ok || (one_of_two && joined.size() > fs.size())) continue;
         if (one_of_two && joined.size() == fs.size()) {
