@@ -658,6 +658,39 @@ TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
   EXPECT_NEAR(found->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
 }
 
+// An input's and an output's calibration that the first pass of the stages leaves as three path
+// gains (tests/data/lab/machine_s9_c46: U1's -3.03 dB and Y1's +2.11 dB on a 2 x 2 plant, beside
+// a 4.5 rad/s lag on U0 -> Y1): once 5e and the joint sizing are done, 5d runs again and names
+// the two where they are, each within its tolerance, and no path gain.
+TEST(Diagnose, AnInputsAndAnOutputsCalibrationsLeftAsPathGainsAreNamedOnTheSecondPass) {
+  constexpr double kGainTolDb = 0.3;
+  const testing::RandomCase c = testing::random_machine_case(9, 46);
+  const testing::HiddenEffect* at_input = nullptr;
+  const testing::HiddenEffect* at_output = nullptr;
+  for (const auto& h : c.hidden) {
+    if (h.cause != CauseKind::kGainMismatch) continue;
+    if (h.scope == Scope::kInput) at_input = &h;
+    if (h.scope == Scope::kOutput) at_output = &h;
+  }
+  ASSERT_NE(at_input, nullptr);
+  ASSERT_NE(at_output, nullptr);
+  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s9_c46");
+  const std::string json = diagnosis_to_json(d).dump(1);
+  EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
+  int gains = 0;
+  for (const Finding& f : d.findings) {
+    if (f.cause != CauseKind::kGainMismatch) continue;
+    ++gains;
+    ASSERT_NE(f.scope, Scope::kPath) << json;
+    const testing::HiddenEffect* h = f.scope == Scope::kInput ? at_input : at_output;
+    EXPECT_EQ(f.scope == Scope::kInput ? f.input : f.output,
+              f.scope == Scope::kInput ? h->input : h->output)
+        << json;
+    EXPECT_NEAR(f.parameters.at("gain_db"), h->value, kGainTolDb) << json;
+  }
+  EXPECT_EQ(gains, 2) << json;
+}
+
 // The machine-shaped self-check's case 13 of seed 4 as the lab measured it (tests/data/lab/
 // machine_s4_c13): an 8.6 ms delay in Y2's sensor, beside the slow mode moved in every path and
 // Y3's -1.55 dB. The band ends at 82 rad/s, where the delay is 41 degrees of phase; each path
