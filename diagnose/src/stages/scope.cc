@@ -336,7 +336,9 @@ bool regroup(DiagnosisRun& r) {
           // The rest's new findings may only undo the group's cause there (a lead under a lag
           // taken to the plant): the group stands when it explains the scope's pairs by the
           // criterion, its findings on them against theirs before; by as many findings, only when
-          // it fits them better by more than one parameter's penalty.
+          // it fits them better by more than one parameter's penalty (a scope of two pairs with a
+          // moved mode and a gain on both, one path's own fit splitting them otherwise: the next
+          // pass then joins what the refit found).
           const auto sp = fitted_pairs(r, scope_pairs);
           const int dk = int(findings_on(joined, scope_pairs)) - int(findings_on(fs, scope_pairs));
           ok = quiet_over(r, fs, joined, rest) &&
@@ -345,15 +347,6 @@ bool regroup(DiagnosisRun& r) {
                       dk >= 0 ? dk + 1 : dk) > 0;
         }
         if (!ok || (one_of_two && joined.size() > fs.size())) continue;
-        if (one_of_two && joined.size() == fs.size()) {
-          // As many findings either way (a moved mode and a gain on both paths, one path's own
-          // fit splitting them otherwise): the group's when it fits the scope's pairs better by
-          // more than one parameter's penalty; the next pass then joins what the refit found.
-          const auto sp = fitted_pairs(r, scope_pairs);
-          const double before = chi2_of(r, extended_by(r, fs, fs.size()), sp);
-          const double after = chi2_of(r, extended_by(r, joined, joined.size()), sp);
-          if (!(after < before - bic_penalty(sp))) continue;
-        }
       }
       fs = std::move(joined);
       merged = true;
