@@ -412,6 +412,15 @@ TEST(Diagnose, ASensorDelayTheWeakPathCannotTellIsStillTheOutputs) {
   EXPECT_NEAR(f.parameters.at("delay_s"), c.hidden[0].value, kDelayTolS) << json;
 }
 
+// The hidden effect of `cause` at `scope` in case c (the last drawn, when several), or nullptr.
+static const testing::HiddenEffect* hidden_at(const testing::RandomCase& c, CauseKind cause,
+                                              Scope scope) {
+  const testing::HiddenEffect* found = nullptr;
+  for (const auto& h : c.hidden)
+    if (h.cause == cause && h.scope == scope) found = &h;
+  return found;
+}
+
 // A machine case hiding the plant's slow pole moved and a lag at `lag_scope`, measured without the
 // lab (measure_machine_case): exactly two findings, the plant's pole within 2 % and the lag at its
 // place within 5 %.
@@ -419,12 +428,8 @@ static void expect_the_plants_pole_and_a_lag(int index, Scope lag_scope) {
   constexpr double kPoleTol = 0.02, kCornerTol = 0.05, kNoiseOfStrongest = 0.005;
   const testing::RandomCase c = testing::random_machine_case(1, index);
   ASSERT_EQ(c.hidden.size(), 2u);
-  const testing::HiddenEffect* pole = nullptr;
-  const testing::HiddenEffect* lag = nullptr;
-  for (const auto& h : c.hidden) {
-    if (h.cause == CauseKind::kPoleShift && h.scope == Scope::kPlant) pole = &h;
-    if (h.cause == CauseKind::kMissingLag && h.scope == lag_scope) lag = &h;
-  }
+  const testing::HiddenEffect* pole = hidden_at(c, CauseKind::kPoleShift, Scope::kPlant);
+  const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, lag_scope);
   ASSERT_NE(pole, nullptr);
   ASSERT_NE(lag, nullptr);
   const Diagnosis d = diagnose(c.simulation, measure_machine_case(c, kNoiseOfStrongest));
@@ -604,13 +609,8 @@ TEST(Diagnose, ALagAnotherOutputWouldUndoStaysAtItsOutput) {
 TEST(Diagnose, AnOutputsLagAndDelayTogetherAreTheOutputsTwoFindings) {
   constexpr double kCornerTol = 0.02, kDelayTolS = 0.5e-3;
   const testing::RandomCase c = testing::random_machine_case(7, 6);
-  const testing::HiddenEffect* lag = nullptr;
-  const testing::HiddenEffect* delay = nullptr;
-  for (const auto& h : c.hidden) {
-    if (h.scope != Scope::kOutput) continue;
-    if (h.cause == CauseKind::kMissingLag) lag = &h;
-    if (h.cause == CauseKind::kTimeDelay) delay = &h;
-  }
+  const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, Scope::kOutput);
+  const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kOutput);
   ASSERT_NE(lag, nullptr);
   ASSERT_NE(delay, nullptr);
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s7_c6");
@@ -640,9 +640,7 @@ TEST(Diagnose, AnOutputsLagAndDelayTogetherAreTheOutputsTwoFindings) {
 TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
   constexpr double kDelayTolS = 0.5e-3;
   const testing::RandomCase c = testing::random_machine_case(7, 21);
-  const testing::HiddenEffect* delay = nullptr;
-  for (const auto& h : c.hidden)
-    if (h.cause == CauseKind::kTimeDelay && h.scope == Scope::kOutput) delay = &h;
+  const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kOutput);
   ASSERT_NE(delay, nullptr);
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s7_c21");
   const std::string json = diagnosis_to_json(d).dump(1);
@@ -665,13 +663,8 @@ TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
 TEST(Diagnose, AnInputsAndAnOutputsCalibrationsLeftAsPathGainsAreNamedOnTheSecondPass) {
   constexpr double kGainTolDb = 0.3;
   const testing::RandomCase c = testing::random_machine_case(9, 46);
-  const testing::HiddenEffect* at_input = nullptr;
-  const testing::HiddenEffect* at_output = nullptr;
-  for (const auto& h : c.hidden) {
-    if (h.cause != CauseKind::kGainMismatch) continue;
-    if (h.scope == Scope::kInput) at_input = &h;
-    if (h.scope == Scope::kOutput) at_output = &h;
-  }
+  const testing::HiddenEffect* at_input = hidden_at(c, CauseKind::kGainMismatch, Scope::kInput);
+  const testing::HiddenEffect* at_output = hidden_at(c, CauseKind::kGainMismatch, Scope::kOutput);
   ASSERT_NE(at_input, nullptr);
   ASSERT_NE(at_output, nullptr);
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s9_c46");
