@@ -118,7 +118,71 @@ bool undoes(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
   if (f.cause == CauseKind::kGainMismatch && g.cause == CauseKind::kGainMismatch)
     return std::abs(f.parameters.at("gain_db") + g.parameters.at("gain_db")) <=
            opt.consistent_gain_db;
+  if (f.cause == CauseKind::kTimeDelay && g.cause == CauseKind::kTimeDelay) {
+    const double a = f.parameters.at("delay_s"), b = g.parameters.at("delay_s");
+    return std::abs(a + b) <= std::max(opt.consistent_delay_s, opt.consistent_rel * std::abs(b));
+  }
   return false;
+}
+
+// Whether f, a pair's own finding against the simulation extended by g, is g's effect again where
+// g placed it: a root f moves, re-damps or adds (a pole shift's from, a damping error's or a
+// resonance's frequency, a lag's or lead's corner) within consistent_rel of the root g placed
+// there (a pole shift's to, the others' own), or, for causes without a root, g's cause again
+// but a delay or a gain, which compose with g's (a path's own beside its output's).
+bool repeats(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
+  auto root = [](const Finding& x, bool placed) -> double {
+    const char* key = nullptr;
+    switch (x.cause) {
+      case CauseKind::kPoleShift:
+        key = placed ? "to_rad_s" : "from_rad_s";
+        break;
+      case CauseKind::kDampingError:
+      case CauseKind::kMissingResonance:
+        key = "wn_rad_s";
+        break;
+      case CauseKind::kMissingLag:
+      case CauseKind::kMissingLead:
+        key = "corner_rad_s";
+        break;
+      default:
+        return 0.0;
+    }
+    return x.parameters.count(key) ? x.parameters.at(key) : 0.0;
+  };
+  const double a = root(f, false), b = root(g, true);
+  if (a > 0 && b > 0) return std::abs(a - b) <= opt.consistent_rel * b;
+  return f.cause == g.cause && f.cause != CauseKind::kTimeDelay &&
+         f.cause != CauseKind::kGainMismatch;
+}
+
+// A path finding of a pair's own diagnosis against an extended model, in the simulation's terms: a
+// moved root's frequency (a pole shift's from, a damping error's wn) is the simulation's root on
+// that path (its transfer function, its output's sensor, its input's actuator) within 1e-3 of it,
+// where the extended model's sat off by what other findings moved; its explanation is left to the
+// summary (stage 8), which names a state model's mode.
+Finding in_simulation_terms(const DiagnosisRun& r, Finding f) {
+  constexpr double kSameRoot = 1e-3;
+  f.explanation.clear();
+  const char* key = f.cause == CauseKind::kPoleShift      ? "from_rad_s"
+                    : f.cause == CauseKind::kDampingError ? "wn_rad_s"
+                                                          : nullptr;
+  if (!key || !f.parameters.count(key)) return f;
+  double& v = f.parameters.at(key);
+  std::vector<const Tf*> tfs;
+  if (const ModelPath* p = r.sim.path(f.output, f.input)) tfs.push_back(&p->tf);
+  if (const int o = r.sim.output_index(f.output); o >= 0 && r.sim.outputs[size_t(o)].sensor)
+    tfs.push_back(&*r.sim.outputs[size_t(o)].sensor);
+  if (const int i = r.sim.input_index(f.input); i >= 0 && r.sim.inputs[size_t(i)].actuator)
+    tfs.push_back(&*r.sim.inputs[size_t(i)].actuator);
+  double best = v, off = kSameRoot * v;
+  for (const Tf* t : tfs)
+    for (const Root& root : t->poles) {
+      const double w = root.pair ? root.wn : -root.real;
+      if (std::abs(w - v) <= off) best = w, off = std::abs(w - v);
+    }
+  v = best;
+  return f;
 }
 
 // The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
@@ -145,7 +209,6 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
   for (size_t x = 0; x + 1 < with.size(); ++x)
     if (!own(with[x])) base.push_back(with[x]);
   base.push_back(with.back());
-  const CauseKind cause = base.back().cause;
   std::vector<std::string> found_it;
   for (const std::string& q : base.back().pairs)
     if (!in_rest(q)) found_it.push_back(q);
@@ -157,7 +220,10 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
         break;
       }
   refine(r, base, sized, fitted_pairs(r, found_it), 1);
-  const Model ext = extended_by(r, base, base.size());
+  // By its paths alone: a state model's entries are fitted over every pair (stage 3a), and the
+  // model's state_space is the simulation's, without the findings.
+  Model ext = extended_by(r, base, base.size());
+  ext.state_space.reset();
   std::vector<Finding> out = base;
   for (const std::string& q : rest) {
     std::vector<MeasuredPair> one;
@@ -166,11 +232,83 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
     const Diagnosis dq = diagnose(ext, one, r.opt);
     for (const Finding& f : dq.findings)
       if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
-        if (f.cause == cause || undoes(f, base.back(), r.opt)) return std::nullopt;
-        out.push_back(f);
+        if (repeats(f, base.back(), r.opt) || undoes(f, base.back(), r.opt)) return std::nullopt;
+        out.push_back(in_simulation_terms(r, f));
       }
   }
   return out;
+}
+
+// The scope's finding (with.back(), its pairs the scope's) sized over every pair of the scope at
+// once, each pair's other causes found again around it: the path findings on the scope's pairs are
+// dropped, the scope's finding is sized together with the findings that remain there, each scope
+// pair is diagnosed again, alone, against the simulation extended by them (its own of the last
+// round left out), and its findings of other causes join before the next sizing; rounds repeat
+// until no pair's findings change (at most kScopeRounds). Where one member's own fit split an
+// overlap (a plant's pole moved and an output's gain, taken on one path as a smaller shift and no
+// gain), the members' mean is off and a rest pair wants the cause again at its own value; sized
+// with every pair's other causes in place it is not. nullopt when a pair still wants the cause, or
+// its undoing, after the last round.
+std::optional<std::vector<Finding>> fit_over_scope(DiagnosisRun& r,
+                                                   const std::vector<Finding>& with,
+                                                   const std::vector<std::string>& scope_pairs) {
+  constexpr int kScopeRounds = 4;
+  auto in_scope = [&](const std::string& q) {
+    return std::find(scope_pairs.begin(), scope_pairs.end(), q) != scope_pairs.end();
+  };
+  std::vector<Finding> kept;  // the findings that stay as they are, the scope's last
+  for (size_t x = 0; x + 1 < with.size(); ++x)
+    if (!(with[x].scope == Scope::kPath && with[x].pairs.size() == 1 && in_scope(with[x].pairs[0])))
+      kept.push_back(with[x]);
+  Finding g = with.back();
+  const auto sp = fitted_pairs(r, scope_pairs);
+  std::vector<Finding> found;  // the scope pairs' own findings of other causes, the last round's
+  for (int round = 0; round < kScopeRounds; ++round) {
+    std::vector<Finding> base = kept;
+    base.insert(base.end(), found.begin(), found.end());
+    base.push_back(g);
+    std::vector<size_t> sized;
+    for (size_t x = 0; x < base.size(); ++x)
+      if (std::any_of(base[x].pairs.begin(), base[x].pairs.end(), in_scope)) sized.push_back(x);
+    refine(r, base, sized, sp, 1);
+    g = base.back();
+    kept.assign(base.begin(), base.begin() + std::ptrdiff_t(kept.size()));
+    // Each pair diagnosed again without its own findings of the last round: they are found anew;
+    // by its paths alone, as in rediagnose_rest.
+    std::vector<Finding> around = kept;
+    around.push_back(g);
+    Model ext = extended_by(r, around, around.size());
+    ext.state_space.reset();
+    std::vector<Finding> again;
+    bool wants = false;
+    for (const std::string& q : scope_pairs) {
+      std::vector<MeasuredPair> one;
+      for (const MeasuredPair& mp : r.data)
+        if (mp.pair == q) one.push_back(mp);
+      for (const Finding& f : diagnose(ext, one, r.opt).findings) {
+        if (!(f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q})) continue;
+        if (repeats(f, g, r.opt) || undoes(f, g, r.opt))
+          wants = true;
+        else
+          again.push_back(in_simulation_terms(r, f));
+      }
+    }
+    auto same = [](const std::vector<Finding>& a, const std::vector<Finding>& b) {
+      if (a.size() != b.size()) return false;
+      for (size_t x = 0; x < a.size(); ++x)
+        if (a[x].cause != b[x].cause || a[x].pairs != b[x].pairs) return false;
+      return true;
+    };
+    const bool settled = !wants && round > 0 && same(again, found);
+    found = std::move(again);
+    if (settled) {
+      std::vector<Finding> out = kept;
+      out.insert(out.end(), found.begin(), found.end());
+      out.push_back(g);
+      return out;
+    }
+  }
+  return std::nullopt;
 }
 
 // "scope:input:output:cause", a scope and cause tried once in a pass.
@@ -329,6 +467,7 @@ bool regroup(DiagnosisRun& r) {
           // forms the same group, and the pairs' diagnoses would only be run again.
           if (!refitted.insert(scope_cause_key(scope, in, out, g.cause)).second) continue;
           std::optional<std::vector<Finding>> again = rediagnose_rest(r, joined, rest);
+          if (!again) again = fit_over_scope(r, joined, scope_pairs);
           // A pair that wants the cause again is not the group's (and the merge would leave a
           // path finding of the cause to be grouped again).
           if (!again) continue;
