@@ -311,6 +311,33 @@ std::optional<std::vector<Finding>> fit_over_scope(DiagnosisRun& r,
   return std::nullopt;
 }
 
+// Two delays or two gains at one place (scope, input, output, pairs) are one effect, their sum: a
+// group's and the composing remainders its rest pairs kept, joined again at the group's scope.
+// True when any were joined.
+bool one_per_place(std::vector<Finding>& fs) {
+  bool joined = false;
+  for (size_t a = 0; a < fs.size(); ++a) {
+    const CauseKind c = fs[a].cause;
+    if (c != CauseKind::kTimeDelay && c != CauseKind::kGainMismatch) continue;
+    const char* key = c == CauseKind::kTimeDelay ? "delay_s" : "gain_db";
+    for (size_t b = a + 1; b < fs.size(); ++b) {
+      const Finding& g = fs[b];
+      if (g.cause != c || g.scope != fs[a].scope || g.input != fs[a].input ||
+          g.output != fs[a].output || g.tf || !g.text_parameters.empty())
+        continue;
+      std::vector<std::string> pa = fs[a].pairs, pb = g.pairs;
+      std::sort(pa.begin(), pa.end());
+      std::sort(pb.begin(), pb.end());
+      if (pa != pb || !fs[a].parameters.count(key) || !g.parameters.count(key)) continue;
+      fs[a].parameters[key] += g.parameters.at(key);
+      fs.erase(fs.begin() + std::ptrdiff_t(b));
+      joined = true;
+      --b;
+    }
+  }
+  return joined;
+}
+
 // "scope:input:output:cause", a scope and cause tried once in a pass.
 std::string scope_cause_key(Scope scope, const std::string& in, const std::string& out,
                             CauseKind cause) {
@@ -497,6 +524,7 @@ bool regroup(DiagnosisRun& r) {
     merge([&](const PairFit& p) { return p.output == o.name; }, Scope::kOutput, "", o.name, 2);
   for (const auto& i : r.sim.inputs)
     merge([&](const PairFit& p) { return p.input == i.name; }, Scope::kInput, i.name, "", 2);
+  merged |= one_per_place(r.findings);
   // A scope's finding whose pairs hold path findings beside it, on fewer than half its pairs: on
   // such a pair the scope's cause took its value from a fit that also split an overlap there
   // (the slow mode moved in every path and one path's lag, that path's pole found 8 % off and
