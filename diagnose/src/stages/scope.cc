@@ -490,9 +490,15 @@ bool regroup(DiagnosisRun& r) {
         // took another effect in, as an output's gain) the rest pairs are diagnosed again.
         bool ok = clear && !few && quiet_over(r, fs, joined, rest);
         if (!ok) {
-          // Once per scope and cause in a pass: every finding of the group is a candidate that
-          // forms the same group, and the pairs' diagnoses would only be run again.
-          if (!refitted.insert(scope_cause_key(scope, in, out, g.cause)).second) continue;
+          // Once per scope, cause and members in a pass: every finding of the group is a
+          // candidate that forms the same group, and the pairs' diagnoses would only be run
+          // again. A group of other members (one whose own fit did not split an overlap) is
+          // another group.
+          std::vector<std::string> members = g.pairs;
+          std::sort(members.begin(), members.end());
+          std::string key = scope_cause_key(scope, in, out, g.cause);
+          for (const std::string& q : members) key += ":" + q;
+          if (!refitted.insert(key).second) continue;
           std::optional<std::vector<Finding>> again = rediagnose_rest(r, joined, rest);
           if (!again) again = fit_over_scope(r, joined, scope_pairs);
           // A pair that wants the cause again is not the group's (and the merge would leave a
