@@ -431,6 +431,14 @@ static const testing::HiddenEffect* hidden_at(const testing::RandomCase& c, Caus
   return found;
 }
 
+// The finding of `cause` in d (the last, when several), or nullptr.
+static const Finding* found_of(const Diagnosis& d, CauseKind cause) {
+  const Finding* found = nullptr;
+  for (const Finding& f : d.findings)
+    if (f.cause == cause) found = &f;
+  return found;
+}
+
 // A machine case hiding the plant's slow pole moved and a lag at `lag_scope`, measured without the
 // lab (measure_machine_case): exactly two findings, the plant's pole within 2 % and the lag at its
 // place within 5 %.
@@ -655,11 +663,8 @@ TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s7_c21");
   const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
-  const Finding* found = nullptr;
-  for (const Finding& f : d.findings) {
-    EXPECT_NE(f.scope, Scope::kPath) << json;
-    if (f.cause == CauseKind::kTimeDelay) found = &f;
-  }
+  for (const Finding& f : d.findings) EXPECT_NE(f.scope, Scope::kPath) << json;
+  const Finding* found = found_of(d, CauseKind::kTimeDelay);
   ASSERT_NE(found, nullptr) << json;
   EXPECT_EQ(found->scope, Scope::kOutput) << json;
   EXPECT_EQ(found->output, delay->output) << json;
@@ -770,11 +775,8 @@ TEST(Diagnose, ALagAboveTheBandThatADelayFitsAsWellIsTheDelay) {
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s14_c12");
   const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
-  const Finding* found = nullptr;
-  for (const Finding& f : d.findings) {
-    EXPECT_NE(f.cause, CauseKind::kMissingLag) << json;
-    if (f.cause == CauseKind::kTimeDelay) found = &f;
-  }
+  EXPECT_EQ(found_of(d, CauseKind::kMissingLag), nullptr) << json;
+  const Finding* found = found_of(d, CauseKind::kTimeDelay);
   ASSERT_NE(found, nullptr) << json;
   EXPECT_EQ(found->scope, Scope::kPath) << json;
   EXPECT_EQ(found->input, delay->input) << json;
@@ -819,12 +821,8 @@ TEST(Diagnose, AnInputsGainIsTriedFromThePathThatDidNotSplitIt) {
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s19_c35");
   const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
-  const Finding* found_gain = nullptr;
-  const Finding* found_lag = nullptr;
-  for (const Finding& f : d.findings) {
-    if (f.cause == CauseKind::kGainMismatch) found_gain = &f;
-    if (f.cause == CauseKind::kMissingLag) found_lag = &f;
-  }
+  const Finding* found_gain = found_of(d, CauseKind::kGainMismatch);
+  const Finding* found_lag = found_of(d, CauseKind::kMissingLag);
   ASSERT_NE(found_gain, nullptr) << json;
   ASSERT_NE(found_lag, nullptr) << json;
   EXPECT_EQ(found_gain->scope, Scope::kInput) << json;
@@ -851,11 +849,8 @@ TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
   ASSERT_EQ(delay->scope, Scope::kOutput);
   const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s4_c13");
   const std::string json = diagnosis_to_json(d).dump(1);
-  const Finding* found = nullptr;
-  for (const Finding& f : d.findings) {
-    EXPECT_NE(f.cause, CauseKind::kMissingResonance) << json;
-    if (f.cause == CauseKind::kTimeDelay) found = &f;
-  }
+  EXPECT_EQ(found_of(d, CauseKind::kMissingResonance), nullptr) << json;
+  const Finding* found = found_of(d, CauseKind::kTimeDelay);
   ASSERT_NE(found, nullptr) << json;
   EXPECT_EQ(found->scope, Scope::kOutput) << json;
   EXPECT_EQ(found->output, delay->output) << json;
