@@ -159,8 +159,8 @@ bool repeats(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
 // A path finding of a pair's own diagnosis against an extended model, in the simulation's terms: a
 // moved root's frequency (a pole shift's from, a damping error's wn) is the simulation's root on
 // that path (its transfer function, its output's sensor, its input's actuator) within 1e-3 of it,
-// where the extended model's sat off by what other findings moved; its explanation is left to the
-// summary (stage 8), which names a state model's mode.
+// where the extended model's root sat off by what other findings moved; its explanation is left
+// to the summary (stage 9), which names a state model's mode.
 Finding in_simulation_terms(const DiagnosisRun& r, Finding f) {
   constexpr double kSameRoot = 1e-3;
   f.explanation.clear();
