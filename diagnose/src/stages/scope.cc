@@ -39,14 +39,11 @@ bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) {
   return unit && unit->consistent(a, b, opt);
 }
 
-// The finding of cause c at a scope, its parameters the mean of its members' (indices into raw).
 // Whether pc moves or re-damps a simulated pair that a mode finding (stage 3b) moved over pc's
 // pair.
 bool moved_as_mode(const DiagnosisRun& r, const PairCause& pc) {
   const Cause& c = pc.c;
-  const char* key = c.cause == CauseKind::kPoleShift      ? "from_rad_s"
-                    : c.cause == CauseKind::kDampingError ? "wn_rad_s"
-                                                          : nullptr;
+  const char* key = moved_root_key(c.cause);
   if (!key || !c.params.count(key)) return false;
   const double wn = c.params.at(key);
   const std::string& pair = r.pairs[pc.pair].pair;
@@ -60,6 +57,7 @@ bool moved_as_mode(const DiagnosisRun& r, const PairCause& pc) {
   return false;
 }
 
+// The finding of cause c at a scope, its parameters the mean of its members' (indices into raw).
 Finding make_finding(const DiagnosisRun& r, const Cause& c, Scope scope, const std::string& in,
                      const std::string& out, const std::vector<size_t>& members) {
   Finding f;
@@ -164,9 +162,7 @@ bool repeats(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
 Finding in_simulation_terms(const DiagnosisRun& r, Finding f) {
   constexpr double kSameRoot = 1e-3;
   f.explanation.clear();
-  const char* key = f.cause == CauseKind::kPoleShift      ? "from_rad_s"
-                    : f.cause == CauseKind::kDampingError ? "wn_rad_s"
-                                                          : nullptr;
+  const char* key = moved_root_key(f.cause);
   if (!key || !f.parameters.count(key)) return f;
   double& v = f.parameters.at(key);
   std::vector<const Tf*> tfs;
@@ -183,6 +179,27 @@ Finding in_simulation_terms(const DiagnosisRun& r, Finding f) {
     }
   v = best;
   return f;
+}
+
+// The simulation extended by `fs`, for a pair diagnosed again by its paths: a state model's
+// entries are fitted over every pair (stage 3a), not on one, and the model's state_space is the
+// simulation's, without the findings.
+Model paths_extended_by(const DiagnosisRun& r, const std::vector<Finding>& fs) {
+  Model ext = extended_by(r, fs, fs.size());
+  ext.state_space.reset();
+  return ext;
+}
+
+// Pair q diagnosed again, alone, against ext (the whole diagnosis on that pair): its findings on
+// q alone.
+std::vector<Finding> own_findings(const DiagnosisRun& r, const Model& ext, const std::string& q) {
+  std::vector<MeasuredPair> one;
+  for (const MeasuredPair& mp : r.data)
+    if (mp.pair == q) one.push_back(mp);
+  std::vector<Finding> out;
+  for (const Finding& f : diagnose(ext, one, r.opt).findings)
+    if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) out.push_back(f);
+  return out;
 }
 
 // The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
@@ -220,22 +237,13 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
         break;
       }
   refine(r, base, sized, fitted_pairs(r, found_it), 1);
-  // By its paths alone: a state model's entries are fitted over every pair (stage 3a), and the
-  // model's state_space is the simulation's, without the findings.
-  Model ext = extended_by(r, base, base.size());
-  ext.state_space.reset();
+  const Model ext = paths_extended_by(r, base);
   std::vector<Finding> out = base;
-  for (const std::string& q : rest) {
-    std::vector<MeasuredPair> one;
-    for (const MeasuredPair& mp : r.data)
-      if (mp.pair == q) one.push_back(mp);
-    const Diagnosis dq = diagnose(ext, one, r.opt);
-    for (const Finding& f : dq.findings)
-      if (f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q}) {
-        if (repeats(f, base.back(), r.opt) || undoes(f, base.back(), r.opt)) return std::nullopt;
-        out.push_back(in_simulation_terms(r, f));
-      }
-  }
+  for (const std::string& q : rest)
+    for (const Finding& f : own_findings(r, ext, q)) {
+      if (repeats(f, base.back(), r.opt) || undoes(f, base.back(), r.opt)) return std::nullopt;
+      out.push_back(in_simulation_terms(r, f));
+    }
   return out;
 }
 
@@ -273,26 +281,19 @@ std::optional<std::vector<Finding>> fit_over_scope(DiagnosisRun& r,
     refine(r, base, sized, sp, 1);
     g = base.back();
     kept.assign(base.begin(), base.begin() + std::ptrdiff_t(kept.size()));
-    // Each pair diagnosed again without its own findings of the last round: they are found anew;
-    // by its paths alone, as in rediagnose_rest.
+    // Each pair diagnosed again without its own findings of the last round: they are found anew.
     std::vector<Finding> around = kept;
     around.push_back(g);
-    Model ext = extended_by(r, around, around.size());
-    ext.state_space.reset();
+    const Model ext = paths_extended_by(r, around);
     std::vector<Finding> again;
     bool wants = false;
-    for (const std::string& q : scope_pairs) {
-      std::vector<MeasuredPair> one;
-      for (const MeasuredPair& mp : r.data)
-        if (mp.pair == q) one.push_back(mp);
-      for (const Finding& f : diagnose(ext, one, r.opt).findings) {
-        if (!(f.scope == Scope::kPath && f.pairs == std::vector<std::string>{q})) continue;
+    for (const std::string& q : scope_pairs)
+      for (const Finding& f : own_findings(r, ext, q)) {
         if (repeats(f, g, r.opt) || undoes(f, g, r.opt))
           wants = true;
         else
           again.push_back(in_simulation_terms(r, f));
       }
-    }
     auto same = [](const std::vector<Finding>& a, const std::vector<Finding>& b) {
       if (a.size() != b.size()) return false;
       for (size_t x = 0; x < a.size(); ++x)

@@ -87,6 +87,14 @@ double bic_penalty(const std::vector<const PairFit*>& pairs);
 bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
                 const std::vector<Finding>& after, const std::vector<std::string>& which);
 
+/// The parameter naming the simulated root a cause moves or re-damps (rad/s): a pole shift's
+/// from_rad_s, a damping error's wn_rad_s; nullptr for the other causes.
+inline const char* moved_root_key(CauseKind cause) {
+  return cause == CauseKind::kPoleShift      ? "from_rad_s"
+         : cause == CauseKind::kDampingError ? "wn_rad_s"
+                                             : nullptr;
+}
+
 /// chi2 of model m over the points of `pairs`: the sum of |G_meas - G_m|^2 / sigma_eff^2, each
 /// point at its own amplitude or multisine, through the lab's chain.
 double chi2_of(const DiagnosisRun& r, const Model& m, const std::vector<const PairFit*>& pairs);

@@ -17,9 +17,7 @@ namespace {
 // in it (those with a participation of 5 % or more), "" otherwise.
 std::string state_mode(const Model& sim, const Finding& f) {
   if (!sim.state_space) return "";
-  const char* key = f.cause == CauseKind::kPoleShift      ? "from_rad_s"
-                    : f.cause == CauseKind::kDampingError ? "wn_rad_s"
-                                                          : nullptr;
+  const char* key = moved_root_key(f.cause);
   if (!key || !f.parameters.count(key)) return "";
   const double wn = f.parameters.at(key);
   const auto z = f.parameters.find("from_zeta");
