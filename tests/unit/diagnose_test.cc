@@ -564,6 +564,20 @@ static Diagnosis diagnose_lab_data(const Model& sim, const std::string& name) {
   return diagnose(sim, read_measured_dir(dir), opt);
 }
 
+// A case of the machine-shaped self-check (tests/util/random_machine.h) diagnosed against the lab's
+// own measurement of it (tests/data/lab/machine_s<seed>_c<index>), with the diagnosis' JSON for
+// failure messages.
+struct LabCase {
+  LabCase(uint64_t seed, int index)
+      : c(testing::random_machine_case(seed, index)),
+        d(diagnose_lab_data(c.simulation,
+                            "machine_s" + std::to_string(seed) + "_c" + std::to_string(index))),
+        json(diagnosis_to_json(d).dump(1)) {}
+  testing::RandomCase c;
+  Diagnosis d;
+  std::string json;
+};
+
 // The machine-shaped self-check's case 9 of seed 3 as the lab measured it (tests/data/lab/
 // machine_s3_c9, its README says how): one input, two outputs, the slow mode moved 1.54 -> 2.63
 // rad/s in both paths (the input's scope: every path of a one-input plant) and a 7.1 ms delay on
@@ -573,7 +587,7 @@ static Diagnosis diagnose_lab_data(const Model& sim, const std::string& name) {
 // sized on Y0's path, shows the delay: two findings, each within its tolerance.
 TEST(Diagnose, AScopesPairThatSplitAnOverlapIsDiagnosedAgainAgainstTheOthers) {
   constexpr double kPoleTol = 0.02, kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(3, 9);
+  const auto& [c, d, json] = LabCase(3, 9);
   const testing::HiddenEffect* pole = nullptr;
   const testing::HiddenEffect* delay = nullptr;
   for (const auto& h : c.hidden) {
@@ -583,8 +597,6 @@ TEST(Diagnose, AScopesPairThatSplitAnOverlapIsDiagnosedAgainAgainstTheOthers) {
   ASSERT_EQ(c.hidden.size(), 2u);
   ASSERT_NE(pole, nullptr);
   ASSERT_NE(delay, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s3_c9");
-  const std::string json = diagnosis_to_json(d).dump(1);
   ASSERT_EQ(d.findings.size(), 2u) << json;
   for (const Finding& f : d.findings) {
     if (f.cause == CauseKind::kPoleShift) {
@@ -606,10 +618,8 @@ TEST(Diagnose, AScopesPairThatSplitAnOverlapIsDiagnosedAgainAgainstTheOthers) {
 // found or dropped beside it.
 TEST(Diagnose, ALagAnotherOutputWouldUndoStaysAtItsOutput) {
   constexpr double kCornerTol = 0.05;
-  const testing::RandomCase c = testing::random_machine_case(1, 5);
+  const auto& [c, d, json] = LabCase(1, 5);
   ASSERT_EQ(c.hidden.size(), 1u);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s1_c5");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_TRUE(d.dropped.empty()) << json;
   ASSERT_EQ(d.findings.size(), 1u) << json;
   const Finding& f = d.findings[0];
@@ -626,13 +636,11 @@ TEST(Diagnose, ALagAnotherOutputWouldUndoStaysAtItsOutput) {
 // findings at the output, each within its tolerance, and no path finding into Y1.
 TEST(Diagnose, AnOutputsLagAndDelayTogetherAreTheOutputsTwoFindings) {
   constexpr double kCornerTol = 0.02, kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(7, 6);
+  const auto& [c, d, json] = LabCase(7, 6);
   const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, Scope::kOutput);
   const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kOutput);
   ASSERT_NE(lag, nullptr);
   ASSERT_NE(delay, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s7_c6");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   int at_output = 0;
   for (const Finding& f : d.findings) {
@@ -657,11 +665,9 @@ TEST(Diagnose, AnOutputsLagAndDelayTogetherAreTheOutputsTwoFindings) {
 // kept on the criterion over the output's pairs: the output's delay within 0.5 ms, no path finding.
 TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
   constexpr double kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(7, 21);
+  const auto& [c, d, json] = LabCase(7, 21);
   const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kOutput);
   ASSERT_NE(delay, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s7_c21");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   for (const Finding& f : d.findings) EXPECT_NE(f.scope, Scope::kPath) << json;
   const Finding* found = found_of(d, CauseKind::kTimeDelay);
@@ -677,13 +683,11 @@ TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
 // the two where they are, each within its tolerance, and no path gain.
 TEST(Diagnose, AnInputsAndAnOutputsCalibrationsLeftAsPathGainsAreNamedOnTheSecondPass) {
   constexpr double kGainTolDb = 0.3;
-  const testing::RandomCase c = testing::random_machine_case(9, 46);
+  const auto& [c, d, json] = LabCase(9, 46);
   const testing::HiddenEffect* at_input = hidden_at(c, CauseKind::kGainMismatch, Scope::kInput);
   const testing::HiddenEffect* at_output = hidden_at(c, CauseKind::kGainMismatch, Scope::kOutput);
   ASSERT_NE(at_input, nullptr);
   ASSERT_NE(at_output, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s9_c46");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   int gains = 0;
   for (const Finding& f : d.findings) {
@@ -707,15 +711,13 @@ TEST(Diagnose, AnInputsAndAnOutputsCalibrationsLeftAsPathGainsAreNamedOnTheSecon
 // left on the paths are the output's and the input's: three findings, each within its tolerance.
 TEST(Diagnose, APlantsModeUnderTwoCalibrationsIsSizedOverEveryPairAtOnce) {
   constexpr double kPoleTol = 0.01, kGainTolDb = 0.3;
-  const testing::RandomCase c = testing::random_machine_case(13, 27);
+  const auto& [c, d, json] = LabCase(13, 27);
   const testing::HiddenEffect* pole = hidden_at(c, CauseKind::kPoleShift, Scope::kPlant);
   const testing::HiddenEffect* at_input = hidden_at(c, CauseKind::kGainMismatch, Scope::kInput);
   const testing::HiddenEffect* at_output = hidden_at(c, CauseKind::kGainMismatch, Scope::kOutput);
   ASSERT_NE(pole, nullptr);
   ASSERT_NE(at_input, nullptr);
   ASSERT_NE(at_output, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s13_c27");
-  const std::string json = diagnosis_to_json(d).dump(1);
   ASSERT_EQ(d.findings.size(), c.hidden.size()) << json;
   for (const Finding& f : d.findings) {
     ASSERT_NE(f.scope, Scope::kPath) << json;
@@ -739,13 +741,11 @@ TEST(Diagnose, APlantsModeUnderTwoCalibrationsIsSizedOverEveryPairAtOnce) {
 // with the path's remainder beside it, each within 0.5 ms.
 TEST(Diagnose, AnOutputsDelayWithAPathsOwnDelayOnTopAreTwoFindings) {
   constexpr double kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(13, 33);
+  const auto& [c, d, json] = LabCase(13, 33);
   const testing::HiddenEffect* at_output = hidden_at(c, CauseKind::kTimeDelay, Scope::kOutput);
   const testing::HiddenEffect* on_path = hidden_at(c, CauseKind::kTimeDelay, Scope::kPath);
   ASSERT_NE(at_output, nullptr);
   ASSERT_NE(on_path, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s13_c33");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   int delays = 0;
   for (const Finding& f : d.findings) {
@@ -769,11 +769,9 @@ TEST(Diagnose, AnOutputsDelayWithAPathsOwnDelayOnTopAreTwoFindings) {
 // named: the delay within 0.5 ms, no lag.
 TEST(Diagnose, ALagAboveTheBandThatADelayFitsAsWellIsTheDelay) {
   constexpr double kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(14, 12);
+  const auto& [c, d, json] = LabCase(14, 12);
   const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kPath);
   ASSERT_NE(delay, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s14_c12");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   EXPECT_EQ(found_of(d, CauseKind::kMissingLag), nullptr) << json;
   const Finding* found = found_of(d, CauseKind::kTimeDelay);
@@ -790,11 +788,9 @@ TEST(Diagnose, ALagAboveTheBandThatADelayFitsAsWellIsTheDelay) {
 // plant in turn. Two gains at one place are one effect: one plant gain, their sum, within 0.3 dB.
 TEST(Diagnose, TwoGainsAtOnePlaceAreOneFindingTheirSum) {
   constexpr double kGainTolDb = 0.3;
-  const testing::RandomCase c = testing::random_machine_case(16, 1);
+  const auto& [c, d, json] = LabCase(16, 1);
   const testing::HiddenEffect* gain = hidden_at(c, CauseKind::kGainMismatch, Scope::kPlant);
   ASSERT_NE(gain, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s16_c1");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   int gains = 0;
   for (const Finding& f : d.findings) {
@@ -813,13 +809,11 @@ TEST(Diagnose, TwoGainsAtOnePlaceAreOneFindingTheirSum) {
 // tolerance, beside the third effect (U1's actuator).
 TEST(Diagnose, AnInputsGainIsTriedFromThePathThatDidNotSplitIt) {
   constexpr double kGainTolDb = 0.3, kCornerTol = 0.1;
-  const testing::RandomCase c = testing::random_machine_case(19, 35);
+  const auto& [c, d, json] = LabCase(19, 35);
   const testing::HiddenEffect* gain = hidden_at(c, CauseKind::kGainMismatch, Scope::kInput);
   const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, Scope::kPath);
   ASSERT_NE(gain, nullptr);
   ASSERT_NE(lag, nullptr);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s19_c35");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
   const Finding* found_gain = found_of(d, CauseKind::kGainMismatch);
   const Finding* found_lag = found_of(d, CauseKind::kMissingLag);
@@ -841,14 +835,12 @@ TEST(Diagnose, AnInputsGainIsTriedFromThePathThatDidNotSplitIt) {
 // within 0.5 ms, and no resonance.
 TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
   constexpr double kDelayTolS = 0.5e-3;
-  const testing::RandomCase c = testing::random_machine_case(4, 13);
+  const auto& [c, d, json] = LabCase(4, 13);
   const testing::HiddenEffect* delay = nullptr;
   for (const auto& h : c.hidden)
     if (h.cause == CauseKind::kTimeDelay) delay = &h;
   ASSERT_NE(delay, nullptr);
   ASSERT_EQ(delay->scope, Scope::kOutput);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s4_c13");
-  const std::string json = diagnosis_to_json(d).dump(1);
   EXPECT_EQ(found_of(d, CauseKind::kMissingResonance), nullptr) << json;
   const Finding* found = found_of(d, CauseKind::kTimeDelay);
   ASSERT_NE(found, nullptr) << json;
@@ -869,10 +861,8 @@ TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
 // pole (a gain and the lag), but a better fit: the pole joins the input, then the gain: three
 // findings, each within its tolerance.
 TEST(Diagnose, AOneInputsCalibrationAndModeAreTheInputsBesideOnePathsLag) {
-  const testing::RandomCase c = testing::random_machine_case(3, 33);
+  const auto& [c, d, json] = LabCase(3, 33);
   ASSERT_EQ(c.hidden.size(), 3u);
-  const Diagnosis d = diagnose_lab_data(c.simulation, "machine_s3_c33");
-  const std::string json = diagnosis_to_json(d).dump(1);
   ASSERT_EQ(d.findings.size(), c.hidden.size()) << json;
   for (const auto& h : c.hidden) {
     int matched = 0;
