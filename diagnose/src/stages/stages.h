@@ -138,8 +138,11 @@ void modes(DiagnosisRun& r);
 /// nonlinear actuator and up to max_causes_per_path linear causes.
 void fit_causes(DiagnosisRun& r);
 /// 5. Consistent fits of one cause over every path into an output, from an input, or everywhere
-/// become one finding there; the rest stay with their path.
+/// become one finding there; the rest stay with their path (scope.cc).
 void scope(DiagnosisRun& r);
+/// Whether two fits on different pairs are one effect: the same cause and shape, the same
+/// parameters present, and the cause's own tolerance (scope.cc).
+bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt);
 /// 5b. Findings that share pairs get their primary parameters refined together, every finding in
 /// place; the state model's entries (of_the_state_model) get their 1-sigma intervals there, the
 /// others free (joint.cc).
@@ -160,7 +163,7 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
             const std::vector<const PairFit*>& pairs, size_t min_params,
             ParameterSigmas* sigmas = nullptr);
 /// 5c. After 5b, path findings of one cause now consistent over every pair of a scope (the plant,
-/// an output, an input) become one finding there; true when any did (scope.cc).
+/// an output, an input) become one finding there; true when any did (regroup.cc).
 bool regroup(DiagnosisRun& r);
 /// 5d. A gain or a delay at an input and another at an output add up on the path between them:
 /// the findings of each additive cause are explained by the fewest inputs' and outputs' values
