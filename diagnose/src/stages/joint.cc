@@ -45,63 +45,83 @@ std::vector<std::vector<size_t>> groups_of(const std::vector<Finding>& fs) {
   return out;
 }
 
-}  // namespace
+// A free parameter of the joint fit: finding fs[finding]'s parameter `key`, fitted in its
+// logarithm when `log`.
+struct FreeParameter {
+  size_t finding;
+  std::string key;
+  bool log;
+};
 
-void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
-            const std::vector<const PairFit*>& pairs, size_t min_params, ParameterSigmas* sigmas) {
-  // The free parameters: each finding's primary one and those of its others the data resolve.
-  struct Param {
-    size_t finding;
-    std::string key;
-    bool log;
-  };
-  std::vector<Param> params;
+// The free parameters of fs[group]: each finding's primary one and those of its others the data
+// resolve (a moved pair's damping), scales all.
+std::vector<FreeParameter> free_parameters(const std::vector<Finding>& fs,
+                                           const std::vector<size_t>& group) {
+  std::vector<FreeParameter> params;
   for (size_t i : group) {
     const CauseUnit& unit = *cause_unit(fs[i].cause);
     const std::string key = unit.primary_parameter(fs[i]).key;
     if (key.empty() || !fs[i].parameters.count(key)) continue;
     const bool positive = unit.interval_domain().positive && fs[i].parameters.at(key) > 0;
     params.push_back({i, key, positive});
-    // The parameters besides it that the data resolve (a moved pair's damping), scales all.
     for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
       if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
         params.push_back({i, sp.key, true});
   }
-  if (params.empty() || params.size() < min_params) return;
-  const int np = int(params.size());
-  auto set_x = [&](std::vector<Finding>& f, const Eigen::VectorXd& x) {
-    for (int k = 0; k < np; ++k)
-      f[params[size_t(k)].finding].parameters[params[size_t(k)].key] =
-          params[size_t(k)].log ? std::exp(x(k)) : x(k);
-  };
-  auto residuals = [&](const Eigen::VectorXd& x, Eigen::VectorXd* res) {
-    std::vector<Finding> moved = fs;
-    set_x(moved, x);
-    const Model m = extended_by(r, moved, moved.size());
+  return params;
+}
+
+// The weighted residuals (G_meas - G_model) / sigma over `pairs`, real and imaginary parts, of
+// the simulation extended by fs with the free parameters at x; their Jacobian by forward
+// differences.
+class JointResiduals {
+ public:
+  JointResiduals(const DiagnosisRun& r, const std::vector<Finding>& fs,
+                 const std::vector<FreeParameter>& params, const std::vector<const PairFit*>& pairs)
+      : r_(r), fs_(fs), params_(params), pairs_(pairs) {}
+
+  int size() const { return int(params_.size()); }
+
+  // x as fs holds it.
+  Eigen::VectorXd x_of(const std::vector<Finding>& fs) const {
+    Eigen::VectorXd x(size());
+    for (int k = 0; k < size(); ++k) {
+      const FreeParameter& p = params_[size_t(k)];
+      const double v = fs[p.finding].parameters.at(p.key);
+      x(k) = p.log ? std::log(v) : v;
+    }
+    return x;
+  }
+
+  void set(std::vector<Finding>& f, const Eigen::VectorXd& x) const {
+    for (int k = 0; k < size(); ++k) {
+      const FreeParameter& p = params_[size_t(k)];
+      f[p.finding].parameters[p.key] = p.log ? std::exp(x(k)) : x(k);
+    }
+  }
+
+  // False where a residual is not finite.
+  bool residuals(const Eigen::VectorXd& x, Eigen::VectorXd* res) const {
+    std::vector<Finding> moved = fs_;
+    set(moved, x);
+    const Model m = extended_by(r_, moved, moved.size());
     std::vector<double> v;
-    for (const PairFit* p : pairs) {
+    for (const PairFit* p : pairs_) {
       for (size_t q = 0; q < p->w.size(); ++q) {
         const C g =
-            model_pair_response(m, p->pair, p->w[q], p->amp[q], r.opt.chain, p->ms).value_or(0.0);
+            model_pair_response(m, p->pair, p->w[q], p->amp[q], r_.opt.chain, p->ms).value_or(0.0);
         const C e = (p->meas[q] - g) / p->sig[q];
         v.push_back(e.real()), v.push_back(e.imag());
       }
     }
     *res = Eigen::Map<Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
     return res->allFinite();
-  };
-  Eigen::VectorXd x(np);
-  for (int k = 0; k < np; ++k) {
-    const double v = fs[params[size_t(k)].finding].parameters.at(params[size_t(k)].key);
-    x(k) = params[size_t(k)].log ? std::log(v) : v;
   }
-  Eigen::VectorXd res;
-  if (!residuals(x, &res)) return;
-  const double start = res.squaredNorm();
-  double chi2 = start, lambda = 1e-3;
-  auto jacobian = [&] {
-    Eigen::MatrixXd J(res.size(), np);
-    for (int k = 0; k < np; ++k) {
+
+  // At x, where the residuals are res; a column whose step fails is zero.
+  Eigen::MatrixXd jacobian(const Eigen::VectorXd& x, const Eigen::VectorXd& res) const {
+    Eigen::MatrixXd J(res.size(), size());
+    for (int k = 0; k < size(); ++k) {
       Eigen::VectorXd xh = x, rh;
       const double h = 1e-6 * std::max(1.0, std::abs(x(k)));
       xh(k) += h;
@@ -112,9 +132,21 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
       J.col(k) = (rh - res) / h;
     }
     return J;
-  };
+  }
+
+ private:
+  const DiagnosisRun& r_;
+  const std::vector<Finding>& fs_;
+  const std::vector<FreeParameter>& params_;
+  const std::vector<const PairFit*>& pairs_;
+};
+
+// Levenberg-Marquardt from x (its residuals res, chi2 their squared norm): at most 50 steps, each
+// tried with up to 10 dampings; x and res at the end, and chi2 there.
+double levenberg_marquardt(const JointResiduals& p, Eigen::VectorXd& x, Eigen::VectorXd& res) {
+  double chi2 = res.squaredNorm(), lambda = 1e-3;
   for (int it = 0; it < 50; ++it) {
-    const Eigen::MatrixXd J = jacobian();
+    const Eigen::MatrixXd J = p.jacobian(x, res);
     const Eigen::MatrixXd A = J.transpose() * J;
     const Eigen::VectorXd g = J.transpose() * res;
     bool accepted = false;
@@ -123,7 +155,7 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
       Ad.diagonal() += lambda * A.diagonal().cwiseMax(1e-12);
       const Eigen::VectorXd dx = Ad.ldlt().solve(-g);
       Eigen::VectorXd rn;
-      if (dx.allFinite() && residuals(x + dx, &rn) && rn.squaredNorm() < chi2) {
+      if (dx.allFinite() && p.residuals(x + dx, &rn) && rn.squaredNorm() < chi2) {
         x += dx, res = rn;
         const double before = chi2;
         chi2 = rn.squaredNorm();
@@ -136,17 +168,28 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
     }
     if (!accepted) break;
   }
-  if (chi2 < start) set_x(fs, x);
+  return chi2;
+}
+
+}  // namespace
+
+void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
+            const std::vector<const PairFit*>& pairs, size_t min_params, ParameterSigmas* sigmas) {
+  const std::vector<FreeParameter> params = free_parameters(fs, group);
+  if (params.empty() || params.size() < min_params) return;
+  const JointResiduals p(r, fs, params, pairs);
+  Eigen::VectorXd x = p.x_of(fs);
+  Eigen::VectorXd res;
+  if (!p.residuals(x, &res)) return;
+  const double start = res.squaredNorm();
+  const double chi2 = levenberg_marquardt(p, x, res);
+  if (chi2 < start) p.set(fs, x);
   if (!sigmas) return;
   if (!(chi2 < start)) {  // the start stands: the Jacobian there
-    x = Eigen::VectorXd(np);
-    for (int k = 0; k < np; ++k) {
-      const double v = fs[params[size_t(k)].finding].parameters.at(params[size_t(k)].key);
-      x(k) = params[size_t(k)].log ? std::log(v) : v;
-    }
-    if (!residuals(x, &res)) return;
+    x = p.x_of(fs);
+    if (!p.residuals(x, &res)) return;
   }
-  const Eigen::MatrixXd J = jacobian();
+  const Eigen::MatrixXd J = p.jacobian(x, res);
   const Eigen::MatrixXd A = J.transpose() * J;
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(A);
   if (!lu.isInvertible()) return;
@@ -154,7 +197,7 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
   // chi2 rises by `scale` at 1 sigma, as in the intervals of stage 6: chi2 per point, at least 1
   // (a point is two residuals, its real and imaginary parts).
   const double scale = std::max(1.0, res.squaredNorm() / (0.5 * double(res.size())));
-  for (int k = 0; k < np; ++k)
+  for (int k = 0; k < p.size(); ++k)
     if (cov(k, k) > 0)
       (*sigmas)[{params[size_t(k)].finding, params[size_t(k)].key}] = std::sqrt(cov(k, k) * scale);
 }

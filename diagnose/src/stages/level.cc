@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "stages.h"
 
@@ -117,175 +118,219 @@ void fit_slope(LevelDependence& ld, const std::vector<double>& sigmas) {
   ld.slope_sigma = std::sqrt(sw / det) * std::sqrt(std::max(1.0, chi2 / double(n - 2)));
 }
 
-}  // namespace
+// Per finding and other measurement: the values of its parameters there and their intervals.
+struct AtLevel {
+  bool compared = false;
+  double level_fit = 0, level_other = 0;
+  std::vector<double> values;
+  std::vector<std::array<double, 2>> intervals;
+};
 
-void level(DiagnosisRun& r) {
-  const size_t nf = r.findings.size();
-  // The other measurements: the validation one, then each further level.
-  std::vector<OtherMeasurement> others;
-  if (std::any_of(r.data.begin(), r.data.end(),
-                  [](const MeasuredPair& mp) { return !mp.validation.points.empty(); }))
-    others.push_back({-1, &r.ms_val});
-  for (size_t k = 0; k < r.ms_levels.size(); ++k) others.push_back({int(k), &r.ms_levels[k]});
-  // Per finding: the parameters it is compared by (the primary first), as refine() fits them.
-  std::vector<std::vector<Compared>> params(nf);
-  for (size_t i = 0; i < nf; ++i) {
-    const Finding& f = r.findings[i];
+// The findings compared over the other measurements: per finding its compared parameters, per
+// finding and measurement its points and values there.
+class LevelComparison {
+ public:
+  explicit LevelComparison(DiagnosisRun& r) : r_(r), nf_(r.findings.size()) {
+    if (std::any_of(r.data.begin(), r.data.end(),
+                    [](const MeasuredPair& mp) { return !mp.validation.points.empty(); }))
+      others_.push_back({-1, &r.ms_val});
+    for (size_t k = 0; k < r.ms_levels.size(); ++k) others_.push_back({int(k), &r.ms_levels[k]});
+    params_.resize(nf_);
+    for (size_t i = 0; i < nf_; ++i) params_[i] = compared_parameters(r.findings[i]);
+    at_.assign(nf_, std::vector<AtLevel>(others_.size()));
+    pts_.assign(others_.size(), std::vector<LevelPoints>(nf_));
+    for (size_t m = 0; m < others_.size(); ++m)
+      for (size_t i = 0; i < nf_; ++i) {
+        if (params_[i].empty()) continue;
+        pts_[m][i] = level_points(r, r.findings[i], others_[m]);
+        const LevelPoints& v = pts_[m][i];
+        const bool levels_known = v.level_fit > 0 && v.level_other > 0;
+        at_[i][m].compared =
+            !v.pairs.empty() && !(levels_known && std::abs(v.level_other / v.level_fit - 1) < 0.05);
+        at_[i][m].level_fit = v.level_fit;
+        at_[i][m].level_other = v.level_other;
+      }
+  }
+
+  // Every other measurement fitted, nearest the fitting measurement's level first (as given where
+  // a level is unknown), each started from the values at the nearest level already fitted.
+  void fit_all() {
+    std::vector<size_t> order(others_.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+      return distance(level_of(a, true), level_of(a, false)) <
+             distance(level_of(b, true), level_of(b, false));
+    });
+    std::vector<std::vector<Finding>> fitted(others_.size());
+    std::vector<size_t> done;
+    for (size_t m : order) {
+      std::vector<Finding> fs = r_.findings;
+      double nearest = distance(level_of(m, true), level_of(m, false));
+      for (size_t d : done)
+        if (const double x = distance(level_of(m, true), level_of(d, true)); x < nearest) {
+          nearest = x;
+          fs = fitted[d];
+        }
+      if (!fit_level(m, fs)) continue;
+      fitted[m] = std::move(fs);
+      done.push_back(m);
+    }
+  }
+
+  // Per finding: each parameter's values by level; marked level-dependent when one lies apart.
+  void mark_dependent() {
+    for (size_t i = 0; i < nf_; ++i) {
+      std::vector<LevelDependence> lds;
+      bool any_apart = false;
+      for (size_t q = 0; q < params_[i].size(); ++q) {
+        std::optional<LevelDependence> ld = dependence(i, q);
+        if (!ld) break;  // the primary (or this one) not compared
+        any_apart = any_apart || ld->apart;
+        lds.push_back(std::move(*ld));
+      }
+      if (!any_apart) continue;
+      r_.findings[i].level = lds[0];
+      r_.findings[i].level_secondary.assign(lds.begin() + 1, lds.end());
+    }
+  }
+
+ private:
+  // The parameters f is compared by (the primary first), as refine() fits them.
+  static std::vector<Compared> compared_parameters(const Finding& f) {
+    std::vector<Compared> out;
     const CauseUnit& unit = *cause_unit(f.cause);
     const std::string key = unit.primary_parameter(f).key;
-    if (key.empty() || !f.intervals.count(key) || !f.parameters.count(key)) continue;
+    if (key.empty() || !f.intervals.count(key) || !f.parameters.count(key)) return out;
     auto compared = [&](const std::string& k, bool log) {
       const double v = f.parameters.at(k);
       return Compared{k, log, v, half_width(f.intervals.at(k), v)};
     };
-    params[i].push_back(compared(key, unit.interval_domain().positive && f.parameters.at(key) > 0));
+    out.push_back(compared(key, unit.interval_domain().positive && f.parameters.at(key) > 0));
     for (const SecondaryParameter& sp : unit.secondary_parameters(f))
       if (sp.fitted && f.intervals.count(sp.key) && f.parameters.count(sp.key) &&
           f.parameters.at(sp.key) > 0)
-        params[i].push_back(compared(sp.key, true));
+        out.push_back(compared(sp.key, true));
+    return out;
   }
-  // Per finding and other measurement: the values of its parameters there and their intervals.
-  struct AtLevel {
-    bool compared = false;
-    double level_fit = 0, level_other = 0;
-    std::vector<double> values;
-    std::vector<std::array<double, 2>> intervals;
-  };
-  std::vector<std::vector<AtLevel>> at(nf, std::vector<AtLevel>(others.size()));
-  std::vector<std::vector<LevelPoints>> pts(others.size(), std::vector<LevelPoints>(nf));
-  for (size_t m = 0; m < others.size(); ++m)
-    for (size_t i = 0; i < nf; ++i) {
-      if (params[i].empty()) continue;
-      pts[m][i] = level_points(r, r.findings[i], others[m]);
-      const LevelPoints& v = pts[m][i];
-      const bool levels_known = v.level_fit > 0 && v.level_other > 0;
-      at[i][m].compared =
-          !v.pairs.empty() && !(levels_known && std::abs(v.level_other / v.level_fit - 1) < 0.05);
-      at[i][m].level_fit = v.level_fit;
-      at[i][m].level_other = v.level_other;
-    }
-  // A measurement's level (the first compared finding's view of it; 0 unknown).
-  auto level_of = [&](size_t m, bool other) {
-    for (size_t i = 0; i < nf; ++i)
-      if (at[i][m].compared) return other ? at[i][m].level_other : at[i][m].level_fit;
-    return 0.0;
-  };
-  // The order: nearest the fitting measurement's level first (as given where a level is unknown),
-  // each started from the values at the nearest level already fitted.
-  std::vector<size_t> order(others.size());
-  std::iota(order.begin(), order.end(), 0);
-  auto distance = [&](double a, double b) {
+
+  static double distance(double a, double b) {
     return a > 0 && b > 0 ? std::abs(std::log(a / b)) : INFINITY;
-  };
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return distance(level_of(a, true), level_of(a, false)) <
-           distance(level_of(b, true), level_of(b, false));
-  });
-  std::vector<std::vector<Finding>> fitted(others.size());
-  std::vector<size_t> done;
-  for (size_t m : order) {
-    std::vector<Finding> fs = r.findings;
-    double nearest = distance(level_of(m, true), level_of(m, false));
-    for (size_t d : done)
-      if (const double x = distance(level_of(m, true), level_of(d, true)); x < nearest) {
-        nearest = x;
-        fs = fitted[d];
-      }
+  }
+
+  // A measurement's level (the first compared finding's view of it; 0 unknown).
+  double level_of(size_t m, bool other) const {
+    for (size_t i = 0; i < nf_; ++i)
+      if (at_[i][m].compared) return other ? at_[i][m].level_other : at_[i][m].level_fit;
+    return 0.0;
+  }
+
+  // The compared findings refitted together on measurement m's points of their pairs, starting
+  // from fs, their values and intervals kept; false when no finding is compared there.
+  bool fit_level(size_t m, std::vector<Finding>& fs) {
     std::vector<size_t> group;
     std::vector<std::string> pair_names;
-    for (size_t i = 0; i < nf; ++i) {
-      if (!at[i][m].compared) continue;
+    for (size_t i = 0; i < nf_; ++i) {
+      if (!at_[i][m].compared) continue;
       group.push_back(i);
-      for (const PairFit& p : pts[m][i].pairs)
+      for (const PairFit& p : pts_[m][i].pairs)
         if (std::find(pair_names.begin(), pair_names.end(), p.pair) == pair_names.end())
           pair_names.push_back(p.pair);
     }
-    if (group.empty()) continue;
+    if (group.empty()) return false;
     // The points of every pair a compared finding explains, once each.
     std::vector<const PairFit*> pairs;
     for (const std::string& name : pair_names)
       for (size_t i : group) {
-        const auto it = std::find_if(pts[m][i].pairs.begin(), pts[m][i].pairs.end(),
+        const auto it = std::find_if(pts_[m][i].pairs.begin(), pts_[m][i].pairs.end(),
                                      [&](const PairFit& p) { return p.pair == name; });
-        if (it == pts[m][i].pairs.end()) continue;
+        if (it == pts_[m][i].pairs.end()) continue;
         pairs.push_back(&*it);
         break;
       }
     const std::vector<Finding> start = fs;
     ParameterSigmas sigmas;
-    refine(r, fs, group, pairs, 1, &sigmas);
-    // A finding the group's fit left where it started or without a sigma (two findings the data
-    // cannot tell apart there make the group's normal equations singular) is fitted alone, the
-    // others held, so that one such pair does not cost every finding its comparison.
-    for (size_t i : group) {
-      const bool stuck = std::any_of(params[i].begin(), params[i].end(), [&](const Compared& c) {
-        const auto it = sigmas.find({i, c.key});
-        return it == sigmas.end() || !std::isfinite(it->second) ||
-               fs[i].parameters.at(c.key) == start[i].parameters.at(c.key);
-      });
-      if (!stuck) continue;
-      std::vector<Finding> alone = fs;
-      std::vector<const PairFit*> own;
-      for (const PairFit& p : pts[m][i].pairs) own.push_back(&p);
-      ParameterSigmas s;
-      refine(r, alone, {i}, own, 1, &s);
-      fs[i] = alone[i];
-      for (const Compared& c : params[i])
-        if (const auto it = s.find({i, c.key}); it != s.end()) sigmas[{i, c.key}] = it->second;
-    }
+    refine(r_, fs, group, pairs, 1, &sigmas);
+    for (size_t i : group) refit_if_stuck(m, i, start, fs, sigmas);
     for (size_t i : group)
-      for (const Compared& c : params[i]) {
+      for (const Compared& c : params_[i]) {
         const double v = fs[i].parameters.at(c.key);
         const auto s = sigmas.find({i, c.key});
         const double sg = s == sigmas.end() ? INFINITY : s->second;
-        at[i][m].values.push_back(v);
-        at[i][m].intervals.push_back(
+        at_[i][m].values.push_back(v);
+        at_[i][m].intervals.push_back(
             c.log ? std::array<double, 2>{v * std::exp(-sg), v * std::exp(sg)}
                   : std::array<double, 2>{v - sg, v + sg});
       }
-    fitted[m] = std::move(fs);
-    done.push_back(m);
+    return true;
   }
-  // Per finding: each parameter's values by level; level-dependent when one lies apart.
-  for (size_t i = 0; i < nf; ++i) {
-    Finding& f = r.findings[i];
-    std::vector<LevelDependence> lds;
-    bool any_apart = false;
-    for (size_t q = 0; q < params[i].size(); ++q) {
-      const Compared& c = params[i][q];
-      if (!std::isfinite(c.s_fit)) break;
-      LevelDependence ld;
-      ld.parameter = c.key;
-      ld.apart = false;
-      std::vector<double> sigmas = {c.s_fit};
-      bool first = true;
-      for (size_t m = 0; m < others.size(); ++m) {
-        const AtLevel& a = at[i][m];
-        if (!a.compared) continue;
-        const double s_other = half_width(a.intervals[q], a.values[q]);
-        if (!std::isfinite(s_other)) continue;
-        if (first) {
-          ld.levels.push_back(a.level_fit);
-          ld.values.push_back(c.v_fit);
-          ld.intervals.push_back(f.intervals.at(c.key));
-          first = false;
-        }
-        ld.levels.push_back(a.level_other);
-        ld.values.push_back(a.values[q]);
-        ld.intervals.push_back(a.intervals[q]);
-        sigmas.push_back(s_other);
-        if (std::abs(a.values[q] - c.v_fit) > kApart * std::hypot(c.s_fit, s_other))
-          ld.apart = true;
+
+  // A finding the group's fit left where it started or without a sigma (two findings the data
+  // cannot tell apart there make the group's normal equations singular) is fitted alone, the
+  // others held, so that one such pair does not cost every finding its comparison.
+  void refit_if_stuck(size_t m, size_t i, const std::vector<Finding>& start,
+                      std::vector<Finding>& fs, ParameterSigmas& sigmas) {
+    const bool stuck = std::any_of(params_[i].begin(), params_[i].end(), [&](const Compared& c) {
+      const auto it = sigmas.find({i, c.key});
+      return it == sigmas.end() || !std::isfinite(it->second) ||
+             fs[i].parameters.at(c.key) == start[i].parameters.at(c.key);
+    });
+    if (!stuck) return;
+    std::vector<Finding> alone = fs;
+    std::vector<const PairFit*> own;
+    for (const PairFit& p : pts_[m][i].pairs) own.push_back(&p);
+    ParameterSigmas s;
+    refine(r_, alone, {i}, own, 1, &s);
+    fs[i] = alone[i];
+    for (const Compared& c : params_[i])
+      if (const auto it = s.find({i, c.key}); it != s.end()) sigmas[{i, c.key}] = it->second;
+  }
+
+  // Finding i's parameter q by level, apart when a level's value lies beyond kApart sigmas of the
+  // fitting measurement's; nullopt when it is not compared at two levels.
+  std::optional<LevelDependence> dependence(size_t i, size_t q) const {
+    const Compared& c = params_[i][q];
+    if (!std::isfinite(c.s_fit)) return std::nullopt;
+    LevelDependence ld;
+    ld.parameter = c.key;
+    ld.apart = false;
+    std::vector<double> sigmas = {c.s_fit};
+    bool first = true;
+    for (size_t m = 0; m < others_.size(); ++m) {
+      const AtLevel& a = at_[i][m];
+      if (!a.compared) continue;
+      const double s_other = half_width(a.intervals[q], a.values[q]);
+      if (!std::isfinite(s_other)) continue;
+      if (first) {
+        ld.levels.push_back(a.level_fit);
+        ld.values.push_back(c.v_fit);
+        ld.intervals.push_back(r_.findings[i].intervals.at(c.key));
+        first = false;
       }
-      if (ld.values.size() < 2) break;  // the primary (or this one) not compared
-      fit_slope(ld, sigmas);
-      any_apart = any_apart || ld.apart;
-      lds.push_back(std::move(ld));
+      ld.levels.push_back(a.level_other);
+      ld.values.push_back(a.values[q]);
+      ld.intervals.push_back(a.intervals[q]);
+      sigmas.push_back(s_other);
+      if (std::abs(a.values[q] - c.v_fit) > kApart * std::hypot(c.s_fit, s_other)) ld.apart = true;
     }
-    if (!any_apart) continue;
-    f.level = lds[0];
-    f.level_secondary.assign(lds.begin() + 1, lds.end());
+    if (ld.values.size() < 2) return std::nullopt;
+    fit_slope(ld, sigmas);
+    return ld;
   }
+
+  DiagnosisRun& r_;
+  const size_t nf_;
+  std::vector<OtherMeasurement> others_;  // the validation one, then each further level
+  std::vector<std::vector<Compared>> params_;
+  std::vector<std::vector<AtLevel>> at_;
+  std::vector<std::vector<LevelPoints>> pts_;
+};
+
+}  // namespace
+
+void level(DiagnosisRun& r) {
+  LevelComparison c(r);
+  c.fit_all();
+  c.mark_dependent();
 }
 
 }  // namespace fralab::diag
