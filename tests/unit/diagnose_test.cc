@@ -802,6 +802,27 @@ TEST(Diagnose, TwoGainsAtOnePlaceAreOneFindingTheirSum) {
   EXPECT_EQ(gains, 1) << json;
 }
 
+// The slow mode moved in every path of a three-input, five-output plant beside 16.1 and 15.3 rad/s
+// sensor lags at Y1 and Y2 (tests/data/lab/machine_s23_c11). Y1's paths' own fits split the lag
+// and the mode's move into a smaller move and a resonance at 31-36 rad/s, zeta 0.76; with the
+// plant's mode sized over every pair, Y1's paths moved that resonance past critical damping (to
+// 580 rad/s, zeta 18: real poles at 16.1 and 20 900 rad/s), an output's pole shift of the root its
+// own resonance added. The move of a root another finding at its place added is that finding
+// moved: one finding, a lag at the slower pole where the faster lies far beyond the band. Every
+// hidden effect is named at its place within its tolerance, and nothing else.
+TEST(Diagnose, AMoveOfARootAnotherFindingAddedIsThatFindingMoved) {
+  const auto& [c, d, json] = LabCase(23, 11);
+  const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, Scope::kOutput);
+  ASSERT_NE(lag, nullptr);
+  EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
+  for (const testing::HiddenEffect& h : c.hidden)
+    EXPECT_TRUE(std::any_of(d.findings.begin(), d.findings.end(),
+                            [&](const Finding& f) { return h.matches(f); }))
+        << h.describe() << "\n"
+        << json;
+  for (const Finding& f : d.findings) EXPECT_NE(f.cause, CauseKind::kMissingResonance) << json;
+}
+
 // An input's -2.75 dB calibration on its two paths beside a 9.77 rad/s lag on one of them
 // (tests/data/lab/machine_s19_c35). The lagged path's own fit splits the two as -2.42 dB and a
 // moved pole; the group from it, tried first, is refused. The group from the other path's -2.75

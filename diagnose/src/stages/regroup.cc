@@ -260,6 +260,68 @@ bool one_per_place(std::vector<Finding>& fs) {
   return joined;
 }
 
+// Whether f and g sit at one place: the same scope, input, output and pairs.
+bool same_place(const Finding& f, const Finding& g) {
+  if (f.scope != g.scope || f.input != g.input || f.output != g.output) return false;
+  std::vector<std::string> pf = f.pairs, pg = g.pairs;
+  std::sort(pf.begin(), pf.end());
+  std::sort(pg.begin(), pg.end());
+  return pf == pg;
+}
+
+// A pole shift or damping error that moves a root another finding at its place added (a missing
+// resonance's pair, a missing lag's pole), within kSameRoot, is that finding with the root moved:
+// one finding. A resonance moved past critical damping is two real poles, wn (zeta -+
+// sqrt(zeta^2 - 1)); where the faster lies beyond kFarBeyondBand times its pairs' highest measured
+// frequency (its phase there under 0.01 rad), it is a lag at the slower. True when any was folded.
+bool moved_roots_folded(DiagnosisRun& r) {
+  constexpr double kSameRoot = 1e-3, kFarBeyondBand = 100;
+  std::vector<Finding>& fs = r.findings;
+  bool folded = false;
+  for (size_t a = 0; a < fs.size(); ++a) {
+    const Finding& f = fs[a];
+    const char* key = moved_root_key(f.cause);
+    if ((f.cause != CauseKind::kPoleShift && f.cause != CauseKind::kDampingError) || !key ||
+        !f.parameters.count(key))
+      continue;
+    const double from = f.parameters.at(key);
+    for (size_t b = 0; b < fs.size(); ++b) {
+      Finding& g = fs[b];
+      const bool resonance = g.cause == CauseKind::kMissingResonance,
+                 lag = g.cause == CauseKind::kMissingLag && f.cause == CauseKind::kPoleShift;
+      if (b == a || g.tf || !g.text_parameters.empty() || !(resonance || lag) || !same_place(f, g))
+        continue;
+      const char* root_key = resonance ? "wn_rad_s" : "corner_rad_s";
+      if (!g.parameters.count(root_key)) continue;
+      const double root = g.parameters.at(root_key);
+      if (!(std::abs(from - root) <= kSameRoot * root)) continue;
+      if (lag) {
+        g.parameters[root_key] = f.parameters.at("to_rad_s");
+      } else {
+        const double wn = f.cause == CauseKind::kPoleShift ? f.parameters.at("to_rad_s")
+                                                           : g.parameters.at(root_key);
+        const double zeta =
+            f.parameters.count("to_zeta") ? f.parameters.at("to_zeta") : g.parameters.at("zeta");
+        g.parameters = {{"wn_rad_s", wn}, {"zeta", zeta}};
+        double top = 0;
+        for (const PairFit* p : fitted_pairs(r, g.pairs))
+          for (double w : p->w) top = std::max(top, w);
+        // The two real poles' product is wn^2: the slower from the faster, free of cancellation.
+        const double fast = zeta >= 1 ? wn * (zeta + std::sqrt(zeta * zeta - 1)) : 0;
+        if (fast > kFarBeyondBand * top) {
+          g.cause = CauseKind::kMissingLag;
+          g.parameters = {{"corner_rad_s", wn * wn / fast}};
+        }
+      }
+      fs.erase(fs.begin() + std::ptrdiff_t(a));
+      folded = true;
+      a = size_t(-1);  // the list changed: look again from its start
+      break;
+    }
+  }
+  return folded;
+}
+
 // "scope:input:output:cause", a scope and cause tried once in a pass.
 std::string scope_cause_key(Scope scope, const std::string& in, const std::string& out,
                             CauseKind cause) {
@@ -546,6 +608,7 @@ bool regroup(DiagnosisRun& r) {
   for (const auto& i : r.sim.inputs)
     merge([&](const PairFit& p) { return p.input == i.name; }, Scope::kInput, i.name, "", 2);
   merged |= one_per_place(r.findings);
+  merged |= moved_roots_folded(r);
   merged |= sized_on_clear_pairs(r);
   return merged;
 }
