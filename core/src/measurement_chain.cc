@@ -21,6 +21,13 @@ std::complex<double> MeasurementChain::pair_factor(const std::string& e1, double
   return 1.0;
 }
 
+std::complex<double> MeasurementChain::pair_factor(const PairId& pair, double w) const {
+  if (pair.command) return command_factor(w);
+  for (const auto& x : reheld_inputs)
+    if (x == pair.input) return command_factor(w);
+  return 1.0;
+}
+
 void MeasurementChain::validate() const {
   if (!(sample_rate_hz >= 0)) throw InputError("measurement chain: sample_rate_hz must be >= 0");
   if (!(converter_delay_s >= 0))

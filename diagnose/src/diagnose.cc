@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "causes/cause.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 #include "fralab/plant/nonlinearity.h"
 #include "stages/stages.h"
@@ -96,9 +97,9 @@ std::optional<MultisineExcitation> multisine_excitation(const Frd& curve) {
 std::optional<C> model_pair_response(const Model& m, const std::string& pair, double w,
                                      double amplitude, const MeasurementChain& chain,
                                      const MultisineExcitation* ms) {
-  auto [e1, e2] = split_pair(pair);
-  const bool cmd = e1.rfind("u_", 0) == 0;
-  const std::string x = cmd ? e1.substr(2) : e1;
+  const PairId id = PairId::parse(pair);
+  const bool cmd = id.command;
+  const std::string& x = id.input;
   const int i = m.input_index(x);
   if (i < 0) return std::nullopt;
   const ModelInput& in = m.inputs[i];
@@ -130,10 +131,10 @@ std::optional<C> model_pair_response(const Model& m, const std::string& pair, do
     if (nl.kind == NonlinearityKind::kDeadband)
       act *= deadband_describing_function(amplitude * std::abs(act), nl.width);
   }
-  const C held = chain.pair_factor(e1, w);  // the lab's hold (measurement_chain.h)
-  if (e2 == x) return cmd ? std::optional<C>(act * coupling * held) : std::nullopt;
-  const int o = m.output_index(e2);
-  if (o < 0 || !m.path(e2, x)) return std::nullopt;
+  const C held = chain.pair_factor(id, w);  // the lab's hold (measurement_chain.h)
+  if (id.output == x) return cmd ? std::optional<C>(act * coupling * held) : std::nullopt;
+  const int o = m.output_index(id.output);
+  if (o < 0 || !m.path(id.output, x)) return std::nullopt;
   const C h = m.position_to_output(o, i, w);
   return (cmd ? act * h : h / coupling) * held;
 }

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/identify/readers.h"
 #include "fralab/identify/state_model.h"
 
@@ -40,13 +41,13 @@ std::vector<FitResult> fit_and_write(const std::vector<Frd>& curves, const FitOp
   for (const Frd& f : curves) {
     FitResult r = fit_tf(f.points, o);
     json_save_file(md_dir.tf(f.pair), fit_to_json(r, f.pair));
-    auto [e1, e2] = split_pair(f.pair);
-    if (e1.rfind("u_", 0) == 0 && e1.substr(2) == e2) {
+    const PairId id = PairId::parse(f.pair);
+    if (id.actuator()) {
       Json a = fit_to_json(r, f.pair);
       a["text"] = tf_to_text(r.tf);
       actuators.push_back(a);
-    } else if (e1.rfind("u_", 0) != 0) {
-      entries.push_back({e1, e2, r});
+    } else if (id.path()) {
+      entries.push_back({id.input, id.output, r});
     }
     fits.push_back(r);
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "cause.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab::diag {
 
@@ -51,7 +52,7 @@ const CauseUnit* cause_unit(CauseKind kind) {
 
 void LinearCause::apply(Model& m, const Finding& f) const {
   if (f.scope == Scope::kInput && f.output.empty() && f.pairs.size() == 1 &&
-      split_pair(f.pairs[0]).first == "u_" + f.input) {
+      PairId::parse(f.pairs[0]).command && PairId::parse(f.pairs[0]).input == f.input) {
     ModelInput& in = m.inputs[m.input_index(f.input)];
     if (!in.actuator) in.actuator = Tf{};
     extend(*in.actuator, f);

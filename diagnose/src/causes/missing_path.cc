@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "cause.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/identify/tfns.h"
 #include "fralab/identify/transfer_matrix.h"
 
@@ -11,9 +12,9 @@ namespace fralab::diag {
 PairFit absent_pair_points(const MeasuredPair& mp, const DiagnoseOptions& opt) {
   PairFit p;
   p.pair = mp.pair;
-  std::tie(p.e1, p.e2) = split_pair(mp.pair);
-  p.input = p.e1;
-  p.output = p.e2;
+  const PairId id = PairId::parse(mp.pair);
+  p.input = id.input;
+  p.output = id.output;
   for (const auto& pt : mp.frd.points)
     if (usable(pt, opt)) add_point(p, pt, 0.0, opt);  // no simulated path: 0
   return p;

@@ -12,19 +12,10 @@
 namespace fralab::diag {
 namespace {
 
-bool is_actuator_pair(const std::string& e1, const std::string& e2) { return e1 == "u_" + e2; }
-
-// The input a pair's excitation drives: X of u_X:X, u_X:O or X:O.
-std::string input_of(const std::string& pair) { return PairId::parse(pair).input; }
-
-}  // namespace
-
-namespace {
-
 const MultisineExcitation* multisine_in(const std::map<std::string, MultisineExcitation>& set,
                                         const std::string& pair, double line_amplitude) {
   if (!(line_amplitude > 0)) return nullptr;
-  auto it = set.find(input_of(pair));
+  auto it = set.find(PairId::parse(pair).input);  // the input its excitation drives
   return it == set.end() ? nullptr : &it->second;
 }
 
@@ -58,9 +49,9 @@ void prepare(DiagnosisRun& r) {
   // fitting data's and the validation's (another amplitude).
   for (bool actuator : {true, false})
     for (const auto& mp : r.data) {
-      auto [e1, e2] = split_pair(mp.pair);
-      if (is_actuator_pair(e1, e2) != actuator) continue;
-      const std::string in = input_of(mp.pair);
+      const PairId id = PairId::parse(mp.pair);
+      if (id.actuator() != actuator) continue;
+      const std::string& in = id.input;  // the input the pair's excitation drives
       if (!r.ms_fit.count(in))
         if (auto ms = multisine_excitation(mp.frd)) r.ms_fit.emplace(in, std::move(*ms));
       if (!r.ms_val.count(in))
@@ -73,16 +64,14 @@ void prepare(DiagnosisRun& r) {
     }
   // The pairs the simulation can speak to (and those it has no path for).
   for (const auto& mp : r.data) {
-    auto [e1, e2] = split_pair(mp.pair);
+    const PairId id = PairId::parse(mp.pair);
     PairFit p;
     p.pair = mp.pair;
-    p.e1 = e1;
-    p.e2 = e2;
-    if (is_actuator_pair(e1, e2)) {
-      p.input = e2;
-    } else if (e1.rfind("u_", 0) != 0) {
-      p.input = e1;
-      p.output = e2;
+    if (id.actuator()) {
+      p.input = id.input;
+    } else if (id.path()) {
+      p.input = id.input;
+      p.output = id.output;
     } else {
       continue;  // command-relative pairs repeat what X:O and u_X:X say
     }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fralab/core/pair_id.h"
 #include "fralab/plant/state_space.h"
 #include "stages.h"
 
@@ -39,7 +40,8 @@ std::string state_mode(const Model& sim, const Finding& f) {
 std::string explain(const Finding& f) {
   std::string ex = cause_unit(f.cause)->explain(f);
   if (f.scope == Scope::kOutput) ex += "; common to every path into " + f.output + ": its sensor";
-  const bool own = f.pairs.size() == 1 && split_pair(f.pairs[0]).first == "u_" + f.input;
+  const bool own = f.pairs.size() == 1 && PairId::parse(f.pairs[0]).command &&
+                   PairId::parse(f.pairs[0]).input == f.input;
   if (f.scope == Scope::kInput)
     ex += own ? "; in the actuator's own response " + f.pairs[0]
               : "; common to every path from " + f.input + ": its actuator or calibration";

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "fralab/core/json_util.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 
@@ -35,6 +36,9 @@ struct MeasurementChain {
   /// The factor a pair E1:E2 carries: command_factor for u_X:* and for X:O of a reheld input X,
   /// else 1.
   std::complex<double> pair_factor(const std::string& e1, double w) const;
+  /// The same for a parsed pair: command_factor when it is referred to the command or its input
+  /// is reheld, else 1.
+  std::complex<double> pair_factor(const PairId& pair, double w) const;
 
   /// The factor above at w rad/s.
   std::complex<double> command_factor(double w) const;
