@@ -1,12 +1,14 @@
+// The state model of a transfer matrix (fralab/identify/state_model.h): rank-one factors of each
+// pole cluster's residues fitted to the data, ranks grown by the criterion, realised as A, B, C, D.
 #include "fralab/identify/state_model.h"
 
 #include <cmath>
 #include <functional>
 #include <set>
-#include <sstream>
 
 #include "fralab/core/frd.h"
 #include "fralab/core/numerics.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 namespace {
@@ -274,329 +276,308 @@ Eigen::VectorXcd residual_direction(const std::vector<PathData>& paths, const Co
   return svd.matrixV().col(0).conjugate();
 }
 
+// build_state_model's steps, in order: the paths' data and their own residues, the rank-one
+// factors' start and fit, Gilbert's ranks, the factors balanced, the realisation, the check.
+class StateModelBuilder {
+ public:
+  StateModelBuilder(const TransferMatrix& m,
+                    const std::map<std::string, std::vector<FrdPoint>>& data,
+                    const StateModelOptions& opt)
+      : m_(m),
+        data_(data),
+        opt_(opt),
+        no_(int(m.outputs.size())),
+        ni_(int(m.inputs.size())),
+        nk_(int(m.clusters.size())) {
+    s_.inputs = m.inputs;
+    s_.outputs = m.outputs;
+    s_.delay_s = Eigen::MatrixXd::Zero(no_, ni_);
+    s_.D = Eigen::MatrixXd::Zero(no_, ni_);
+    pair_.resize(nk_);
+    pole_.resize(nk_);
+    for (int k = 0; k < nk_; ++k)
+      pair_[k] = m.clusters[k].mean.pair, pole_[k] = location(m.clusters[k].mean);
+    R_.assign(nk_, Eigen::MatrixXcd::Zero(no_, ni_));
+  }
+
+  StateModel build() {
+    for (int o = 0; o < no_; ++o)
+      for (int i = 0; i < ni_; ++i) add_path(o, i);
+    start_factors();
+    // ... then fitted to the data themselves (fit_factors).
+    cm_.nk = nk_;
+    for (int k = 0; k < nk_; ++k) cm_.kc.push_back(k), cm_.pair.push_back(pair_[k]);
+    s_.start_chi2 = weighted_sse(paths_, cm_, c_, b_, s_.D);
+    s_.fit_chi2 = fit_factors(paths_, cm_, opt_, c_, b_, s_.D, &s_.sweeps);
+    grow_ranks();
+    balance_factors();
+    realise();
+    check_against_data();
+    return s_;
+  }
+
+ private:
+  // Path o, i's data for the factors, its delay, and the residues of its own clusters, alone (the
+  // start of the factors' fit); nothing where it is not measured or its fit failed.
+  void add_path(int o, int i) {
+    auto it = m_.fits.find({m_.outputs[o], m_.inputs[i]});
+    const std::string key = m_.inputs[i] + ":" + m_.outputs[o];
+    auto dit = data_.find(key);
+    if (it == m_.fits.end() || dit == data_.end()) return;
+    const FitResult& fit = it->second;
+    std::vector<FrdPoint> pts;
+    bool sigma = true;
+    for (const auto& p : dit->second) {
+      if (!p.valid || !(p.mag > 0)) continue;
+      pts.push_back(p);
+      sigma = sigma && p.sigma > 0;
+    }
+    const bool converged = fit.status == FitResult::Status::kConverged;
+    // The factors are fitted to every measured path but failed fits: the rank-one products put
+    // response into every path, so a path left out is predicted by factors nothing holds there
+    // (on the J85 lab's run, 1e22 chi2 per point on the P5 paths that reached the maximum
+    // order). A path with no response is fitted too (its data, noise, by its sigma).
+    const bool mor = fit.has_model() && !converged;
+    const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
+    if (pts.empty() || !(converged || mor || zero)) return;
+    all_sigma_ = all_sigma_ && sigma;
+    const Tf& tf = fit.tf;
+    if (converged || mor) s_.delay_s(o, i) = tf.delay_s;
+    PathData pd;
+    pd.o = o;
+    pd.i = i;
+    pd.has_d = converged && tf.num_order() >= tf.den_order();
+    for (const FrdPoint& p : pts) {
+      const Cx sj(0, p.w);
+      pd.g.push_back(p.value() * std::polar(1.0, p.w * s_.delay_s(o, i)));  // delay removed
+      pd.wt.push_back(p.sigma > 0 ? 1.0 / p.sigma : 1.0 / p.mag);
+      for (int k = 0; k < nk_; ++k) {
+        pd.hp.push_back(1.0 / (sj - pole_[k]));
+        pd.hm.push_back(1.0 / (sj - std::conj(pole_[k])));
+      }
+    }
+    paths_.push_back(pd);
+    if (!converged) return;
+    const std::vector<int> ks = own_clusters(key, tf);
+    if (ks.empty() && !pd.has_d) return;
+    const Eigen::VectorXd x = residue_fit(pd, nk_, ks, pair_, pd.has_d, pd.g);
+    int c = 0;
+    if (pd.has_d) s_.D(o, i) = x(c++);
+    for (int k : ks) {
+      R_[k](o, i) = pair_[k] ? Cx(x(c), x(c + 1)) : Cx(x(c));
+      c += pair_[k] ? 2 : 1;
+    }
+  }
+
+  // A path's own clusters: those nearest its fit's poles, or with one pole set those it is a
+  // member of.
+  std::vector<int> own_clusters(const std::string& key, const Tf& tf) const {
+    std::vector<int> ks;
+    if (m_.from_pole_set) {
+      for (int k = 0; k < nk_; ++k) {
+        const auto& mem = m_.clusters[size_t(k)].pairs;
+        if (std::find(mem.begin(), mem.end(), key) != mem.end()) ks.push_back(k);
+      }
+    }
+    for (const Root& p : m_.from_pole_set ? std::vector<Root>{} : tf.poles) {
+      int best = -1;
+      double bd = INFINITY;
+      for (int k = 0; k < nk_; ++k) {
+        if (pair_[k] != p.pair) continue;
+        double d = std::abs(pole_[k] - location(p));
+        if (d < bd) bd = d, best = k;
+      }
+      if (best >= 0 && std::find(ks.begin(), ks.end(), best) == ks.end()) ks.push_back(best);
+    }
+    return ks;
+  }
+
+  // The rank-one factors R_k ~ c_k b_k^T: the SVD's (real ones for a real pole) as the start.
+  void start_factors() {
+    c_ = Eigen::MatrixXcd::Zero(no_, nk_);
+    b_ = Eigen::MatrixXcd::Zero(ni_, nk_);
+    for (int k = 0; k < nk_; ++k) {
+      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(R_[k], Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const auto sv = svd.singularValues();
+      const double total = sv.squaredNorm();
+      s_.rank1_loss.push_back(total > 0 ? 1.0 - sv(0) * sv(0) / total : 0.0);
+      if (pair_[k]) {
+        c_.col(k) = svd.matrixU().col(0) * std::sqrt(sv(0));
+        b_.col(k) = svd.matrixV().col(0).conjugate() * std::sqrt(sv(0));
+      } else {
+        Eigen::JacobiSVD<Eigen::MatrixXd> rs(R_[k].real(),
+                                             Eigen::ComputeThinU | Eigen::ComputeThinV);
+        const double s1 = rs.singularValues()(0);
+        c_.col(k) = (rs.matrixU().col(0) * std::sqrt(s1)).cast<Cx>();
+        b_.col(k) = (rs.matrixV().col(0) * std::sqrt(s1)).cast<Cx>();
+      }
+    }
+  }
+
+  // Gilbert's realisation: a cluster whose residues the data show are not rank one gets one more
+  // component (its pole's states once more) while that lowers the criterion, the misfit plus
+  // ln(2N) per real parameter the component adds (as the order search's; with sigma on every
+  // path the misfit is chi2, else the unknown-variance form 2N ln(sse / 2N), the sse floored at
+  // 1e-18 of the data's weighted energy so that noise-free data do not buy rounding).
+  void grow_ranks() {
+    s_.rank.assign(nk_, 1);
+    for (int k = 0; k < nk_; ++k) s_.poles.push_back(m_.clusters[k].mean);
+    std::set<int> outs_used, ins_used;
+    size_t n_points = 0;
+    double energy = 0;
+    for (const PathData& pd : paths_) {
+      outs_used.insert(pd.o), ins_used.insert(pd.i), n_points += pd.g.size();
+      for (size_t q = 0; q < pd.g.size(); ++q) energy += pd.wt[q] * pd.wt[q] * std::norm(pd.g[q]);
+    }
+    const double nr = 2.0 * double(n_points), per_param = std::log(std::max(nr, 2.0));
+    auto criterion = [&](double sse) {
+      return all_sigma_ ? sse : nr * std::log(std::max(sse, 1e-18 * energy) / nr);
+    };
+    const std::vector<int> cap = rank_caps();
+    // Each candidate is tried with a few sweeps from the current factors, against the current
+    // factors given the same sweeps: alternating least squares creeps on along flat valleys for
+    // hundreds of sweeps, and a candidate given more sweeps than the model it is compared with
+    // would be credited with the creep (the J85 test: 100-300 in chi2 for components the data do
+    // not need).
+    StateModelOptions trial = opt_;
+    trial.max_sweeps = std::min(opt_.max_sweeps, opt_.rank_trial_sweeps);
+    while (opt_.max_sweeps > 0) {
+      Eigen::MatrixXcd c0 = c_, b0 = b_;
+      Eigen::MatrixXd D0 = s_.D;
+      int sweeps0 = 0;
+      const double crit0 = criterion(fit_factors(paths_, cm_, trial, c0, b0, D0, &sweeps0));
+      int best = -1;
+      double best_crit = crit0;
+      Eigen::MatrixXcd best_c, best_b;
+      Eigen::MatrixXd best_D;
+      for (int k = 0; k < nk_; ++k) {
+        if (s_.rank[k] >= cap[k]) continue;
+        Components cm2 = cm_;
+        cm2.kc.push_back(k), cm2.pair.push_back(pair_[k]);
+        Eigen::MatrixXcd c2(no_, cm2.size()), b2(ni_, cm2.size());
+        c2 << c_, Eigen::VectorXcd::Zero(no_);
+        b2 << b_, residual_direction(paths_, cm_, k, pair_, c_, b_, s_.D, no_, ni_);
+        Eigen::MatrixXd D2 = s_.D;
+        int sweeps = 0;
+        const double sse = fit_factors(paths_, cm2, trial, c2, b2, D2, &sweeps);
+        const double added =
+            (int(outs_used.size()) + int(ins_used.size()) - 1) * (pair_[k] ? 2 : 1);
+        const double cr = criterion(sse) + per_param * added;
+        if (cr < best_crit) best = k, best_crit = cr, best_c = c2, best_b = b2, best_D = D2;
+      }
+      if (best < 0) break;
+      cm_.kc.push_back(best), cm_.pair.push_back(pair_[best]);
+      c_ = best_c, b_ = best_b, s_.D = best_D;
+      int sweeps = 0;
+      s_.fit_chi2 = fit_factors(paths_, cm_, opt_, c_, b_, s_.D, &sweeps);
+      s_.sweeps += sweeps;
+      ++s_.rank[best];
+    }
+  }
+
+  // A cluster's rank at most: its members' outputs and inputs, and the options' maximum.
+  std::vector<int> rank_caps() const {
+    std::vector<int> cap(nk_, 1);
+    for (int k = 0; k < nk_; ++k) {
+      std::set<std::string> mo, mi;
+      for (const std::string& key : m_.clusters[k].pairs) {
+        const PairId id = PairId::parse(key);
+        mi.insert(id.input), mo.insert(id.output);
+      }
+      cap[k] = std::min({int(mo.size()), int(mi.size()), opt_.max_rank});
+    }
+    return cap;
+  }
+
+  // Each factor pair scaled to equal norms (the product is what the data fix). Where nb / nc
+  // under- or overflows (factors of 1e-160 and 1e160, as data in units of 1e-20 weighted by their
+  // sigma make them), the factor is the quotient of the roots.
+  void balance_factors() {
+    for (int j = 0; j < cm_.size(); ++j) {
+      const double nc = c_.col(j).norm(), nb = b_.col(j).norm();
+      double a = std::sqrt(nb / nc);
+      if (!(std::isfinite(a) && a > 0)) a = std::sqrt(nb) / std::sqrt(nc);
+      if (std::isfinite(a) && a > 0) {
+        c_.col(j) *= a;
+        b_.col(j) /= a;
+      }
+    }
+  }
+
+  // States: one per real component, two per pair's.
+  void realise() {
+    for (int j = 0; j < cm_.size(); ++j) s_.order += pair_[cm_.kc[j]] ? 2 : 1;
+    s_.A = Eigen::MatrixXd::Zero(s_.order, s_.order);
+    s_.B = Eigen::MatrixXd::Zero(s_.order, ni_);
+    s_.C = Eigen::MatrixXd::Zero(no_, s_.order);
+    int x0 = 0;
+    for (int j = 0; j < cm_.size(); ++j) {
+      const Cx p = pole_[cm_.kc[j]];
+      if (!cm_.pair[j]) {
+        s_.A(x0, x0) = p.real();
+        s_.B.row(x0) = b_.col(j).real().transpose();
+        s_.C.col(x0) = c_.col(j).real();
+        x0 += 1;
+      } else {
+        // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b;
+        // Im b] u, y = 2 (Re c) x1 - 2 (Im c) x2.
+        s_.A(x0, x0) = p.real();
+        s_.A(x0, x0 + 1) = -p.imag();
+        s_.A(x0 + 1, x0) = p.imag();
+        s_.A(x0 + 1, x0 + 1) = p.real();
+        s_.B.row(x0) = b_.col(j).real().transpose();
+        s_.B.row(x0 + 1) = b_.col(j).imag().transpose();
+        s_.C.col(x0) = 2 * c_.col(j).real();
+        s_.C.col(x0 + 1) = -2 * c_.col(j).imag();
+        x0 += 2;
+      }
+    }
+  }
+
+  // The model checked against the data, path by path; the error over the converged fits' paths.
+  void check_against_data() {
+    double sum = 0;
+    int n = 0;
+    for (int o = 0; o < no_; ++o) {
+      for (int i = 0; i < ni_; ++i) {
+        const std::string key = m_.inputs[i] + ":" + m_.outputs[o];
+        auto dit = data_.find(key);
+        auto fit = m_.fits.find({m_.outputs[o], m_.inputs[i]});
+        if (dit == data_.end() || fit == m_.fits.end()) continue;
+        const StateModelPathCheck c =
+            check_path(dit->second, fit->second, [&](double w) { return s_.at(o, i, w); });
+        s_.path_check[key] = c;
+        if (c.error < 0) continue;
+        s_.path_error[key] = c.error;
+        if (fit->second.status != FitResult::Status::kConverged) continue;
+        sum += c.error * c.error;
+        ++n;
+      }
+    }
+    s_.error = n ? std::sqrt(sum / n) : 0.0;
+  }
+
+  const TransferMatrix& m_;
+  const std::map<std::string, std::vector<FrdPoint>>& data_;
+  const StateModelOptions& opt_;
+  const int no_, ni_, nk_;
+  StateModel s_;
+  std::vector<bool> pair_;           // each cluster's pole is a pair
+  std::vector<Cx> pole_;             // each cluster's pole (upper half plane)
+  std::vector<Eigen::MatrixXcd> R_;  // residues per cluster
+  std::vector<PathData> paths_;      // the data the factors are fitted to
+  bool all_sigma_ = true;            // every one of them with its sigma
+  Components cm_;
+  Eigen::MatrixXcd c_, b_;  // the factors, a column per component
+};
+
 }  // namespace
 
 StateModel build_state_model(const TransferMatrix& m,
                              const std::map<std::string, std::vector<FrdPoint>>& data,
                              const StateModelOptions& opt) {
   opt.validate();
-  StateModel s;
-  s.inputs = m.inputs;
-  s.outputs = m.outputs;
-  const int no = int(m.outputs.size()), ni = int(m.inputs.size()), nk = int(m.clusters.size());
-  s.delay_s = Eigen::MatrixXd::Zero(no, ni);
-  s.D = Eigen::MatrixXd::Zero(no, ni);
-  std::vector<bool> pair(nk);
-  std::vector<Cx> pole(nk);
-  for (int k = 0; k < nk; ++k)
-    pair[k] = m.clusters[k].mean.pair, pole[k] = location(m.clusters[k].mean);
-  std::vector<Eigen::MatrixXcd> R(nk, Eigen::MatrixXcd::Zero(no, ni));  // residues per cluster
-  std::vector<PathData> paths;  // the data the factors are fitted to
-  bool all_sigma = true;        // every one of them with its sigma
-  for (int o = 0; o < no; ++o) {
-    for (int i = 0; i < ni; ++i) {
-      auto it = m.fits.find({m.outputs[o], m.inputs[i]});
-      const std::string key = m.inputs[i] + ":" + m.outputs[o];
-      auto dit = data.find(key);
-      if (it == m.fits.end() || dit == data.end()) continue;
-      const FitResult& fit = it->second;
-      std::vector<FrdPoint> pts;
-      bool sigma = true;
-      for (const auto& p : dit->second) {
-        if (!p.valid || !(p.mag > 0)) continue;
-        pts.push_back(p);
-        sigma = sigma && p.sigma > 0;
-      }
-      const bool converged = fit.status == FitResult::Status::kConverged;
-      // The factors are fitted to every measured path but failed fits: the rank-one products put
-      // response into every path, so a path left out is predicted by factors nothing holds there
-      // (on the J85 lab's run, 1e22 chi2 per point on the P5 paths that reached the maximum
-      // order). A path with no response is fitted too (its data, noise, by its sigma).
-      const bool mor = fit.has_model() && !converged;
-      const bool zero = fit.status == FitResult::Status::kNoResponse && sigma;
-      if (pts.empty() || !(converged || mor || zero)) continue;
-      all_sigma = all_sigma && sigma;
-      const Tf& tf = fit.tf;
-      if (converged || mor) s.delay_s(o, i) = tf.delay_s;
-      PathData pd;
-      pd.o = o;
-      pd.i = i;
-      pd.has_d = converged && tf.num_order() >= tf.den_order();
-      for (const FrdPoint& p : pts) {
-        const Cx sj(0, p.w);
-        pd.g.push_back(p.value() * std::polar(1.0, p.w * s.delay_s(o, i)));  // delay removed
-        pd.wt.push_back(p.sigma > 0 ? 1.0 / p.sigma : 1.0 / p.mag);
-        for (int k = 0; k < nk; ++k) {
-          pd.hp.push_back(1.0 / (sj - pole[k]));
-          pd.hm.push_back(1.0 / (sj - std::conj(pole[k])));
-        }
-      }
-      paths.push_back(pd);
-      if (!converged) continue;
-      // The residues of this path's own clusters, alone (the start of the factors' fit): those
-      // nearest its fit's poles, or with one pole set those it is a member of.
-      std::vector<int> ks;
-      if (m.from_pole_set) {
-        for (int k = 0; k < nk; ++k) {
-          const auto& mem = m.clusters[size_t(k)].pairs;
-          if (std::find(mem.begin(), mem.end(), key) != mem.end()) ks.push_back(k);
-        }
-      }
-      for (const Root& p : m.from_pole_set ? std::vector<Root>{} : tf.poles) {
-        int best = -1;
-        double bd = INFINITY;
-        for (int k = 0; k < nk; ++k) {
-          if (pair[k] != p.pair) continue;
-          double d = std::abs(pole[k] - location(p));
-          if (d < bd) bd = d, best = k;
-        }
-        if (best >= 0 && std::find(ks.begin(), ks.end(), best) == ks.end()) ks.push_back(best);
-      }
-      if (ks.empty() && !pd.has_d) continue;
-      const Eigen::VectorXd x = residue_fit(pd, nk, ks, pair, pd.has_d, pd.g);
-      int c = 0;
-      if (pd.has_d) s.D(o, i) = x(c++);
-      for (int k : ks) {
-        R[k](o, i) = pair[k] ? Cx(x(c), x(c + 1)) : Cx(x(c));
-        c += pair[k] ? 2 : 1;
-      }
-    }
-  }
-  // The rank-one factors R_k ~ c_k b_k^T: the SVD's (real ones for a real pole) as the start...
-  Eigen::MatrixXcd c = Eigen::MatrixXcd::Zero(no, nk), b = Eigen::MatrixXcd::Zero(ni, nk);
-  for (int k = 0; k < nk; ++k) {
-    Eigen::JacobiSVD<Eigen::MatrixXcd> svd(R[k], Eigen::ComputeThinU | Eigen::ComputeThinV);
-    const auto sv = svd.singularValues();
-    const double total = sv.squaredNorm();
-    s.rank1_loss.push_back(total > 0 ? 1.0 - sv(0) * sv(0) / total : 0.0);
-    if (pair[k]) {
-      c.col(k) = svd.matrixU().col(0) * std::sqrt(sv(0));
-      b.col(k) = svd.matrixV().col(0).conjugate() * std::sqrt(sv(0));
-    } else {
-      Eigen::JacobiSVD<Eigen::MatrixXd> rs(R[k].real(), Eigen::ComputeThinU | Eigen::ComputeThinV);
-      const double s1 = rs.singularValues()(0);
-      c.col(k) = (rs.matrixU().col(0) * std::sqrt(s1)).cast<Cx>();
-      b.col(k) = (rs.matrixV().col(0) * std::sqrt(s1)).cast<Cx>();
-    }
-  }
-  // ... then fitted to the data themselves (fit_factors).
-  Components cm;
-  cm.nk = nk;
-  for (int k = 0; k < nk; ++k) cm.kc.push_back(k), cm.pair.push_back(pair[k]);
-  s.start_chi2 = weighted_sse(paths, cm, c, b, s.D);
-  s.fit_chi2 = fit_factors(paths, cm, opt, c, b, s.D, &s.sweeps);
-  // Gilbert's realisation: a cluster whose residues the data show are not rank one gets one more
-  // component (its pole's states once more) while that lowers the criterion, the misfit plus
-  // ln(2N) per real parameter the component adds (as the order search's; with sigma on every
-  // path the misfit is chi2, else the unknown-variance form 2N ln(sse / 2N), the sse floored at
-  // 1e-18 of the data's weighted energy so that noise-free data do not buy rounding).
-  s.rank.assign(nk, 1);
-  for (int k = 0; k < nk; ++k) s.poles.push_back(m.clusters[k].mean);
-  std::set<int> outs_used, ins_used;
-  size_t n_points = 0;
-  double energy = 0;
-  for (const PathData& pd : paths) {
-    outs_used.insert(pd.o), ins_used.insert(pd.i), n_points += pd.g.size();
-    for (size_t q = 0; q < pd.g.size(); ++q) energy += pd.wt[q] * pd.wt[q] * std::norm(pd.g[q]);
-  }
-  const double nr = 2.0 * double(n_points), per_param = std::log(std::max(nr, 2.0));
-  auto criterion = [&](double sse) {
-    return all_sigma ? sse : nr * std::log(std::max(sse, 1e-18 * energy) / nr);
-  };
-  std::vector<int> cap(nk, 1);  // a cluster's rank at most: its members' outputs and inputs
-  for (int k = 0; k < nk; ++k) {
-    std::set<std::string> mo, mi;
-    for (const std::string& key : m.clusters[k].pairs) {
-      auto [in, out] = split_pair(key);
-      mi.insert(in), mo.insert(out);
-    }
-    cap[k] = std::min({int(mo.size()), int(mi.size()), opt.max_rank});
-  }
-  // Each candidate is tried with a few sweeps from the current factors, against the current
-  // factors given the same sweeps: alternating least squares creeps on along flat valleys for
-  // hundreds of sweeps, and a candidate given more sweeps than the model it is compared with would
-  // be credited with the creep (the J85 test: 100-300 in chi2 for components the data do not need).
-  StateModelOptions trial = opt;
-  trial.max_sweeps = std::min(opt.max_sweeps, opt.rank_trial_sweeps);
-  while (opt.max_sweeps > 0) {
-    Eigen::MatrixXcd c0 = c, b0 = b;
-    Eigen::MatrixXd D0 = s.D;
-    int sweeps0 = 0;
-    const double crit0 = criterion(fit_factors(paths, cm, trial, c0, b0, D0, &sweeps0));
-    int best = -1;
-    double best_crit = crit0;
-    Eigen::MatrixXcd best_c, best_b;
-    Eigen::MatrixXd best_D;
-    for (int k = 0; k < nk; ++k) {
-      if (s.rank[k] >= cap[k]) continue;
-      Components cm2 = cm;
-      cm2.kc.push_back(k), cm2.pair.push_back(pair[k]);
-      Eigen::MatrixXcd c2(no, cm2.size()), b2(ni, cm2.size());
-      c2 << c, Eigen::VectorXcd::Zero(no);
-      b2 << b, residual_direction(paths, cm, k, pair, c, b, s.D, no, ni);
-      Eigen::MatrixXd D2 = s.D;
-      int sweeps = 0;
-      const double sse = fit_factors(paths, cm2, trial, c2, b2, D2, &sweeps);
-      const double added = (int(outs_used.size()) + int(ins_used.size()) - 1) * (pair[k] ? 2 : 1);
-      const double cr = criterion(sse) + per_param * added;
-      if (cr < best_crit) best = k, best_crit = cr, best_c = c2, best_b = b2, best_D = D2;
-    }
-    if (best < 0) break;
-    cm.kc.push_back(best), cm.pair.push_back(pair[best]);
-    c = best_c, b = best_b, s.D = best_D;
-    int sweeps = 0;
-    s.fit_chi2 = fit_factors(paths, cm, opt, c, b, s.D, &sweeps);
-    s.sweeps += sweeps;
-    ++s.rank[best];
-  }
-  // Each factor pair scaled to equal norms (the product is what the data fix). Where nb / nc
-  // under- or overflows (factors of 1e-160 and 1e160, as data in units of 1e-20 weighted by their
-  // sigma make them), the factor is the quotient of the roots.
-  for (int j = 0; j < cm.size(); ++j) {
-    const double nc = c.col(j).norm(), nb = b.col(j).norm();
-    double a = std::sqrt(nb / nc);
-    if (!(std::isfinite(a) && a > 0)) a = std::sqrt(nb) / std::sqrt(nc);
-    if (std::isfinite(a) && a > 0) {
-      c.col(j) *= a;
-      b.col(j) /= a;
-    }
-  }
-  // States: one per real component, two per pair's.
-  for (int j = 0; j < cm.size(); ++j) s.order += pair[cm.kc[j]] ? 2 : 1;
-  s.A = Eigen::MatrixXd::Zero(s.order, s.order);
-  s.B = Eigen::MatrixXd::Zero(s.order, ni);
-  s.C = Eigen::MatrixXd::Zero(no, s.order);
-  int x0 = 0;
-  for (int j = 0; j < cm.size(); ++j) {
-    const Cx p = pole[cm.kc[j]];
-    if (!cm.pair[j]) {
-      s.A(x0, x0) = p.real();
-      s.B.row(x0) = b.col(j).real().transpose();
-      s.C.col(x0) = c.col(j).real();
-      x0 += 1;
-    } else {
-      // z' = p z + b^T u, y = 2 Re(c z): with z = x1 + j x2, x' = [[s, -w], [w, s]] x + [Re b; Im
-      // b] u, y = 2 (Re c) x1 - 2 (Im c) x2.
-      s.A(x0, x0) = p.real();
-      s.A(x0, x0 + 1) = -p.imag();
-      s.A(x0 + 1, x0) = p.imag();
-      s.A(x0 + 1, x0 + 1) = p.real();
-      s.B.row(x0) = b.col(j).real().transpose();
-      s.B.row(x0 + 1) = b.col(j).imag().transpose();
-      s.C.col(x0) = 2 * c.col(j).real();
-      s.C.col(x0 + 1) = -2 * c.col(j).imag();
-      x0 += 2;
-    }
-  }
-  // Check against the data.
-  double sum = 0;
-  int n = 0;
-  for (int o = 0; o < no; ++o) {
-    for (int i = 0; i < ni; ++i) {
-      const std::string key = m.inputs[i] + ":" + m.outputs[o];
-      auto dit = data.find(key);
-      auto fit = m.fits.find({m.outputs[o], m.inputs[i]});
-      if (dit == data.end() || fit == m.fits.end()) continue;
-      const StateModelPathCheck c =
-          check_path(dit->second, fit->second, [&](double w) { return s.at(o, i, w); });
-      s.path_check[key] = c;
-      if (c.error < 0) continue;
-      s.path_error[key] = c.error;
-      if (fit->second.status != FitResult::Status::kConverged) continue;
-      sum += c.error * c.error;
-      ++n;
-    }
-  }
-  s.error = n ? std::sqrt(sum / n) : 0.0;
-  return s;
-}
-
-Json state_model_json(const StateModel& s) {
-  auto mat = [](const Eigen::MatrixXd& M) {
-    Json a = Json::array();
-    for (int r = 0; r < M.rows(); ++r) {
-      Json row = Json::array();
-      for (int c = 0; c < M.cols(); ++c) row.push_back(M(r, c));
-      a.push_back(row);
-    }
-    return a;
-  };
-  Json checks = Json::object();
-  for (const auto& [k, c] : s.path_check)
-    checks[k] = Json{{"fit_status", c.fit_status},
-                     {"points", c.points},
-                     {"clear_points", c.clear},
-                     {"error", c.error},
-                     {"chi2_per_point", c.chi2_per_point},
-                     {"fit_chi2_per_point", c.fit_chi2_per_point},
-                     {"model_silent", c.model_silent}};
-  return Json{
-      {"order", s.order},
-      {"inputs", s.inputs},
-      {"outputs", s.outputs},
-      {"A", mat(s.A)},
-      {"B", mat(s.B)},
-      {"C", mat(s.C)},
-      {"D", mat(s.D)},
-      {"delay_s", mat(s.delay_s)},
-      {"path_error", s.path_error},
-      {"path_check", checks},
-      {"error", s.error},
-      {"rank1_loss", s.rank1_loss},
-      {"rank", s.rank},
-      {"factor_fit", {{"start_chi2", s.start_chi2}, {"chi2", s.fit_chi2}, {"sweeps", s.sweeps}}},
-      {"metric",
-       "rms over the points measured to better than 30 % (sigma <= 0.3 |G|) of "
-       "|ln(G_model/G_measured)|; error: over the paths in the model"}};
-}
-
-namespace {
-
-// "rank one everywhere", or "rank one but at [s/3.38 + 1] (rank 2), ..." naming the clusters above.
-std::string ranks_text(const StateModel& s) {
-  std::ostringstream t;
-  int above = 0;
-  for (int r : s.rank) above += r > 1;
-  if (above == 0) return "rank one everywhere";
-  t << "rank one but at";
-  const char* sep = " ";
-  for (size_t k = 0; k < s.rank.size(); ++k) {
-    if (s.rank[k] < 2) continue;
-    t << sep << factor_text(s.poles[k]) << " (rank " << s.rank[k] << ")";
-    sep = ", ";
-  }
-  return t.str();
-}
-
-}  // namespace
-
-std::string state_model_markdown(const StateModel& s) {
-  auto num = [](double v) {
-    if (v < 0) return std::string("-");
-    std::ostringstream t;
-    t.precision(3);
-    t << v;
-    return t.str();
-  };
-  int in_model = 0;
-  for (const auto& [k, c] : s.path_check) in_model += c.fit_status == "converged";
-  std::ostringstream md;
-  md << "\n## State model\n\nOrder " << s.order
-     << " (one state per distinct real pole, two per pair, times the rank of its residue matrix: "
-     << ranks_text(s)
-     << "); "
-        "error against the data (rms |ln(G_model/G_measured)| over the points measured to better "
-        "than 30 %): "
-     << num(s.error) << " over the " << in_model
-     << " paths in the model. chi2 per point: mean |G - G_measured|^2 / sigma^2 (about 1: as "
-        "good as the noise), the state model's beside the path's own fit's (0 for no response)."
-        "\n\n| path | fit | points (clear) | error | chi2 per point: model / fit |\n"
-        "|---|---|---|---|---|\n";
-  for (const auto& [k, c] : s.path_check)
-    md << "| " << k << " | " << c.fit_status << " | " << c.points << " (" << c.clear << ") | "
-       << (c.model_silent ? std::string("no response in the model") : num(c.error)) << " | "
-       << num(c.chi2_per_point) << " / " << num(c.fit_chi2_per_point) << " |\n";
-  return md.str();
+  return StateModelBuilder(m, data, opt).build();
 }
 
 }  // namespace fralab
