@@ -17,7 +17,7 @@ using C = std::complex<double>;
 /// One pair's usable points against the current model. The model is sim * factor * F for a
 /// candidate factor F; chi2 weighs each complex point by 1/sigma_eff^2.
 struct PairFit {
-  std::string pair, input, output;  // output "" for actuator pairs u_X:X
+  std::string pair, input, output;          // output "" for actuator pairs u_X:X
   std::vector<double> w, amp, h3;           // rad/s; excitation amplitude; 3rd harmonic of E2
   std::vector<double> line_amp, nl;         // a multisine's: the line's command amplitude; nl_rel
   std::vector<int> realisations;            // a multisine's realisations averaged (0: one)
