@@ -4,8 +4,8 @@
 // s = max(1, chi2_min / N) above its minimum (and so each other parameter its cause reports, as a
 // moved pair's damping; the state model's entries keep the intervals stage 5b gave them, the set's
 // other entries free); a finding whose simulated value (or absence) does
-// not raise chi2 by more than s is dropped, said why; so are a lag and a lead at one place that
-// cancel each other.
+// not raise chi2 by more than 4s (that value within two sigma) is dropped, said why; so are a lag
+// and a lead at one place that cancel each other.
 #include <algorithm>
 #include <array>
 #include <boost/math/tools/roots.hpp>
@@ -90,6 +90,9 @@ static void drop_cancelling(DiagnosisRun& r) {
     }
 }
 
+// A change is resolved when the simulation's value lies this many sigmas from the finding's.
+constexpr double kResolvedSigmas = 2.0;
+
 void resolve(DiagnosisRun& r) {
   drop_cancelling(r);
   std::vector<Finding>& findings = r.findings;
@@ -131,7 +134,9 @@ void resolve(DiagnosisRun& r) {
       };
       f.intervals[sp.key] = parameter_interval(chi2_at, f.parameters.at(sp.key), {true, 1e-6});
     }
-    if (c_sim - c_min > s) {
+    // Resolved: the simulation's value lies beyond kResolvedSigmas of the finding's.
+    const double apart = kResolvedSigmas * kResolvedSigmas * s;
+    if (c_sim - c_min > apart) {
       kept.push_back(f);
       continue;
     }
@@ -152,7 +157,7 @@ void resolve(DiagnosisRun& r) {
       const double c_d = chi2_of_model(extended_by(r, as_damping, as_damping.size()));
       as_damping[i].parameters["to_zeta"] = f.parameters.at("from_zeta");
       const double c_none = chi2_of_model(extended_by(r, as_damping, as_damping.size()));
-      if (c_d - c_min <= s && c_none - c_d > s) {
+      if (c_d - c_min <= apart && c_none - c_d > apart) {
         f = std::move(d);
         --i;  // this finding again, as a damping_error (unsigned wrap-around at 0 is defined)
         continue;
@@ -161,7 +166,7 @@ void resolve(DiagnosisRun& r) {
     std::string why = "not resolved by the data: chi2 over its pairs is " + fmt(c_min) +
                       " with it and " + fmt(c_sim) + " at the simulation's " +
                       (sim_value ? key + " = " + fmt(*sim_value) : std::string("(without it)")) +
-                      ", less than " + fmt(s) + " apart";
+                      ", less than " + fmt(apart) + " apart";
     r.d.dropped.push_back({f, why});
   }
   findings = kept;
