@@ -145,69 +145,65 @@ std::map<std::string, ClockEvidence> clock_evidence(const std::vector<ClockEstim
   return out;
 }
 
-}  // namespace
+// Where the diagnosed data come from: the measure folder, its name in the report, and the clock
+// estimates of the runs that made it (the clock alternative's evidence).
+struct DataSource {
+  std::string dir, name;
+  std::vector<ClockEstimate> clocks;
+};
 
-DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
-  DiagnoseResult res;
-  if (c.out.empty()) throw InputError("--out DIR is required");
-  if (c.engine.empty() == c.measured.empty())
-    throw InputError("give exactly one of --engine TRUTH.json or --measured DIR");
-  Model sim = load_model_or_scheduled(c.simulation);
-  // The diagnosis's folder is its own until it ends (its measurements take their sub-folders).
-  const RunLock lock(c.out, "fralab diagnose");
-  std::string data_dir = c.measured, data_name = c.measured;
-  std::vector<ClockEstimate> clock_estimates;  // every run's own, for the clock alternative
-  if (!c.engine.empty()) {
-    MeasureOptions m = c.measure;
-    m.engine = c.engine;
-    if (m.acquire.inputs.empty()) {
-      for (const auto& in : sim.inputs)
-        m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
-    }
-    if (m.auto_campaign) m.acquire.excitation = Excitation::kMultisine;  // its first run's
-    if (c.zoom && m.acquire.excitation == Excitation::kMultisine && m.acquire.zoom.empty()) {
-      const auto [lo, hi] = parse_band(m.acquire.band);
-      m.acquire.zoom = light_modes(sim, lo, hi);
-    }
-    m.out = c.out + "/measure";
-    const MeasureResult measured = measure(m);
-    if (measured.partial()) res.partial.push_back(partial_run_message(measured, m.out));
-    clock_estimates = measured.clock_estimates;
-    data_dir = m.out;
-    data_name = c.engine + " (measured by fralab, seed " + std::to_string(m.seed);
-    if (c.validation) {
-      // An independent measurement for validation, not used for fitting: another noise seed and
-      // a second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are
-      // verified.
-      MeasureOptions v = m;
-      v.seed = m.seed + 1;
-      v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
-      v.out = MeasureDir(m.out).validation().root;
-      v.clock_estimates = measured.clock_estimates;  // the same recorder's clocks, pooled
-      const MeasureResult validated = measure(v);
-      if (validated.partial()) res.partial.push_back(partial_run_message(validated, v.out));
-      clock_estimates = validated.clock_estimates;
-      // A clock the pool of both measurements names, which the measurement's own runs did not:
-      // they are checked again, so the curves diagnosed are mended as the validation's are.
-      ClockRecheck again = recheck_clocks(m.out, validated.clock_estimates);
-      if (const std::string refit = refit_after_recheck(m.out, again, m.fit_delay, m.timeout_s);
-          !refit.empty())
-        again.lines.push_back(refit);
-      for (const std::string& line : again.lines)
-        std::cerr << "fralab: data quality, checked again: " << line << "\n";
-      data_name += "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
-    } else {
-      data_name += "; no validation measurement)";
-    }
+// With --engine: the engine measured into OUT/measure (and, with validation, once more at another
+// seed and 1.5x the amplitude into its validation/), the partial runs said in res.
+DataSource measure_engine(const DiagnoseCommand& c, const Model& sim, DiagnoseResult& res) {
+  MeasureOptions m = c.measure;
+  m.engine = c.engine;
+  if (m.acquire.inputs.empty()) {
+    for (const auto& in : sim.inputs)
+      m.acquire.inputs += (m.acquire.inputs.empty() ? "" : ",") + in.name;
   }
-  const MeasuredFolder folder = read_measured_folder(data_dir);
-  DiagnoseOptions opt;
-  opt.chain = folder.chain;
-  std::vector<MeasuredPair> data = folder.data;
-  // An output silent on every path where the simulation expects a response: over two or more
-  // inputs a dead sensor, its pairs set aside; over one, left to the diagnosis with the dead
-  // channel named beside what it finds there.
-  DataQuality from_sim;
+  if (m.auto_campaign) m.acquire.excitation = Excitation::kMultisine;  // its first run's
+  if (c.zoom && m.acquire.excitation == Excitation::kMultisine && m.acquire.zoom.empty()) {
+    const auto [lo, hi] = parse_band(m.acquire.band);
+    m.acquire.zoom = light_modes(sim, lo, hi);
+  }
+  m.out = c.out + "/measure";
+  const MeasureResult measured = measure(m);
+  if (measured.partial()) res.partial.push_back(partial_run_message(measured, m.out));
+  DataSource src{m.out, c.engine + " (measured by fralab, seed " + std::to_string(m.seed),
+                 measured.clock_estimates};
+  if (!c.validation) {
+    src.name += "; no validation measurement)";
+    return src;
+  }
+  // An independent measurement for validation, not used for fitting: another noise seed and a
+  // second amplitude (1.5x), so amplitude-dependent effects (hysteresis, deadband) are verified.
+  MeasureOptions v = m;
+  v.seed = m.seed + 1;
+  v.acquire.amplitude_scale = 1.5 * m.acquire.amplitude_scale;
+  v.out = MeasureDir(m.out).validation().root;
+  v.clock_estimates = measured.clock_estimates;  // the same recorder's clocks, pooled
+  const MeasureResult validated = measure(v);
+  if (validated.partial()) res.partial.push_back(partial_run_message(validated, v.out));
+  src.clocks = validated.clock_estimates;
+  // A clock the pool of both measurements names, which the measurement's own runs did not: they
+  // are checked again, so the curves diagnosed are mended as the validation's are.
+  ClockRecheck again = recheck_clocks(m.out, validated.clock_estimates);
+  if (const std::string refit = refit_after_recheck(m.out, again, m.fit_delay, m.timeout_s);
+      !refit.empty())
+    again.lines.push_back(refit);
+  for (const std::string& line : again.lines)
+    std::cerr << "fralab: data quality, checked again: " << line << "\n";
+  src.name += "; validation: seed " + std::to_string(v.seed) + " at 1.5x the amplitude)";
+  return src;
+}
+
+// An output silent on every path where the simulation expects a response: over two or more
+// inputs a dead sensor, its pairs set aside from `data` and named in `from_sim`; over one, left
+// to the diagnosis, returned to be named beside what it finds there.
+std::vector<SilentOutput> set_aside_silent_outputs(const Model& sim,
+                                                   std::vector<MeasuredPair>& data,
+                                                   const DiagnoseOptions& opt,
+                                                   DataQuality& from_sim) {
   for (const ModelOutput& o : sim.outputs) from_sim.checked.push_back(o.name);
   std::vector<SilentOutput> silent_kept;
   for (const SilentOutput& s : silent_outputs(sim, data, opt)) {
@@ -226,24 +222,18 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
                ") set aside: nothing is concluded from them; check the sensor and its wiring";
     from_sim.faults.push_back(std::move(f));
   }
-  const Json levels_json = attach_levels(c, data);
-  Json baseline_json;
-  if (!c.baseline.empty()) {
-    BaselineSummary s;
-    data = relative_to_baseline(sim, data, read_measured_folder(c.baseline).data, opt, &s);
-    baseline_json = {{"folder", c.baseline},
-                     {"pairs", s.pairs},
-                     {"points", s.points},
-                     {"left_out", s.left_out},
-                     {"pairs_without", s.without}};
-    data_name += ", relative to the baseline " + c.baseline +
-                 " (the simulation's misfit there is "
-                 "its own, not a finding)";
-  }
-  Diagnosis d = diagnose(sim, data, opt);
-  Json dj = diagnosis_to_json(d);
-  DataNotes notes;
-  Json runs = recorded_data_quality(data_dir, &notes);
+  return silent_kept;
+}
+
+// diagnosis.json's data_quality section: every run's recorded faults (the data's, the baseline's
+// and each level's), the channels checked against the simulation, and the data faults that could
+// stand for a finding (notes.alternatives, from the clipped channels' largest shares, the silent
+// outputs kept and the runs' clocks); the report's lines go to `notes`.
+Json data_quality_section(const DiagnoseCommand& c, const Diagnosis& d, const Model& sim,
+                          const std::vector<MeasuredPair>& data, const DiagnoseOptions& opt,
+                          const DataSource& src, const DataQuality& from_sim,
+                          const std::vector<SilentOutput>& silent_kept, DataNotes& notes) {
+  Json runs = recorded_data_quality(src.dir, &notes);
   if (!c.baseline.empty()) {
     for (Json& r : recorded_data_quality(c.baseline, &notes)) runs.push_back(std::move(r));
   }
@@ -257,33 +247,75 @@ DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
         share = std::max(share, f["size"].get<double>());
       }
   notes.alternatives = data_alternatives(d, sim, data, opt, clipped, silent_kept,
-                                         clock_evidence(clock_estimates, data_dir));
+                                         clock_evidence(src.clocks, src.dir));
   for (const DataFault& f : from_sim.faults)
     notes.faults.push_back("the measurement against the simulation: " + f.text + "; " + f.action +
                            ".");
-  dj["data_quality"] = {{"runs", runs},
-                        {"channels", data_quality_to_json(from_sim)},
-                        {"alternatives", data_alternatives_to_json(notes.alternatives)}};
-  if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
-  if (!levels_json.is_null()) dj["levels"] = levels_json;
-  json_save_file(c.out + "/diagnosis.json", dj);
+  return {{"runs", runs},
+          {"channels", data_quality_to_json(from_sim)},
+          {"alternatives", data_alternatives_to_json(notes.alternatives)}};
+}
+
+// The extended model as fralab-model/1 (read back: it must be one the plant can run) and as a
+// state model (fralab-ss/1 and .mat); a model that has none (no path with dynamics) is said, and
+// the diagnosis stands.
+void write_extended_models(const Model& sim, const Diagnosis& d, const std::string& out) {
   Model ext = d.extended;
   ext.name = sim.name + " + diagnosis";
   ext.warnings.clear();
-  save_model(c.out + "/extended_model.json", ext);
-  load_model(c.out +
-             "/extended_model.json");  // it must be a valid fralab-model/1 the plant can run
-  // The same as a state model, for the simulation's owner (fralab-ss/1 and .mat); a model that
-  // has none (no path with dynamics) is said, and the diagnosis stands.
+  save_model(out + "/extended_model.json", ext);
+  load_model(out + "/extended_model.json");
   try {
     const Json ss = model_state_space_document(ext, extended_state_space(sim, d));
-    json_save_file(c.out + "/extended_model_ss.json", ss);
-    write_state_space_mat(c.out + "/extended_model.mat", ss);
+    json_save_file(out + "/extended_model_ss.json", ss);
+    write_state_space_mat(out + "/extended_model.mat", ss);
   } catch (const InputError& e) {
     std::fprintf(stderr, "fralab: the extended model as a state model: %s\n", e.what());
   }
+}
+
+}  // namespace
+
+DiagnoseResult run_diagnose(const DiagnoseCommand& c) {
+  DiagnoseResult res;
+  if (c.out.empty()) throw InputError("--out DIR is required");
+  if (c.engine.empty() == c.measured.empty())
+    throw InputError("give exactly one of --engine TRUTH.json or --measured DIR");
+  Model sim = load_model_or_scheduled(c.simulation);
+  // The diagnosis's folder is its own until it ends (its measurements take their sub-folders).
+  const RunLock lock(c.out, "fralab diagnose");
+  DataSource src =
+      c.engine.empty() ? DataSource{c.measured, c.measured, {}} : measure_engine(c, sim, res);
+  const MeasuredFolder folder = read_measured_folder(src.dir);
+  DiagnoseOptions opt;
+  opt.chain = folder.chain;
+  std::vector<MeasuredPair> data = folder.data;
+  DataQuality from_sim;
+  const std::vector<SilentOutput> silent_kept = set_aside_silent_outputs(sim, data, opt, from_sim);
+  const Json levels_json = attach_levels(c, data);
+  Json baseline_json;
+  if (!c.baseline.empty()) {
+    BaselineSummary s;
+    data = relative_to_baseline(sim, data, read_measured_folder(c.baseline).data, opt, &s);
+    baseline_json = {{"folder", c.baseline},
+                     {"pairs", s.pairs},
+                     {"points", s.points},
+                     {"left_out", s.left_out},
+                     {"pairs_without", s.without}};
+    src.name += ", relative to the baseline " + c.baseline +
+                " (the simulation's misfit there is its own, not a finding)";
+  }
+  Diagnosis d = diagnose(sim, data, opt);
+  Json dj = diagnosis_to_json(d);
+  DataNotes notes;
+  dj["data_quality"] =
+      data_quality_section(c, d, sim, data, opt, src, from_sim, silent_kept, notes);
+  if (!baseline_json.is_null()) dj["baseline"] = baseline_json;
+  if (!levels_json.is_null()) dj["levels"] = levels_json;
+  json_save_file(c.out + "/diagnosis.json", dj);
+  write_extended_models(sim, d, c.out);
   const bool plots = c.plots && render_diagnosis_plots(d, c.out);
-  write_diagnosis_report(d, sim.name, data_name, plots, c.out, notes);
+  write_diagnosis_report(d, sim.name, src.name, plots, c.out, notes);
   write_report_html(c.out, "Diagnosis: " + sim.name);
   res.summary = diagnosis_summary(d, c.out);
   return res;
