@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 
 #include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
@@ -124,6 +125,99 @@ std::vector<SilentOutput> silent_outputs(const Model& sim, const std::vector<Mea
   return out;
 }
 
+namespace {
+
+// A clock error that could stand for finding f (index i): the delay it stands for (a lag's at low
+// frequency is 1 / corner) within the delay the clock's 2-sigma band gives its output's samples
+// by the measured periods' mean time.
+std::optional<DataAlternative> clock_alternative(
+    const Finding& f, int i, const std::map<std::string, ClockEvidence>& clocks) {
+  const auto c = clocks.find(f.output);
+  if (c == clocks.end()) return std::nullopt;
+  double tau = 0;
+  if (f.cause == CauseKind::kTimeDelay && f.parameters.count("delay_s"))
+    tau = f.parameters.at("delay_s");
+  else if (f.cause == CauseKind::kMissingLag && f.parameters.count("corner_rad_s"))
+    tau = 1 / f.parameters.at("corner_rad_s");
+  const ClockEvidence& e = c->second;
+  const double lo = (std::abs(e.eps) - 2 * e.sigma) * e.t_mid_s,
+               hi = (std::abs(e.eps) + 2 * e.sigma) * e.t_mid_s;
+  if (!(tau > 0 && e.eps > 0 && std::abs(e.eps) >= 2 * e.sigma && tau >= lo && tau <= hi))
+    return std::nullopt;
+  DataAlternative a;
+  a.kind = DataAlternative::Kind::kClock;
+  a.channel = f.output;
+  a.finding = i;
+  a.text = "or " + f.output + "'s recorder runs on a clock " + significant(100 * e.eps, 3) +
+           " % fast (+-" + significant(100 * e.sigma, 2) +
+           " %, too little for the recordings' checks to name): by the measured periods' " +
+           "mean time, " + significant(e.t_mid_s, 3) + " s from the run's start, that " +
+           "delays its samples by " + significant(1e3 * e.eps * e.t_mid_s, 3) + " ms; " +
+           "check its clock against the excitation's before changing the model";
+  return a;
+}
+
+// A finding at one channel that a wiring or units fault reproduces: a sign error (the wiring),
+// a gain within 1 % of a units factor or its inverse.
+void channel_alternatives(const Finding& f, int i, std::vector<DataAlternative>& out) {
+  const std::string ch = channel_of(f);
+  if (ch.empty()) return;
+  if (f.cause == CauseKind::kSignError) {
+    DataAlternative a;
+    a.kind = DataAlternative::Kind::kWiringSign;
+    a.channel = ch;
+    a.finding = i;
+    a.text = "or " + ch + " is wired with the wrong sign: check its wiring and the sign in " +
+             "the channel list before changing the model";
+    out.push_back(std::move(a));
+  } else if (f.cause == CauseKind::kGainMismatch && f.parameters.count("gain_db")) {
+    const double k = std::pow(10.0, f.parameters.at("gain_db") / 20);
+    for (const UnitsFactor& u : kUnits) {
+      for (const double want : {u.factor, 1.0 / u.factor}) {
+        if (std::abs(std::log(k / want)) > std::log(1.01)) continue;
+        DataAlternative a;
+        a.kind = DataAlternative::Kind::kUnits;
+        a.channel = ch;
+        a.finding = i;
+        a.factor = want;
+        a.text = "or " + ch + " is recorded in one unit and read in another: its gain " +
+                 significant(k, 4) + " is the factor " + significant(want, 7) + " between " +
+                 u.what + "; check the channel's units before changing the model";
+        out.push_back(std::move(a));
+      }
+    }
+  }
+}
+
+// Two outputs exchanged: each measured output matches the simulation's other far better than its
+// own.
+void swapped_outputs(const Model& sim, const std::vector<MeasuredPair>& data,
+                     const DiagnoseOptions& opt, std::vector<DataAlternative>& out) {
+  for (size_t a = 0; a < sim.outputs.size(); ++a) {
+    for (size_t b = a + 1; b < sim.outputs.size(); ++b) {
+      const std::string &A = sim.outputs[a].name, &B = sim.outputs[b].name;
+      const double ab = exchanged_error(sim, data, A, B, opt),
+                   ba = exchanged_error(sim, data, B, A, opt);
+      const double aa = exchanged_error(sim, data, A, A, opt),
+                   bb = exchanged_error(sim, data, B, B, opt);
+      if (!(ab + ba < kSwapRatio * (aa + bb) && std::max(ab, ba) < 0.5 * std::min(aa, bb)))
+        continue;
+      DataAlternative s;
+      s.kind = DataAlternative::Kind::kSwap;
+      s.channel = A;
+      s.other = B;
+      s.text = A + " and " + B + " look exchanged: measured " + A + " matches the simulation's " +
+               B + " (error " + significant(ab, 3) + " against " + significant(aa, 3) +
+               ") and measured " + B + " its " + A + " (" + significant(ba, 3) + " against " +
+               significant(bb, 3) + "); check the wiring and the channel list: the findings on " +
+               "their paths may be that alone";
+      out.push_back(std::move(s));
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& sim,
                                                const std::vector<MeasuredPair>& data,
                                                const DiagnoseOptions& opt,
@@ -133,30 +227,8 @@ std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& 
   std::vector<DataAlternative> out;
   for (size_t i = 0; i < d.findings.size(); ++i) {
     const Finding& f = d.findings[i];
-    if (const auto c = clocks.find(f.output); c != clocks.end()) {
-      // The delay the finding stands for: a lag's at low frequency is 1 / corner.
-      double tau = 0;
-      if (f.cause == CauseKind::kTimeDelay && f.parameters.count("delay_s"))
-        tau = f.parameters.at("delay_s");
-      else if (f.cause == CauseKind::kMissingLag && f.parameters.count("corner_rad_s"))
-        tau = 1 / f.parameters.at("corner_rad_s");
-      const ClockEvidence& e = c->second;
-      const double lo = (std::abs(e.eps) - 2 * e.sigma) * e.t_mid_s,
-                   hi = (std::abs(e.eps) + 2 * e.sigma) * e.t_mid_s;
-      if (tau > 0 && e.eps > 0 && std::abs(e.eps) >= 2 * e.sigma && tau >= lo && tau <= hi) {
-        DataAlternative a;
-        a.kind = DataAlternative::Kind::kClock;
-        a.channel = f.output;
-        a.finding = int(i);
-        a.text = "or " + f.output + "'s recorder runs on a clock " + significant(100 * e.eps, 3) +
-                 " % fast (+-" + significant(100 * e.sigma, 2) +
-                 " %, too little for the recordings' checks to name): by the measured periods' " +
-                 "mean time, " + significant(e.t_mid_s, 3) + " s from the run's start, that " +
-                 "delays its samples by " + significant(1e3 * e.eps * e.t_mid_s, 3) + " ms; " +
-                 "check its clock against the excitation's before changing the model";
-        out.push_back(std::move(a));
-      }
-    }
+    if (std::optional<DataAlternative> a = clock_alternative(f, int(i), clocks))
+      out.push_back(std::move(*a));
     for (const SilentOutput& s : silent) {
       if (f.output != s.output) continue;
       DataAlternative a;
@@ -179,56 +251,9 @@ std::vector<DataAlternative> data_alternatives(const Diagnosis& d, const Model& 
                "on its curves: measure again within range before changing the model";
       out.push_back(std::move(a));
     }
-    const std::string ch = channel_of(f);
-    if (ch.empty()) continue;
-    if (f.cause == CauseKind::kSignError) {
-      DataAlternative a;
-      a.kind = DataAlternative::Kind::kWiringSign;
-      a.channel = ch;
-      a.finding = int(i);
-      a.text = "or " + ch + " is wired with the wrong sign: check its wiring and the sign in " +
-               "the channel list before changing the model";
-      out.push_back(std::move(a));
-    } else if (f.cause == CauseKind::kGainMismatch && f.parameters.count("gain_db")) {
-      const double k = std::pow(10.0, f.parameters.at("gain_db") / 20);
-      for (const UnitsFactor& u : kUnits) {
-        for (const double want : {u.factor, 1.0 / u.factor}) {
-          if (std::abs(std::log(k / want)) > std::log(1.01)) continue;
-          DataAlternative a;
-          a.kind = DataAlternative::Kind::kUnits;
-          a.channel = ch;
-          a.finding = int(i);
-          a.factor = want;
-          a.text = "or " + ch + " is recorded in one unit and read in another: its gain " +
-                   significant(k, 4) + " is the factor " + significant(want, 7) + " between " +
-                   u.what + "; check the channel's units before changing the model";
-          out.push_back(std::move(a));
-        }
-      }
-    }
+    channel_alternatives(f, int(i), out);
   }
-  // Two outputs exchanged.
-  for (size_t a = 0; a < sim.outputs.size(); ++a) {
-    for (size_t b = a + 1; b < sim.outputs.size(); ++b) {
-      const std::string &A = sim.outputs[a].name, &B = sim.outputs[b].name;
-      const double ab = exchanged_error(sim, data, A, B, opt),
-                   ba = exchanged_error(sim, data, B, A, opt);
-      const double aa = exchanged_error(sim, data, A, A, opt),
-                   bb = exchanged_error(sim, data, B, B, opt);
-      if (!(ab + ba < kSwapRatio * (aa + bb) && std::max(ab, ba) < 0.5 * std::min(aa, bb)))
-        continue;
-      DataAlternative s;
-      s.kind = DataAlternative::Kind::kSwap;
-      s.channel = A;
-      s.other = B;
-      s.text = A + " and " + B + " look exchanged: measured " + A + " matches the simulation's " +
-               B + " (error " + significant(ab, 3) + " against " + significant(aa, 3) +
-               ") and measured " + B + " its " + A + " (" + significant(ba, 3) + " against " +
-               significant(bb, 3) + "); check the wiring and the channel list: the findings on " +
-               "their paths may be that alone";
-      out.push_back(std::move(s));
-    }
-  }
+  swapped_outputs(sim, data, opt, out);
   return out;
 }
 

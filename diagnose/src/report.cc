@@ -77,10 +77,11 @@ bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
   return true;
 }
 
-void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
-                            const std::string& data_name, bool plots, const std::string& dir,
-                            const DataNotes& data) {
-  std::ofstream md(dir + "/report.md");
+namespace {
+
+// The report's sections, each written to md in order (md's precision, set by the first, holds).
+void report_header(std::ostream& md, const Diagnosis& d, const std::string& sim_name,
+                   const std::string& data_name) {
   md << "# Diagnosis: " << sim_name << "\n\nMeasured data: " << data_name << "\n\n";
   md << "Error (" << d.metric << "): simulation **" << std::setprecision(3) << d.error_before
      << "**, extended model **" << d.error_after << "**";
@@ -98,7 +99,11 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
   } else {
     md << "ideal (none recorded)";
   }
-  md << ".\n\n## Data quality\n\n";
+  md << ".\n";
+}
+
+void report_data_quality(std::ostream& md, const DataNotes& data) {
+  md << "\n## Data quality\n\n";
   if (!data.checked) {
     md << "The recordings were not checked (measured before fralab checked them): look at "
           "them before trusting a finding.\n";
@@ -109,6 +114,9 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
   for (const std::string& l : data.faults) md << "- " << l << "\n";
   for (const DataAlternative& a : data.alternatives)
     if (a.finding < 0) md << "- " << a.text << ".\n";
+}
+
+void report_findings(std::ostream& md, const Diagnosis& d, const DataNotes& data) {
   md << "\n## Findings\n\n";
   if (d.findings.empty())
     md << "None: every measured response agrees with the simulation within its uncertainty.\n";
@@ -129,6 +137,10 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
       if (a.finding == int(&f - d.findings.data()))
         md << "  - Data alternative: " << a.text << ".\n";
   }
+}
+
+// What fits as well (the state model's other sets), what was dropped, and what nothing explains.
+void report_beside_findings(std::ostream& md, const Diagnosis& d) {
   if (!d.state_alternatives.empty()) {
     md << "\n## As well fitted (other entries of the state model the data cannot tell apart)\n\n";
     for (const StateAlternative& a : d.state_alternatives) {
@@ -162,22 +174,37 @@ void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
          << u.explanation << ".\n";
     }
   }
+}
+
+void report_pairs(std::ostream& md, const Diagnosis& d, bool plots, const std::string& dir) {
   md << "\n## Pairs\n\n| pair | beyond uncertainty | chi2 sim | chi2 extended | error sim | error "
         "extended |\n|---|---|---|---|---|---|\n";
   for (const auto& p : d.pairs) {
     md << "| " << p.pair << " | " << (p.beyond ? "yes" : "no") << " | " << p.chi2_sim << " | "
        << p.chi2_ext << " | " << p.error_sim << " | " << p.error_ext << " |\n";
   }
-  if (plots) {
-    if (std::filesystem::exists(dir + "/plots/overview.png"))
-      md << "\n## The transfer matrix at a glance\n\nGain (dB) above phase (degrees) of each "
-            "output (rows) per input (columns) over frequency (Hz).\n\n"
-         << "![the transfer matrix: measured, simulation, extended model](plots/overview.png)\n";
-    md << "\n## Bode plots (measured with sigma, simulation, extended model; residuals "
-          "measured/model)\n\n";
-    for (const auto& p : d.pairs)
-      md << "![" << p.pair << "](plots/" << pair_file_stem(p.pair) << ".png)\n\n";
-  }
+  if (!plots) return;
+  if (std::filesystem::exists(dir + "/plots/overview.png"))
+    md << "\n## The transfer matrix at a glance\n\nGain (dB) above phase (degrees) of each "
+          "output (rows) per input (columns) over frequency (Hz).\n\n"
+       << "![the transfer matrix: measured, simulation, extended model](plots/overview.png)\n";
+  md << "\n## Bode plots (measured with sigma, simulation, extended model; residuals "
+        "measured/model)\n\n";
+  for (const auto& p : d.pairs)
+    md << "![" << p.pair << "](plots/" << pair_file_stem(p.pair) << ".png)\n\n";
+}
+
+}  // namespace
+
+void write_diagnosis_report(const Diagnosis& d, const std::string& sim_name,
+                            const std::string& data_name, bool plots, const std::string& dir,
+                            const DataNotes& data) {
+  std::ofstream md(dir + "/report.md");
+  report_header(md, d, sim_name, data_name);
+  report_data_quality(md, data);
+  report_findings(md, d, data);
+  report_beside_findings(md, d);
+  report_pairs(md, d, plots, dir);
 }
 
 std::string diagnosis_summary(const Diagnosis& d, const std::string& dir) {

@@ -8,6 +8,29 @@
 #include "fralab/core/pair_id.h"
 
 namespace fralab::diag {
+namespace {
+
+// The entries `moved` sets at values moved_v, in e and v: a named parameter as the entries it sets
+// (their moves add: no set holds two that overlap), each valued as it sets it; the added lags and
+// delays as they are.
+void expand_named(const StateSpace& sim, const std::vector<StateEntry>& moved,
+                  const std::vector<double>& moved_v, std::vector<StateEntry>& e,
+                  std::vector<double>& v) {
+  for (size_t k = 0; k < moved.size(); ++k) {
+    if (!moved[k].named()) {
+      e.push_back(moved[k]), v.push_back(moved_v[k]);
+      continue;
+    }
+    const NamedParameter& np = sim.parameters[size_t(moved[k].row)];
+    for (const NamedParameter::Entry& x : np.entries) {
+      e.push_back({x.matrix, x.row, x.col});
+      v.push_back(entry_value(sim, e.back()) *
+                  (x.inverse ? np.value / moved_v[k] : moved_v[k] / np.value));
+    }
+  }
+}
+
+}  // namespace
 
 StateEval::StateEval(const DiagnosisRun& r, const StateSpace& sim, const Paths& sim_paths)
     : r_(r), sim_(sim) {
@@ -53,22 +76,9 @@ bool StateEval::responses(const StateSpace& ss, std::vector<Eigen::MatrixXcd>* g
 
 std::vector<Eigen::MatrixXcd> StateEval::moved_responses(const std::vector<StateEntry>& moved,
                                                          const std::vector<double>& moved_v) const {
-  // A named parameter as the entries it sets (their moves add: no set holds two that
-  // overlap), each valued as it sets it; the added lags and delays as they are.
   std::vector<StateEntry> e;
   std::vector<double> v;
-  for (size_t k = 0; k < moved.size(); ++k) {
-    if (!moved[k].named()) {
-      e.push_back(moved[k]), v.push_back(moved_v[k]);
-      continue;
-    }
-    const NamedParameter& np = sim_.parameters[size_t(moved[k].row)];
-    for (const NamedParameter::Entry& x : np.entries) {
-      e.push_back({x.matrix, x.row, x.col});
-      v.push_back(entry_value(sim_, e.back()) *
-                  (x.inverse ? np.value / moved_v[k] : moved_v[k] / np.value));
-    }
-  }
+  expand_named(sim_, moved, moved_v, e, v);
   std::vector<int> a;
   std::vector<double> delta(e.size());
   for (size_t k = 0; k < e.size(); ++k) {
