@@ -823,6 +823,28 @@ TEST(Diagnose, AMoveOfARootAnotherFindingAddedIsThatFindingMoved) {
   for (const Finding& f : d.findings) EXPECT_NE(f.cause, CauseKind::kMissingResonance) << json;
 }
 
+// A one-input plant's path with a 26.4 rad/s lag and an 8.0 ms delay (tests/data/lab/
+// machine_s27_c53). The path's own fit takes them for a 22.1 rad/s lag and a resonance at 91 rad/s,
+// zeta 0.07; the delay that replaces the resonance fits only when the lag beside it is sized again
+// with it (at 22.1 rad/s the delay is refused, and a lag at 103 rad/s would stand in for it). The
+// alternatives are sized together with the findings on the resonance's pairs: the lag and the
+// delay, each within its tolerance, and nothing else.
+TEST(Diagnose, AResonancesAlternativeIsSizedWithTheFindingsBesideIt) {
+  constexpr double kCornerTol = 0.05, kDelayTolS = 1e-3;
+  const auto& [c, d, json] = LabCase(27, 53);
+  const testing::HiddenEffect* lag = hidden_at(c, CauseKind::kMissingLag, Scope::kPath);
+  const testing::HiddenEffect* delay = hidden_at(c, CauseKind::kTimeDelay, Scope::kPath);
+  ASSERT_NE(lag, nullptr);
+  ASSERT_NE(delay, nullptr);
+  EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
+  const Finding* fl = found_of(d, CauseKind::kMissingLag);
+  const Finding* fd = found_of(d, CauseKind::kTimeDelay);
+  ASSERT_NE(fl, nullptr) << json;
+  ASSERT_NE(fd, nullptr) << json;
+  EXPECT_NEAR(fl->parameters.at("corner_rad_s") / lag->value, 1, kCornerTol) << json;
+  EXPECT_NEAR(fd->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+}
+
 // An input's -2.75 dB calibration on its two paths beside a 9.77 rad/s lag on one of them
 // (tests/data/lab/machine_s19_c35). The lagged path's own fit splits the two as -2.42 dB and a
 // moved pole; the group from it, tried first, is refused. The group from the other path's -2.75

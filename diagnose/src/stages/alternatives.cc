@@ -4,13 +4,15 @@
 // finding, those three alternatives are fitted over the finding's pairs at its scope, every other
 // finding in place: the delay by a grid over [0, delay_max_s] (0.25 ms) then Brent's method, the
 // lag by a grid over ln corner from a tenth of the pairs' lowest frequency to 30 times their
-// highest, the two together from those by Levenberg-Marquardt (joint.cc's refine). The finding is
-// replaced by the alternative with the lowest BIC over its pairs, chi2 + k ln 2N (k: 2 for the
-// resonance and for the lag with the delay, 1 for either alone), when that is lower than the
-// resonance's. A missing lag whose corner lies above its pairs' band is replaced by a delay fitted
-// the same way when the delay's chi2 is within one ln 2N of the lag's.
+// highest, the two together from those by Levenberg-Marquardt (joint.cc's refine), each then sized
+// with the findings whose pairs all lie among the resonance's. The finding is replaced by the
+// alternative with the lowest BIC over its pairs, chi2 + k ln 2N (k: 2 for the resonance and for
+// the lag with the delay, 1 for either alone), when that is lower than the resonance's. A missing
+// lag whose corner lies above its pairs' band is replaced by a delay fitted and sized the same way
+// when the delay's chi2 is within one ln 2N of the lag's.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "stages.h"
 
@@ -51,6 +53,17 @@ struct Around {
     return a;
   }
   Finding delay(double t) const { return at_scope(CauseKind::kTimeDelay, "delay_s", t); }
+  // The other findings whose pairs all lie among f's (indices into `others`).
+  std::vector<size_t> inside() const {
+    std::vector<size_t> out;
+    for (size_t x = 0; x < others.size(); ++x)
+      if (!others[x].pairs.empty() &&
+          std::all_of(others[x].pairs.begin(), others[x].pairs.end(), [&](const std::string& q) {
+            return std::find(f.pairs.begin(), f.pairs.end(), q) != f.pairs.end();
+          }))
+        out.push_back(x);
+    return out;
+  }
   Finding lag(double lc) const { return at_scope(CauseKind::kMissingLag, "corner_rad_s", lc); }
   // The delay on top of `under` that fits best: a grid over [0, delay_max_s], then Brent's method.
   double best_delay(const std::vector<Finding>& under) const {
@@ -91,7 +104,7 @@ bool resonance_alternative(DiagnosisRun& r, size_t i) {
   };
   const std::vector<Alt> alts{{{a.delay(t)}, 1}, {{a.lag(lc)}, 1}, {{both[il], both[id]}, 2}};
   double best = a.chi2_with({f}) + 2 * a.pen;
-  const Alt* chosen = nullptr;
+  std::optional<std::vector<Finding>> chosen;
   for (const Alt& alt : alts) {
     // A delay stays >= 0 and a lag's corner inside what its search saw.
     bool ok = true;
@@ -103,11 +116,17 @@ bool resonance_alternative(DiagnosisRun& r, size_t i) {
       }
     }
     if (!ok) continue;
-    const double bic = a.chi2_with(alt.extra) + alt.k * a.pen;
-    if (bic < best) best = bic, chosen = &alt;
+    // Sized together with the findings on the resonance's pairs alone (a path's lag beside it,
+    // fitted with the resonance, is off for the delay that replaces it).
+    std::vector<Finding> all = a.with(alt.extra);
+    std::vector<size_t> group = a.inside();
+    for (size_t k = 0; k < alt.extra.size(); ++k) group.push_back(a.others.size() + k);
+    if (group.size() > alt.extra.size()) refine(r, all, group, a.pairs, 1);
+    const double bic = chi2_of(r, extended_by(r, all, all.size()), a.pairs) + alt.k * a.pen;
+    if (bic < best) best = bic, chosen = std::move(all);
   }
   if (!chosen) return false;
-  r.findings = a.with(chosen->extra);
+  r.findings = std::move(*chosen);
   return true;
 }
 
@@ -120,8 +139,15 @@ bool lag_above_band(DiagnosisRun& r, size_t i) {
   if (!(a.f.parameters.at("corner_rad_s") > a.w_hi)) return false;
   const Finding d = a.delay(a.best_delay({}));
   if (!(d.parameters.at("delay_s") > 0)) return false;
-  if (!(a.chi2_with({d}) <= a.chi2_with({a.f}) + a.pen)) return false;
-  r.findings = a.with({d});
+  // Sized together with the findings on the lag's pairs alone, as a resonance's alternatives.
+  std::vector<Finding> all = a.with({d});
+  std::vector<size_t> group = a.inside();
+  group.push_back(all.size() - 1);
+  if (group.size() > 1) refine(r, all, group, a.pairs, 1);
+  if (!(all.back().parameters.at("delay_s") > 0)) return false;
+  if (!(chi2_of(r, extended_by(r, all, all.size()), a.pairs) <= a.chi2_with({a.f}) + a.pen))
+    return false;
+  r.findings = std::move(all);
   return true;
 }
 
