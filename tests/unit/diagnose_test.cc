@@ -845,6 +845,26 @@ TEST(Diagnose, AResonancesAlternativeIsSizedWithTheFindingsBesideIt) {
   EXPECT_NEAR(fd->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
 }
 
+// A one-input plant's slow mode moved 1.58 -> 2.63 rad/s in every path, beside its actuator made
+// faster and a 26 ms delay on one path (tests/data/lab/machine_s20_c11). The mode came back as two
+// plant findings, 1.58 -> 2.60 and 2.60 -> 2.63 rad/s: the second moves the root the first placed.
+// One root's two moves at one place are one finding: the mode moved to 2.63, within its
+// tolerance, and every hidden effect named once.
+TEST(Diagnose, TwoMovesOfOneRootAreOneFinding) {
+  constexpr double kPoleTol = 0.01;
+  const auto& [c, d, json] = LabCase(20, 11);
+  const testing::HiddenEffect* mode = hidden_at(c, CauseKind::kPoleShift, Scope::kPlant);
+  ASSERT_NE(mode, nullptr);
+  EXPECT_EQ(d.findings.size(), c.hidden.size()) << json;
+  int plant_moves = 0;
+  for (const Finding& f : d.findings) {
+    if (f.cause != CauseKind::kPoleShift || f.scope != Scope::kPlant) continue;
+    ++plant_moves;
+    EXPECT_NEAR(f.parameters.at("to_rad_s") / mode->value, 1, kPoleTol) << json;
+  }
+  EXPECT_EQ(plant_moves, 1) << json;
+}
+
 // An input's -2.75 dB calibration on its two paths beside a 9.77 rad/s lag on one of them
 // (tests/data/lab/machine_s19_c35). The lagged path's own fit splits the two as -2.42 dB and a
 // moved pole; the group from it, tried first, is refused. The group from the other path's -2.75

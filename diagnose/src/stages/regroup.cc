@@ -270,10 +270,11 @@ bool same_place(const Finding& f, const Finding& g) {
 }
 
 // A pole shift or damping error that moves a root another finding at its place added (a missing
-// resonance's pair, a missing lag's pole), within kSameRoot, is that finding with the root moved:
-// one finding. A resonance moved past critical damping is two real poles, wn (zeta -+
-// sqrt(zeta^2 - 1)); where the faster lies beyond kFarBeyondBand times its pairs' highest measured
-// frequency (its phase there under 0.01 rad), it is a lag at the slower. True when any was folded.
+// resonance's pair, a missing lag's pole) or moved (a pole shift's to), within kSameRoot, is that
+// finding with the root moved: one finding. A resonance moved past critical damping is two real
+// poles, wn (zeta -+ sqrt(zeta^2 - 1)); where the faster lies beyond kFarBeyondBand times its
+// pairs' highest measured frequency (its phase there under 0.01 rad), it is a lag at the slower.
+// True when any was folded.
 bool moved_roots_folded(DiagnosisRun& r) {
   constexpr double kSameRoot = 1e-3, kFarBeyondBand = 100;
   std::vector<Finding>& fs = r.findings;
@@ -287,16 +288,23 @@ bool moved_roots_folded(DiagnosisRun& r) {
     const double from = f.parameters.at(key);
     for (size_t b = 0; b < fs.size(); ++b) {
       Finding& g = fs[b];
+      const bool shift = f.cause == CauseKind::kPoleShift;
       const bool resonance = g.cause == CauseKind::kMissingResonance,
-                 lag = g.cause == CauseKind::kMissingLag && f.cause == CauseKind::kPoleShift;
-      if (b == a || g.tf || !g.text_parameters.empty() || !(resonance || lag) || !same_place(f, g))
+                 lag = g.cause == CauseKind::kMissingLag && shift,
+                 moved = g.cause == CauseKind::kPoleShift && shift;
+      if (b == a || g.tf || !g.text_parameters.empty() || !(resonance || lag || moved) ||
+          !same_place(f, g))
         continue;
-      const char* root_key = resonance ? "wn_rad_s" : "corner_rad_s";
+      const char* root_key = resonance ? "wn_rad_s" : lag ? "corner_rad_s" : "to_rad_s";
       if (!g.parameters.count(root_key)) continue;
       const double root = g.parameters.at(root_key);
       if (!(std::abs(from - root) <= kSameRoot * root)) continue;
       if (lag) {
         g.parameters[root_key] = f.parameters.at("to_rad_s");
+      } else if (moved) {  // the root g moved, moved on: g to where f took it
+        g.parameters[root_key] = f.parameters.at("to_rad_s");
+        for (const char* k : {"to_zeta", "zeta"})
+          if (f.parameters.count(k) && g.parameters.count(k)) g.parameters[k] = f.parameters.at(k);
       } else {
         const double wn = f.cause == CauseKind::kPoleShift ? f.parameters.at("to_rad_s")
                                                            : g.parameters.at(root_key);
