@@ -9,8 +9,12 @@
 #include "fralab/analyze/fourier_filter.h"
 #include "fralab/analyze/period_fft.h"
 #include "fralab/analyze/repeats.h"
+#include "line_statistics.h"
+#include "orthogonal_multisine.h"
 
 namespace fralab {
+
+using namespace analyze_detail;
 
 void AnalyzerOptions::validate() const {
   if (max_blocks < 2)
@@ -25,6 +29,7 @@ PairAnalyzer::PairAnalyzer(const std::string& pair, const AnalyzerOptions& optio
       store_(store ? std::move(store) : std::make_shared<SampleStore>()) {
   opt_.validate();
   std::tie(e1_, e2_) = split_pair(pair);
+  orthogonal_ = std::make_unique<OrthogonalRealisations>(e1_, e2_, opt_.distortion_threshold);
   for (const std::string& ch : {e1_, e2_, std::string("ref_phase")}) store_->keep(ch);
   reader_ = store_->add_reader();
 }
@@ -33,6 +38,18 @@ PairAnalyzer::~PairAnalyzer() { store_->remove_reader(reader_); }
 
 const double* PairAnalyzer::samples(const std::string& ch, int64_t n) const {
   return store_->channel(ch)->data() + (n - store_->base());
+}
+
+std::function<const double*(const std::string&)> PairAnalyzer::window_channel(
+    const StatusEvent& st) const {
+  return [this, st](const std::string& ch) -> const double* {
+    const std::vector<double>* v = store_->channel(ch);
+    if (!v || st.sample - store_->base() + st.n_samples > int64_t(v->size())) return nullptr;
+    const double* c = samples(ch, st.sample);
+    for (int64_t k = 0; k < st.n_samples; ++k)
+      if (std::isnan(c[k])) return nullptr;
+    return c;
+  };
 }
 
 bool PairAnalyzer::wants(const StatusEvent& st) const {
@@ -68,50 +85,6 @@ static std::vector<int> orthogonal_inputs(const StatusEvent& st) {
   std::set<int> all;
   for (int i : st.line_input) all.insert(i);
   return {all.begin(), all.end()};
-}
-
-// An orthogonal multisine's lines: unique, ascending, within 1..P/2-1 (what a period resolves).
-static std::vector<int> orthogonal_lines(const StatusEvent& st) {
-  std::set<int> uniq;
-  for (int k : st.lines)
-    if (k >= 1 && k < st.period_samples / 2) uniq.insert(k);
-  return {uniq.begin(), uniq.end()};
-}
-
-// The nearest line no input excites on each side of line k (at most two), within 1..P/2-1.
-static std::vector<int> unexcited_neighbours(const std::vector<bool>& excited, int k, int P) {
-  std::vector<int> out;
-  for (int dir : {-1, 1})
-    for (int kk = k + dir; kk >= 1 && kk < P / 2; kk += dir)
-      if (!excited[kk]) {
-        out.push_back(kk);
-        break;
-      }
-  return out;
-}
-
-// sum_p |z_p - mean_p z|^2 over the M periods: the spread of a line's period values about their
-// mean (a periodic part, distortion or the response itself, cancels in it).
-template <class Z>
-static double period_spread(int M, const Z& z) {
-  std::complex<double> zm = 0;
-  for (int p = 0; p < M; ++p) zm += z(p);
-  zm /= double(M);
-  double s = 0;
-  for (int p = 0; p < M; ++p) s += std::norm(z(p) - zm);
-  return s;
-}
-
-// A point's sigma, > 0 as the contract needs: noise-free periods repeat exactly and spread by 0.
-static double positive_sigma(double sigma, double mag) {
-  return sigma > 0 ? sigma : 1e-300 + 1e-15 * mag;
-}
-
-static std::pair<std::string, double> first_excited(const StatusEvent& st) {
-  for (size_t i = 0; i < st.inputs.size() && i < st.amplitudes.size(); ++i) {
-    if (st.amplitudes[i] > 0.0) return {st.inputs[i], st.amplitudes[i]};
-  }
-  return {"", 0.0};
 }
 
 void PairAnalyzer::on_status(const StatusEvent& st) {
@@ -266,14 +239,15 @@ void PairAnalyzer::try_complete(bool force) {
       }
     }
     if (!it->second.ins.empty()) {
-      Experiment ex;
+      OrthogonalExperiment ex;
       if (ready) {
-        ex = orthogonal_experiment(it->second);
+        ex = orthogonal_experiment(st, it->second.ins, samples(e1_, st.sample),
+                                   samples(e2_, st.sample), window_channel(st));
       } else {
         ex.valid = false;
         ex.note = "incomplete window: " + describe_gaps(a, b);
       }
-      for (const FrdPoint& q : add_experiment(it->second, std::move(ex))) {
+      for (const FrdPoint& q : orthogonal_->add(st, it->second.ins, std::move(ex))) {
         realisation_points_.push_back(q);
         fresh_.push_back(q);
       }
@@ -308,22 +282,10 @@ void PairAnalyzer::try_complete(bool force) {
 void PairAnalyzer::flush() {
   try_complete(true);
   // Orthogonal multisine realisations whose experiments never all arrived (their status lost).
-  for (auto& [r, g] : groups_) {
-    const int nu = int(g.ins.size());
-    std::string missing;
-    for (int e = 0; e < nu; ++e)
-      if (!g.experiments.count(e)) missing += (missing.empty() ? "" : ", ") + std::to_string(e + 1);
-    FrdPoint p;
-    p.step = r * nu;
-    p.valid = false;
-    p.input = first_excited(g.st).first;
-    p.note = "orthogonal multisine realisation " + std::to_string(r + 1) + ": experiment(s) " +
-             missing + " of " + std::to_string(nu) +
-             " never arrived (their status is not on the tape)";
+  for (const FrdPoint& p : orthogonal_->incomplete()) {
     points_.push_back(p);
     fresh_.push_back(p);
   }
-  groups_.clear();
 }
 
 void PairAnalyzer::trim() {
@@ -500,245 +462,6 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     }
     q.nl_rel = nb.empty() ? 0.0 : lvl / double(nb.size()) / std::max(std::abs(m2), 1e-300);
     out.push_back(q);
-  }
-  return out;
-}
-
-PairAnalyzer::Experiment PairAnalyzer::orthogonal_experiment(const Window& win) {
-  const StatusEvent& st = win.st;
-  Experiment ex;
-  const int P = st.period_samples;
-  const int M = P > 0 ? int(st.n_samples / P) : 0;
-  const std::vector<int>& ins = win.ins;
-  if (P < 4 || M < 2) {
-    ex.valid = false;
-    ex.note = "multisine status without periods or lines";
-    return ex;
-  }
-  auto channel = [&](const std::string& ch) -> const double* {
-    const std::vector<double>* v = store_->channel(ch);
-    if (!v || st.sample - store_->base() + st.n_samples > int64_t(v->size())) return nullptr;
-    const double* c = samples(ch, st.sample);
-    for (int64_t k = 0; k < st.n_samples; ++k)
-      if (std::isnan(c[k])) return nullptr;
-    return c;
-  };
-  std::vector<const double*> u, pos;
-  for (int i : ins) {
-    const std::string& name = st.inputs[i];
-    u.push_back(channel("u_" + name));
-    pos.push_back(channel(name));
-    if (!u.back() || !pos.back()) {
-      ex.valid = false;
-      ex.note = "orthogonal multisine: the tape has no channel " + (u.back() ? name : "u_" + name) +
-                " over the window (the analyser solves with every input's command and position)";
-      return ex;
-    }
-  }
-  const std::vector<int> lines = orthogonal_lines(st);
-  std::vector<bool> excited(P / 2 + 1, false);
-  for (int k : lines)
-    if (k >= 0 && k <= P / 2) excited[k] = true;
-  PeriodFft fft(P);
-  auto period_spectrum = [&](const double* x, int p) { return fft(x + size_t(p) * P); };
-  const size_t L = lines.size();
-  ex.x1.assign(L, std::vector<Complex>(M));
-  ex.x2.assign(L, std::vector<Complex>(M));
-  // The nearest non-excited line each side of every line (pooled noise).
-  std::vector<std::vector<int>> nbk(L);
-  for (size_t j = 0; j < L; ++j) nbk[j] = unexcited_neighbours(excited, lines[j], P);
-  ex.nb1.assign(L, {});
-  ex.nb2.assign(L, {});
-  for (size_t j = 0; j < L; ++j) {
-    ex.nb1[j].assign(nbk[j].size(), std::vector<Complex>(M));
-    ex.nb2[j].assign(nbk[j].size(), std::vector<Complex>(M));
-  }
-  ex.u.assign(L, std::vector<Complex>(ins.size(), 0.0));
-  ex.pos.assign(L, std::vector<Complex>(ins.size(), 0.0));
-  ex.nl.assign(L, 0.0);
-  std::vector<Complex> x2_mean(P / 2 + 1, 0.0);
-  std::vector<std::vector<Complex>> pos_mean(ins.size(), std::vector<Complex>(P / 2 + 1, 0.0));
-  // [input q][line j][line, then its neighbours][period]: the positions per period, for their
-  // noise.
-  std::vector<std::vector<std::vector<std::vector<Complex>>>> posp(ins.size());
-  for (auto& pq : posp) {
-    pq.resize(L);
-    for (size_t j = 0; j < L; ++j) pq[j].assign(1 + nbk[j].size(), std::vector<Complex>(M));
-  }
-  const double* a = samples(e1_, st.sample);
-  const double* b = samples(e2_, st.sample);
-  for (int p = 0; p < M; ++p) {
-    const auto s1 = period_spectrum(a, p);
-    const auto s2 = period_spectrum(b, p);
-    for (size_t j = 0; j < L; ++j) {
-      ex.x1[j][p] = s1[lines[j]];
-      ex.x2[j][p] = s2[lines[j]];
-      for (size_t n = 0; n < nbk[j].size(); ++n) {
-        ex.nb1[j][n][p] = s1[nbk[j][n]];
-        ex.nb2[j][n][p] = s2[nbk[j][n]];
-      }
-    }
-    for (size_t k = 0; k < x2_mean.size(); ++k) x2_mean[k] += s2[k] / double(M);
-    for (size_t q = 0; q < ins.size(); ++q) {
-      const auto su = period_spectrum(u[q], p);
-      for (size_t j = 0; j < L; ++j) ex.u[j][q] += su[lines[j]] / double(M);
-      const auto sp = period_spectrum(pos[q], p);
-      for (size_t k = 0; k < sp.size(); ++k) pos_mean[q][k] += sp[k] / double(M);
-      for (size_t j = 0; j < L; ++j) {
-        posp[q][j][0][p] = sp[lines[j]];
-        for (size_t n = 0; n < nbk[j].size(); ++n) posp[q][j][1 + n][p] = sp[nbk[j][n]];
-      }
-    }
-  }
-  // A channel's mean level on line j's unexcited neighbours, relative to line j.
-  auto distortion = [&](const std::vector<Complex>& x, size_t j) {
-    double lvl = 0;
-    for (int kk : nbk[j]) lvl += std::abs(x[kk]);
-    return nbk[j].empty() ? 0.0
-                          : lvl / double(nbk[j].size()) / std::max(std::abs(x[lines[j]]), 1e-300);
-  };
-  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, j);
-  ex.pos_nl.assign(ins.size(), 0.0);
-  ex.pos_var.assign(L, std::vector<double>(ins.size(), 0.0));
-  for (size_t q = 0; q < ins.size(); ++q) {
-    std::vector<double> d(L);
-    for (size_t j = 0; j < L; ++j) {
-      ex.pos[j][q] = pos_mean[q][lines[j]];
-      double ss = 0;
-      for (const std::vector<Complex>& v : posp[q][j])
-        ss += period_spread(M, [&](int p) { return v[size_t(p)]; });
-      ex.pos_var[j][q] = ss / (double(posp[q][j].size()) * double(M) * (M - 1));
-      d[j] = distortion(pos_mean[q], j);
-    }
-    std::nth_element(d.begin(), d.begin() + L / 2, d.end());
-    ex.pos_nl[q] = L ? d[L / 2] : 0.0;
-  }
-  return ex;
-}
-
-std::vector<FrdPoint> PairAnalyzer::add_experiment(const Window& win, Experiment ex) {
-  const StatusEvent& st = win.st;
-  const int r = st.step / int(win.ins.size()), e = st.step % int(win.ins.size());
-  Group& g = groups_[r];
-  if (g.experiments.empty()) g.st = st, g.ins = win.ins;
-  // Every experiment of a realisation must state the same design (a corrupt status may not).
-  if (st.step < 0 || st.lines != g.st.lines || st.line_input != g.st.line_input ||
-      st.inputs != g.st.inputs || st.period_samples != g.st.period_samples) {
-    ex.valid = false;
-    ex.note =
-        "its status states another design than experiment 1's (step, lines, inputs or "
-        "period)";
-  }
-  g.experiments[e] = std::move(ex);
-  for (int k = 0; k < int(g.ins.size()); ++k)
-    if (!g.experiments.count(k)) return {};
-  // The realisation is complete (experiments 0..n_u-1 of its first status's design): solve per
-  // line.
-  Group grp = std::move(g);
-  groups_.erase(r);
-  const std::vector<int>& ins = grp.ins;
-  const int nu = int(ins.size());
-  const std::vector<int> lines = orthogonal_lines(grp.st);
-  const double df = grp.st.sample_rate_hz / grp.st.period_samples;
-  auto name = [&](int q) { return grp.st.inputs[ins[q]]; };
-  // The pair's input(s): the one named by E1 or E2 (u_X or X); none: every input.
-  std::vector<int> want;
-  for (int q = 0; q < nu; ++q)
-    for (const std::string& ch : {e1_, e2_})
-      if ((ch == name(q) || ch == "u_" + name(q)) &&
-          std::find(want.begin(), want.end(), q) == want.end())
-        want.push_back(q);
-  if (want.empty())
-    for (int q = 0; q < nu; ++q) want.push_back(q);
-  std::string bad;
-  for (const auto& [ee, x] : grp.experiments)
-    if (!x.valid)
-      bad += (bad.empty() ? "" : "; ") + ("experiment " + std::to_string(ee + 1) + ": " + x.note);
-  // Regressors: every input's command, except that for a pair X:O an input whose position
-  // distorts enters by its measured position.
-  const auto& gin = grp.st.inputs;
-  const bool position_pair = std::find(gin.begin(), gin.end(), e1_) != gin.end();
-  std::vector<bool> by_position(nu, false);
-  if (position_pair && bad.empty()) {
-    for (int q = 0; q < nu; ++q) {
-      double d = 0;
-      for (const auto& [ee, x] : grp.experiments) d += x.pos_nl[q] / nu;
-      by_position[q] = d > opt_.distortion_threshold;
-    }
-  }
-  std::vector<FrdPoint> out;
-  for (size_t j = 0; j < lines.size(); ++j) {
-    for (int q : want) {
-      FrdPoint p;
-      p.w = 2 * std::numbers::pi * lines[j] * df;
-      p.step = r * nu;
-      p.input = name(q);
-      p.amplitude = size_t(ins[q]) < grp.st.amplitudes.size() ? grp.st.amplitudes[ins[q]] : 0.0;
-      if (!bad.empty()) {
-        p.valid = false;
-        p.note = "orthogonal multisine realisation " + std::to_string(r + 1) + ": " + bad;
-        out.push_back(p);
-        continue;
-      }
-      p.n_cycles = int(grp.experiments.begin()->second.x1[j].size());
-      Eigen::MatrixXcd U(nu, nu);
-      Eigen::VectorXcd X1(nu), X2(nu);
-      for (int ee = 0; ee < nu; ++ee) {
-        const Experiment& x = grp.experiments.at(ee);
-        for (int qq = 0; qq < nu; ++qq) U(qq, ee) = by_position[qq] ? x.pos[j][qq] : x.u[j][qq];
-        const int M = int(x.x1[j].size());
-        Complex m1 = 0, m2 = 0;
-        for (int pp = 0; pp < M; ++pp) m1 += x.x1[j][pp], m2 += x.x2[j][pp];
-        X1(ee) = m1 / double(M);
-        X2(ee) = m2 / double(M);
-      }
-      Eigen::JacobiSVD<Eigen::MatrixXcd> svd(U);
-      const auto sv = svd.singularValues();
-      if (!(sv(nu - 1) > 1e-9 * sv(0))) {
-        p.valid = false;
-        p.note = "orthogonal multisine: the commands do not span the " + std::to_string(nu) +
-                 " inputs at line " + std::to_string(lines[j]) + " (singular input matrix)";
-        out.push_back(p);
-        continue;
-      }
-      const Eigen::MatrixXcd Ui = U.inverse();  // h = X U^{-1}: h_q = sum_e X_e Ui(e, q)
-      const Complex h1 = X1.transpose() * Ui.col(q), h2 = X2.transpose() * Ui.col(q);
-      if (std::abs(h1) == 0.0 || !std::isfinite(std::abs(h1)) || !std::isfinite(std::abs(h2))) {
-        p.valid = false;
-        p.note = "channel " + e1_ + " has no response to input " + p.input + " at line " +
-                 std::to_string(lines[j]);
-        out.push_back(p);
-        continue;
-      }
-      const Complex R = h2 / h1;
-      // Every input's coefficient in both channels (the positions' noise term below).
-      const Eigen::RowVectorXcd d = X2.transpose() * Ui - R * (X1.transpose() * Ui);
-      p.mag = std::abs(R);
-      p.phase_deg = std::arg(R) * 180 / std::numbers::pi;
-      double var = 0, nl = 0;
-      for (int ee = 0; ee < nu; ++ee) {
-        const Experiment& x = grp.experiments.at(ee);
-        const int M = int(x.x1[j].size());
-        // The spread over periods of z = X2 - R X1 at the line and its unexcited neighbours.
-        auto spread = [&](const std::vector<Complex>& v1, const std::vector<Complex>& v2) {
-          return period_spread(M, [&](int pp) { return v2[size_t(pp)] - R * v1[size_t(pp)]; });
-        };
-        double sz = spread(x.x1[j], x.x2[j]);
-        for (size_t n = 0; n < x.nb1[j].size(); ++n) sz += spread(x.nb1[j][n], x.nb2[j][n]);
-        var += std::norm(Ui(ee, q)) * sz / (double(1 + x.nb1[j].size()) * double(M) * (M - 1));
-        for (int rr = 0; rr < nu; ++rr)
-          if (by_position[rr]) var += std::norm(Ui(ee, q)) * std::norm(d(rr)) * x.pos_var[j][rr];
-        nl += x.nl[j] / nu;
-      }
-      p.sigma = positive_sigma(std::sqrt(var) / std::abs(h1), p.mag);
-      p.coherence = std::norm(R) / (std::norm(R) + double(nu) * p.n_cycles * p.sigma * p.sigma);
-      p.nl_rel = nl;
-      double ua = 0;
-      for (int ee = 0; ee < nu; ++ee)
-        ua += 2 * std::abs(grp.experiments.at(ee).u[j][q]) / grp.st.period_samples / nu;
-      p.line_amplitude = ua;
-      out.push_back(p);
-    }
   }
   return out;
 }

@@ -112,128 +112,114 @@ static NonlinearitySpec nonlinearity_from_json(const Json& j, const JsonWhere& w
   return nl;
 }
 
-Model parse_model(const Json& doc, const std::string& source) {
-  JsonWhere root{source, ""};
-  json_require_object(doc, root);
-  if (doc.contains("format") && doc["format"] == kStateSpaceFormat)
-    return parse_state_space_model(doc, source);
-  Model m;
-  m.source = source;
-  auto* warn = &m.warnings;
-  m.extra = json_unknown_members(
-      doc, root, {"format", "name", "operating_point", "inputs", "outputs", "paths"}, warn);
-  const std::string format = json_string_member(doc, root, "format");
-  if (format != kModelFormat) {
-    json_fail(root / "format",
-              "expected \"" + std::string(kModelFormat) + "\", found \"" + format + "\"");
-  }
-  if (doc.contains("name")) m.name = json_string_member(doc, root, "name");
-  if (doc.contains("operating_point")) {
-    const Json& op = doc["operating_point"];
-    JsonWhere w = root / "operating_point";
-    json_require_object(op, w);
-    m.operating_point_extra = json_unknown_members(op, w, {"speed_pct", "steady_state"}, warn);
-    m.speed_pct = json_number_member(op, w, "speed_pct", 0.0);
-    if (op.contains("steady_state")) {
-      const Json& ss = op["steady_state"];
-      json_require_object(ss, w / "steady_state");
-      for (auto it = ss.begin(); it != ss.end(); ++it) {
-        m.steady_state[it.key()] = json_number(it.value(), w / "steady_state" / it.key());
-      }
+// The operating point's speed and steady state, where the file gives one.
+static void parse_operating_point(const Json& doc, const JsonWhere& root, Model& m) {
+  if (!doc.contains("operating_point")) return;
+  const Json& op = doc["operating_point"];
+  JsonWhere w = root / "operating_point";
+  json_require_object(op, w);
+  m.operating_point_extra = json_unknown_members(op, w, {"speed_pct", "steady_state"}, &m.warnings);
+  m.speed_pct = json_number_member(op, w, "speed_pct", 0.0);
+  if (op.contains("steady_state")) {
+    const Json& ss = op["steady_state"];
+    json_require_object(ss, w / "steady_state");
+    for (auto it = ss.begin(); it != ss.end(); ++it) {
+      m.steady_state[it.key()] = json_number(it.value(), w / "steady_state" / it.key());
     }
   }
-  std::set<std::string> names;
-  const Json& ins = json_array_member(doc, root, "inputs");
-  if (ins.empty()) json_fail(root / "inputs", "a model needs at least one input");
-  for (size_t i = 0; i < ins.size(); ++i) {
-    JsonWhere w = root / "inputs" / i;
-    const Json& j = ins[i];
-    json_require_object(j, w);
-    ModelInput in;
-    in.extra = json_unknown_members(j, w,
-                                    {"name", "units", "full_scale", "actuator", "noise_rms",
-                                     "test_amplitude_pct", "measurement_coupling", "faults"},
-                                    warn);
-    in.name = json_string_member(j, w, "name");
-    check_name(in.name, w / "name");
-    if (!names.insert(in.name).second)
-      json_fail(w / "name", "duplicate channel name \"" + in.name + "\"");
-    in.units = json_string_member(j, w, "units");
-    check_units(in.name, in.units, w / "units");
-    in.full_scale = json_number_member(j, w, "full_scale");
-    if (in.full_scale <= 0.0) json_fail(w / "full_scale", "full_scale must be > 0 (input units)");
-    in.noise_rms = json_number_member(j, w, "noise_rms", 0.0);
-    if (in.noise_rms < 0.0) json_fail(w / "noise_rms", "noise_rms must be >= 0");
-    in.test_amplitude_pct = json_number_member(j, w, "test_amplitude_pct", 0.0);
-    if (in.test_amplitude_pct < 0.0 || in.test_amplitude_pct > 50.0) {
-      json_fail(w / "test_amplitude_pct", "test_amplitude_pct must be in [0, 50] % of full scale");
-    }
-    if (j.contains("actuator")) {
-      const Json& a = j["actuator"];
-      JsonWhere wa = w / "actuator";
-      json_require_object(a, wa);
-      json_unknown_members(a, wa, {"tf", "nonlinearity"}, warn);
-      if (a.contains("tf")) in.actuator = tf_from_json(a["tf"], wa / "tf", warn);
-      const Json& nls = json_array_member(a, wa, "nonlinearity", true);
-      for (size_t k = 0; k < nls.size(); ++k) {
-        in.nonlinearity.push_back(nonlinearity_from_json(nls[k], wa / "nonlinearity" / k, warn));
-      }
-    }
-    const Json& cs = json_array_member(j, w, "measurement_coupling", true);
-    for (size_t k = 0; k < cs.size(); ++k) {
-      JsonWhere wc = w / "measurement_coupling" / k;
-      MeasurementCoupling c;
-      c.output = json_string_member(cs[k], wc, "output");
-      c.gain = json_number_member(cs[k], wc, "gain");
-      in.measurement_coupling.push_back(c);
-    }
-    if (j.contains("faults")) in.faults = channel_faults_from_json(j["faults"], w / "faults", true);
-    m.inputs.push_back(std::move(in));
+}
+
+// A channel's name, checked and not yet taken (names holds the channels read so far), and units
+// of the channel's kind.
+static void read_channel_name(const Json& j, const JsonWhere& w, std::set<std::string>& names,
+                              std::string& name, std::string& units) {
+  name = json_string_member(j, w, "name");
+  check_name(name, w / "name");
+  if (!names.insert(name).second) json_fail(w / "name", "duplicate channel name \"" + name + "\"");
+  units = json_string_member(j, w, "units");
+  check_units(name, units, w / "units");
+}
+
+static ModelInput model_input_from_json(const Json& j, const JsonWhere& w,
+                                        std::set<std::string>& names,
+                                        std::vector<std::string>* warn) {
+  json_require_object(j, w);
+  ModelInput in;
+  in.extra = json_unknown_members(j, w,
+                                  {"name", "units", "full_scale", "actuator", "noise_rms",
+                                   "test_amplitude_pct", "measurement_coupling", "faults"},
+                                  warn);
+  read_channel_name(j, w, names, in.name, in.units);
+  in.full_scale = json_number_member(j, w, "full_scale");
+  if (in.full_scale <= 0.0) json_fail(w / "full_scale", "full_scale must be > 0 (input units)");
+  in.noise_rms = json_number_member(j, w, "noise_rms", 0.0);
+  if (in.noise_rms < 0.0) json_fail(w / "noise_rms", "noise_rms must be >= 0");
+  in.test_amplitude_pct = json_number_member(j, w, "test_amplitude_pct", 0.0);
+  if (in.test_amplitude_pct < 0.0 || in.test_amplitude_pct > 50.0) {
+    json_fail(w / "test_amplitude_pct", "test_amplitude_pct must be in [0, 50] % of full scale");
   }
-  const Json& outs = json_array_member(doc, root, "outputs");
-  for (size_t i = 0; i < outs.size(); ++i) {
-    JsonWhere w = root / "outputs" / i;
-    const Json& j = outs[i];
-    json_require_object(j, w);
-    ModelOutput out;
-    out.extra =
-        json_unknown_members(j, w, {"name", "units", "noise_rms", "sensor", "faults"}, warn);
-    out.name = json_string_member(j, w, "name");
-    check_name(out.name, w / "name");
-    if (!names.insert(out.name).second)
-      json_fail(w / "name", "duplicate channel name \"" + out.name + "\"");
-    out.units = json_string_member(j, w, "units");
-    check_units(out.name, out.units, w / "units");
-    out.noise_rms = json_number_member(j, w, "noise_rms", 0.0);
-    if (out.noise_rms < 0.0) json_fail(w / "noise_rms", "noise_rms must be >= 0");
-    if (j.contains("sensor")) {
-      const Json& s = j["sensor"];
-      json_require_object(s, w / "sensor");
-      json_unknown_members(s, w / "sensor", {"tf"}, warn);
-      out.sensor = tf_from_json(json_member(s, w / "sensor", "tf"), w / "sensor" / "tf", warn);
+  if (j.contains("actuator")) {
+    const Json& a = j["actuator"];
+    JsonWhere wa = w / "actuator";
+    json_require_object(a, wa);
+    json_unknown_members(a, wa, {"tf", "nonlinearity"}, warn);
+    if (a.contains("tf")) in.actuator = tf_from_json(a["tf"], wa / "tf", warn);
+    const Json& nls = json_array_member(a, wa, "nonlinearity", true);
+    for (size_t k = 0; k < nls.size(); ++k) {
+      in.nonlinearity.push_back(nonlinearity_from_json(nls[k], wa / "nonlinearity" / k, warn));
     }
-    if (j.contains("faults"))
-      out.faults = channel_faults_from_json(j["faults"], w / "faults", false);
-    m.outputs.push_back(std::move(out));
   }
-  const Json& paths = json_array_member(doc, root, "paths", true);
-  for (size_t i = 0; i < paths.size(); ++i) {
-    JsonWhere w = root / "paths" / i;
-    const Json& j = paths[i];
-    json_require_object(j, w);
-    ModelPath p;
-    p.extra = json_unknown_members(j, w, {"output", "input", "tf"}, warn);
-    p.output = json_string_member(j, w, "output");
-    p.input = json_string_member(j, w, "input");
-    if (m.output_index(p.output) < 0)
-      json_fail(w / "output", "no output named \"" + p.output + "\"");
-    if (m.input_index(p.input) < 0) json_fail(w / "input", "no input named \"" + p.input + "\"");
-    if (m.path(p.output, p.input)) {
-      json_fail(w, "a second path " + p.input + " -> " + p.output + " (one path per pair)");
-    }
-    p.tf = tf_from_json(json_member(j, w, "tf"), w / "tf", warn);
-    m.paths.push_back(std::move(p));
+  const Json& cs = json_array_member(j, w, "measurement_coupling", true);
+  for (size_t k = 0; k < cs.size(); ++k) {
+    JsonWhere wc = w / "measurement_coupling" / k;
+    MeasurementCoupling c;
+    c.output = json_string_member(cs[k], wc, "output");
+    c.gain = json_number_member(cs[k], wc, "gain");
+    in.measurement_coupling.push_back(c);
   }
+  if (j.contains("faults")) in.faults = channel_faults_from_json(j["faults"], w / "faults", true);
+  return in;
+}
+
+static ModelOutput model_output_from_json(const Json& j, const JsonWhere& w,
+                                          std::set<std::string>& names,
+                                          std::vector<std::string>* warn) {
+  json_require_object(j, w);
+  ModelOutput out;
+  out.extra = json_unknown_members(j, w, {"name", "units", "noise_rms", "sensor", "faults"}, warn);
+  read_channel_name(j, w, names, out.name, out.units);
+  out.noise_rms = json_number_member(j, w, "noise_rms", 0.0);
+  if (out.noise_rms < 0.0) json_fail(w / "noise_rms", "noise_rms must be >= 0");
+  if (j.contains("sensor")) {
+    const Json& s = j["sensor"];
+    json_require_object(s, w / "sensor");
+    json_unknown_members(s, w / "sensor", {"tf"}, warn);
+    out.sensor = tf_from_json(json_member(s, w / "sensor", "tf"), w / "sensor" / "tf", warn);
+  }
+  if (j.contains("faults")) out.faults = channel_faults_from_json(j["faults"], w / "faults", false);
+  return out;
+}
+
+// A path between an input and an output of m, the first between them.
+static ModelPath model_path_from_json(const Json& j, const JsonWhere& w, const Model& m,
+                                      std::vector<std::string>* warn) {
+  json_require_object(j, w);
+  ModelPath p;
+  p.extra = json_unknown_members(j, w, {"output", "input", "tf"}, warn);
+  p.output = json_string_member(j, w, "output");
+  p.input = json_string_member(j, w, "input");
+  if (m.output_index(p.output) < 0) json_fail(w / "output", "no output named \"" + p.output + "\"");
+  if (m.input_index(p.input) < 0) json_fail(w / "input", "no input named \"" + p.input + "\"");
+  if (m.path(p.output, p.input)) {
+    json_fail(w, "a second path " + p.input + " -> " + p.output + " (one path per pair)");
+  }
+  p.tf = tf_from_json(json_member(j, w, "tf"), w / "tf", warn);
+  return p;
+}
+
+// The names the channels give each other: a measurement coupling's output, a swap's other
+// channel (and only one of the two lists a swap).
+static void check_cross_references(const Model& m, const JsonWhere& root) {
   for (size_t i = 0; i < m.inputs.size(); ++i) {
     for (size_t k = 0; k < m.inputs[i].measurement_coupling.size(); ++k) {
       const auto& c = m.inputs[i].measurement_coupling[k];
@@ -243,7 +229,6 @@ Model parse_model(const Json& doc, const std::string& source) {
       }
     }
   }
-  // A swap names another channel, and only one of the two lists it.
   auto check_swaps = [&](const std::string& name, const std::vector<ChannelFault>& faults,
                          const JsonWhere& w) {
     for (size_t k = 0; k < faults.size(); ++k) {
@@ -263,6 +248,37 @@ Model parse_model(const Json& doc, const std::string& source) {
     check_swaps(m.inputs[i].name, m.inputs[i].faults, root / "inputs" / i / "faults");
   for (size_t i = 0; i < m.outputs.size(); ++i)
     check_swaps(m.outputs[i].name, m.outputs[i].faults, root / "outputs" / i / "faults");
+}
+
+Model parse_model(const Json& doc, const std::string& source) {
+  JsonWhere root{source, ""};
+  json_require_object(doc, root);
+  if (doc.contains("format") && doc["format"] == kStateSpaceFormat)
+    return parse_state_space_model(doc, source);
+  Model m;
+  m.source = source;
+  auto* warn = &m.warnings;
+  m.extra = json_unknown_members(
+      doc, root, {"format", "name", "operating_point", "inputs", "outputs", "paths"}, warn);
+  const std::string format = json_string_member(doc, root, "format");
+  if (format != kModelFormat) {
+    json_fail(root / "format",
+              "expected \"" + std::string(kModelFormat) + "\", found \"" + format + "\"");
+  }
+  if (doc.contains("name")) m.name = json_string_member(doc, root, "name");
+  parse_operating_point(doc, root, m);
+  std::set<std::string> names;
+  const Json& ins = json_array_member(doc, root, "inputs");
+  if (ins.empty()) json_fail(root / "inputs", "a model needs at least one input");
+  for (size_t i = 0; i < ins.size(); ++i)
+    m.inputs.push_back(model_input_from_json(ins[i], root / "inputs" / i, names, warn));
+  const Json& outs = json_array_member(doc, root, "outputs");
+  for (size_t i = 0; i < outs.size(); ++i)
+    m.outputs.push_back(model_output_from_json(outs[i], root / "outputs" / i, names, warn));
+  const Json& paths = json_array_member(doc, root, "paths", true);
+  for (size_t i = 0; i < paths.size(); ++i)
+    m.paths.push_back(model_path_from_json(paths[i], root / "paths" / i, m, warn));
+  check_cross_references(m, root);
   return m;
 }
 

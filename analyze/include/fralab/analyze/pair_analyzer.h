@@ -62,6 +62,7 @@
 #pragma once
 
 #include <complex>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -74,6 +75,10 @@
 #include "fralab/core/frd.h"
 
 namespace fralab {
+
+namespace analyze_detail {
+class OrthogonalRealisations;
+}
 
 struct AnalyzerOptions {
   int max_blocks = 8;  // K for sigma/coherence, >= 2
@@ -130,26 +135,6 @@ class PairAnalyzer {
   void try_complete(bool force);
   FrdPoint compute(const Window& w);
   std::vector<FrdPoint> compute_multisine(const Window& w);
-  // Orthogonal multisines: one experiment's spectra at the lines, kept until its realisation is
-  // complete; returns that realisation's points then (else nothing).
-  struct Experiment {
-    bool valid = true;
-    std::string note;
-    std::vector<std::vector<std::complex<double>>> x1, x2;  // [line][period]
-    // [line][period]: the same at the nearest non-excited line each side (noise pooled from them)
-    std::vector<std::vector<std::vector<std::complex<double>>>> nb1, nb2;
-    std::vector<std::vector<std::complex<double>>>
-        u;  // [line][input q]: period-mean command spectrum
-    std::vector<std::vector<std::complex<double>>>
-        pos;  // [line][input q]: the same of its position
-    // [line][input q]: the variance of that period mean (the position's noise, pooled over the
-    // line and its nearest non-excited lines, as sigma pools the pair's channels)
-    std::vector<std::vector<double>> pos_var;
-    std::vector<double> pos_nl;  // [input q]: median over lines of its position's distortion
-    std::vector<double> nl;      // [line]: E2 on the nearest unexcited lines / |X2|
-  };
-  std::vector<FrdPoint> add_experiment(const Window& w, Experiment ex);
-  Experiment orthogonal_experiment(const Window& w);
   bool covers(int64_t a, int64_t b) const;
   std::string describe_gaps(int64_t a, int64_t b) const;
   bool wants(const StatusEvent& st) const;
@@ -167,12 +152,11 @@ class PairAnalyzer {
   int reader_ = 0;
   /// Channel `ch` from sample n (n >= store_->base(); the channel kept).
   const double* samples(const std::string& ch, int64_t n) const;
-  struct Group {
-    StatusEvent st;                         // its first experiment's status (lines, inputs)
-    std::vector<int> ins;                   // its inputs
-    std::map<int, Experiment> experiments;  // by experiment e
-  };
-  std::map<int, Group> groups_;  // by realisation
+  /// The channel's samples over status st's window (nullptr where the store lacks it, it does
+  /// not cover the window, or it holds a NaN there).
+  std::function<const double*(const std::string&)> window_channel(const StatusEvent& st) const;
+  // The orthogonal multisines' realisations until their experiments are in.
+  std::unique_ptr<analyze_detail::OrthogonalRealisations> orthogonal_;
   // Samples a free-running plant held (tape channel "underrun"), and the last settle status (its
   // step and start sample).
   HeldSamples held_;
