@@ -437,44 +437,65 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
   for (int i : excite)
     if (i < 0 || i >= int(inputs_.size())) throw InputError("campaign: input index out of range");
   P_ = multisine_period_samples(o);
-  const double df = fs_ / P_;
   const bool ortho = o.design == MultisineOptions::Design::kOrthogonal;
   const std::vector<int> lines = multisine_lines(o, P_);
   const int ni = int(excite.size());
   if (lines.empty() || (!ortho && int(lines.size()) < ni))
     throw InputError("multisine: fewer lines than excited inputs; widen the band");
-  std::mt19937_64 rng(o.seed);
-  std::vector<int> ev_lines, line_input;
   const int n_exp = ortho ? o.realisations * ni : 1;
   period_.assign(n_exp, std::vector<std::vector<double>>(inputs_.size()));
-  std::vector<double> amps(inputs_.size(), 0.0);
-  if (ortho) {
-    for (int k : lines)
-      for (int i : excite) ev_lines.push_back(k), line_input.push_back(i);
-    for (int r = 0; r < o.realisations; ++r) {
-      std::mt19937_64 rr(o.seed + uint64_t(r));
-      for (int q = 0; q < ni; ++q) {
-        const std::vector<double> ph = line_phases(o.phases, P_, lines, rr);
-        for (int e = 0; e < ni; ++e) {
-          std::vector<double> pe = ph;
-          for (double& v : pe) v += 2 * std::numbers::pi * double(q * e % ni) / ni;
-          period_[size_t(r * ni + e)][excite[q]] = multisine_period(P_, lines, pe);
-        }
+  StatusEvent e;
+  if (ortho)
+    design_orthogonal(lines, excite, o, &e.lines, &e.line_input);
+  else
+    design_zippered(lines, excite, o, &e.lines, &e.line_input);
+  e.amplitudes = scale_to_amplitudes(excite, o);
+  e.run_id = run_id;
+  schedule(o, n_exp, ni, std::move(e));
+}
+
+void MultisineCampaign::design_orthogonal(const std::vector<int>& lines,
+                                          const std::vector<int>& excite, const MultisineOptions& o,
+                                          std::vector<int>* ev_lines,
+                                          std::vector<int>* line_input) {
+  const int ni = int(excite.size());
+  for (int k : lines)
+    for (int i : excite) ev_lines->push_back(k), line_input->push_back(i);
+  for (int r = 0; r < o.realisations; ++r) {
+    std::mt19937_64 rr(o.seed + uint64_t(r));
+    for (int q = 0; q < ni; ++q) {
+      const std::vector<double> ph = line_phases(o.phases, P_, lines, rr);
+      for (int e = 0; e < ni; ++e) {
+        std::vector<double> pe = ph;
+        for (double& v : pe) v += 2 * std::numbers::pi * double(q * e % ni) / ni;
+        period_[size_t(r * ni + e)][excite[q]] = multisine_period(P_, lines, pe);
       }
     }
-  } else {
-    std::vector<std::vector<int>> per(inputs_.size());
-    for (size_t j = 0; j < lines.size(); ++j) {
-      const int i = excite[j % ni];
-      ev_lines.push_back(lines[j]);
-      line_input.push_back(i);
-      per[i].push_back(lines[j]);
-    }
-    for (int i : excite)
-      period_[0][i] = multisine_period(P_, per[i], line_phases(o.phases, P_, per[i], rng));
   }
-  // Each input scaled so that its largest peak over every experiment is its amplitude ("peak"),
-  // or its rms the sine's at that amplitude, the peak within half the full scale ("rms").
+}
+
+void MultisineCampaign::design_zippered(const std::vector<int>& lines,
+                                        const std::vector<int>& excite, const MultisineOptions& o,
+                                        std::vector<int>* ev_lines, std::vector<int>* line_input) {
+  const int ni = int(excite.size());
+  std::mt19937_64 rng(o.seed);
+  std::vector<std::vector<int>> per(inputs_.size());
+  for (size_t j = 0; j < lines.size(); ++j) {
+    const int i = excite[j % ni];
+    ev_lines->push_back(lines[j]);
+    line_input->push_back(i);
+    per[i].push_back(lines[j]);
+  }
+  for (int i : excite)
+    period_[0][i] = multisine_period(P_, per[i], line_phases(o.phases, P_, per[i], rng));
+}
+
+// Each input scaled so that its largest peak over every experiment is its amplitude ("peak"),
+// or its rms the sine's at that amplitude, the peak within half the full scale ("rms"); the slew,
+// the period wrapping round, within the input's rate limit.
+std::vector<double> MultisineCampaign::scale_to_amplitudes(const std::vector<int>& excite,
+                                                           const MultisineOptions& o) {
+  std::vector<double> amps(inputs_.size(), 0.0);
   for (int i : excite) {
     double peak = 0, ss = 0, n = 0;
     for (const auto& x : period_) {
@@ -486,7 +507,7 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
       g = inputs_[i].amplitude / std::sqrt(2.0) / std::sqrt(ss / n);
       if (inputs_[i].full_scale > 0) g = std::min(g, 0.5 * inputs_[i].full_scale / peak);
     }
-    if (inputs_[i].max_rate > 0) {  // the slew, the period wrapping round, within the rate limit
+    if (inputs_[i].max_rate > 0) {
       double slew = 0;
       for (const auto& x : period_)
         for (size_t n = 0; n < x[i].size(); ++n)
@@ -497,6 +518,11 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
       for (double& v : x[i]) v *= g;
     amps[i] = g * peak;
   }
+  return amps;
+}
+
+void MultisineCampaign::schedule(const MultisineOptions& o, int n_exp, int ni, StatusEvent e) {
+  const bool ortho = o.design == MultisineOptions::Design::kOrthogonal;
   const double tc_samples = o.settle_time_constants * o.slowest_time_constant_s * fs_;
   if (ortho) {
     settle_ = o.slowest_time_constant_s > 0
@@ -506,17 +532,12 @@ MultisineCampaign::MultisineCampaign(std::vector<CampaignInput> inputs, std::vec
     settle_ = int64_t(std::max(1, int(std::ceil(tc_samples / P_)))) * P_;
   }
   experiment_ = settle_ + int64_t(o.periods) * P_;
-  StatusEvent e;
-  e.run_id = run_id;
   e.sample_rate_hz = fs_;
   e.excitation = Excitation::kMultisine;
   for (const auto& in : inputs_) e.inputs.push_back(in.name);
-  e.amplitudes = amps;
   e.n_steps = n_exp;
-  e.frequency_hz = df;
+  e.frequency_hz = fs_ / P_;
   e.period_samples = P_;
-  e.lines = ev_lines;
-  e.line_input = line_input;
   int64_t seq = 0;
   for (int x = 0; x < n_exp; ++x) {
     e.step = x;

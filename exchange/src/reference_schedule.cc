@@ -1,5 +1,7 @@
 #include <cmath>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "fralab/core/error.h"
 #include "fralab/core/text.h"
@@ -12,6 +14,71 @@ void ReferenceScheduleOptions::validate() const {
   if (min_cycles < 1) throw InputError("--min-cycles must be >= 1");
   if (!(min_integrate_s >= 0)) throw InputError("--min-integrate-s must be >= 0");
 }
+
+namespace {
+
+// The runs of one frequency > 0 on channel cf, [a, b) as row indices.
+std::vector<std::pair<int64_t, int64_t>> frequency_runs(const TimeSeries& s, int cf) {
+  std::vector<std::pair<int64_t, int64_t>> runs;
+  for (int64_t k = 0; k < s.n_samples;) {
+    const double f = s.at(size_t(cf), k);
+    if (!(f > 0)) {
+      ++k;
+      continue;
+    }
+    int64_t e = k + 1;
+    while (e < s.n_samples && std::abs(s.at(size_t(cf), e) - f) <= 1e-9 * f) ++e;
+    runs.push_back({k, e});
+    k = e;
+  }
+  return runs;
+}
+
+// The whole cycles a step of f Hz integrates (the options' least) and their length in samples,
+// which must be a whole number within the run's b - a samples; refused naming `where`.
+std::pair<int, int64_t> integration_window(double f, double fs, int64_t run_samples,
+                                           const ReferenceScheduleOptions& o,
+                                           const std::string& where) {
+  if (!(f <= fs / 2))
+    throw InputError(where + ": above half the " + lossless(fs) + " Hz sample rate");
+  const double cycles = std::max(double(o.min_cycles), std::ceil(o.min_integrate_s * f));
+  if (!(cycles <= 1e9)) throw InputError(where + ": " + lossless(cycles) + " cycles per point");
+  const int n = int(cycles);
+  const double exact = n * fs / f;
+  const int64_t L = std::llround(exact);
+  if (std::abs(exact - double(L)) > 1e-6)
+    throw InputError(where + ": " + std::to_string(n) + " cycles are " + lossless(exact) +
+                     " samples, not a whole number: not a fralab stepped sine (give --schedule)");
+  if (L < 2 || L > run_samples)
+    throw InputError(where + ": " + std::to_string(run_samples) + " samples at this frequency, " +
+                     std::to_string(n) + " cycles need " + std::to_string(L) +
+                     " (--min-cycles, --min-integrate-s as the measurement's?)");
+  return {n, L};
+}
+
+// The excited input over rows [b - L, b): the command that varies most, relative to its size;
+// its index into cmds and its rms, or -1 where none varies.
+std::pair<int, double> excited_command(const TimeSeries& s, const std::vector<int>& cmds, int64_t b,
+                                       int64_t L) {
+  int best = -1;
+  double best_rel = 0, best_rms = 0;
+  for (size_t i = 0; i < cmds.size(); ++i) {
+    double mean = 0, ss = 0;
+    for (int64_t k = b - L; k < b; ++k) mean += s.at(size_t(cmds[i]), k);
+    mean /= double(L);
+    for (int64_t k = b - L; k < b; ++k) ss += std::pow(s.at(size_t(cmds[i]), k) - mean, 2);
+    const double rms = std::sqrt(ss / double(L));
+    const double rel = rms / std::max(std::abs(mean), 1e-300);
+    if (rms > 1e-12 * std::max(std::abs(mean), 1.0) && rel > best_rel) {
+      best = int(i);
+      best_rel = rel;
+      best_rms = rms;
+    }
+  }
+  return {best, best_rms};
+}
+
+}  // namespace
 
 Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOptions& o) {
   o.validate();
@@ -32,19 +99,7 @@ Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOpt
   Schedule out;
   out.sample_rate_hz = fs;
   out.run_id = o.run_id;
-  // The runs of one frequency > 0.
-  std::vector<std::pair<int64_t, int64_t>> runs;  // [a, b) as row indices
-  for (int64_t k = 0; k < s.n_samples;) {
-    const double f = s.at(size_t(cf), k);
-    if (!(f > 0)) {
-      ++k;
-      continue;
-    }
-    int64_t e = k + 1;
-    while (e < s.n_samples && std::abs(s.at(size_t(cf), e) - f) <= 1e-9 * f) ++e;
-    runs.push_back({k, e});
-    k = e;
-  }
+  const std::vector<std::pair<int64_t, int64_t>> runs = frequency_runs(s, cf);
   if (runs.empty())
     throw InputError(s.source + ": " + o.freq_channel + " is never above 0: no step");
   int64_t seq = 0;
@@ -53,36 +108,8 @@ Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOpt
     const double f = s.at(size_t(cf), a);
     const std::string where = s.source + ": step " + std::to_string(r) + " (" + lossless(f) +
                               " Hz, t = " + lossless(double(s.start_sample + a) / fs) + " s)";
-    if (!(f <= fs / 2))
-      throw InputError(where + ": above half the " + lossless(fs) + " Hz sample rate");
-    const double cycles = std::max(double(o.min_cycles), std::ceil(o.min_integrate_s * f));
-    if (!(cycles <= 1e9)) throw InputError(where + ": " + lossless(cycles) + " cycles per point");
-    const int n = int(cycles);
-    const double exact = n * fs / f;
-    const int64_t L = std::llround(exact);
-    if (std::abs(exact - double(L)) > 1e-6)
-      throw InputError(where + ": " + std::to_string(n) + " cycles are " + lossless(exact) +
-                       " samples, not a whole number: not a fralab stepped sine (give --schedule)");
-    if (L < 2 || L > b - a)
-      throw InputError(where + ": " + std::to_string(b - a) + " samples at this frequency, " +
-                       std::to_string(n) + " cycles need " + std::to_string(L) +
-                       " (--min-cycles, --min-integrate-s as the measurement's?)");
-    // The excited input: the command that varies most over the window, relative to its size.
-    int best = -1;
-    double best_rel = 0, best_rms = 0;
-    for (size_t i = 0; i < cmds.size(); ++i) {
-      double mean = 0, ss = 0;
-      for (int64_t k = b - L; k < b; ++k) mean += s.at(size_t(cmds[i]), k);
-      mean /= double(L);
-      for (int64_t k = b - L; k < b; ++k) ss += std::pow(s.at(size_t(cmds[i]), k) - mean, 2);
-      const double rms = std::sqrt(ss / double(L));
-      const double rel = rms / std::max(std::abs(mean), 1e-300);
-      if (rms > 1e-12 * std::max(std::abs(mean), 1.0) && rel > best_rel) {
-        best = int(i);
-        best_rel = rel;
-        best_rms = rms;
-      }
-    }
+    const auto [n, L] = integration_window(f, fs, b - a, o, where);
+    const auto [best, best_rms] = excited_command(s, cmds, b, L);
     if (best < 0) throw InputError(where + ": no command channel varies: which input is excited?");
     StatusEvent e;
     e.run_id = o.run_id;

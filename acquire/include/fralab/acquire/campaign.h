@@ -257,6 +257,19 @@ class MultisineCampaign : public Campaign {
   int period_samples() const { return P_; }
 
  private:
+  // The periods of each experiment and input, unscaled, and the status's lines: orthogonal (every
+  // input on every line, the DFT phase matrix across experiments) or zippered (lines dealt out).
+  void design_orthogonal(const std::vector<int>& lines, const std::vector<int>& excite,
+                         const MultisineOptions& o, std::vector<int>* ev_lines,
+                         std::vector<int>* line_input);
+  void design_zippered(const std::vector<int>& lines, const std::vector<int>& excite,
+                       const MultisineOptions& o, std::vector<int>* ev_lines,
+                       std::vector<int>* line_input);
+  // Each excited input's periods scaled to its amplitude; returns the amplitudes (peaks).
+  std::vector<double> scale_to_amplitudes(const std::vector<int>& excite,
+                                          const MultisineOptions& o);
+  // The settle, the experiment's length and the status events of n_exp experiments.
+  void schedule(const MultisineOptions& o, int n_exp, int ni, StatusEvent e);
   // period_[x][i]: experiment x's (r n_u + e) period of input i's deviation (empty: idle).
   std::vector<std::vector<std::vector<double>>> period_;
   int P_ = 0;
