@@ -165,6 +165,12 @@ void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>
 /// 5c. After 5b, path findings of one cause now consistent over every pair of a scope (the plant,
 /// an output, an input) become one finding there; true when any did (regroup.cc).
 bool regroup(DiagnosisRun& r);
+/// 5c's last steps: two delays or two gains at one place (scope, input, output, pairs) joined as
+/// their sum; true when any were (one_per_place.cc).
+bool one_per_place(std::vector<Finding>& fs);
+/// 5c's last steps: a pole shift or damping error that moves a root another finding at its place
+/// added or moved folded into that finding; true when any was (one_per_place.cc).
+bool moved_roots_folded(DiagnosisRun& r);
 /// 5d. A gain or a delay at an input and another at an output add up on the path between them:
 /// the findings of each additive cause are explained by the fewest inputs' and outputs' values
 /// (and paths' residuals) when that is fewer findings; true when any were (calibration.cc).
