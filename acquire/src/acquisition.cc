@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fralab/acquire/model_info.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 
@@ -165,7 +166,7 @@ Block abort_block(const Campaign& c, int64_t seq, int64_t start_sample, int n,
   blk.n_samples = n;
   blk.final_block = true;
   for (const auto& in : c.inputs()) {
-    blk.channels.push_back("u_" + in.name);
+    blk.channels.push_back(command_channel(in.name));
     blk.samples.insert(blk.samples.end(), size_t(n), in.dc);
   }
   blk.channels.push_back("ref_phase");
@@ -189,7 +190,7 @@ Block command_block(const Campaign& c, int64_t seq, int block, double sample_rat
   blk.sample_rate_hz = sample_rate_hz;
   blk.n_samples = n;
   blk.final_block = seq == command_block_count(c, block) - 1;
-  for (const auto& in : c.inputs()) blk.channels.push_back("u_" + in.name);
+  for (const auto& in : c.inputs()) blk.channels.push_back(command_channel(in.name));
   blk.channels.push_back("ref_phase");
   blk.channels.push_back("ref_freq_hz");
   blk.samples.reserve(blk.channels.size() * n);

@@ -7,6 +7,7 @@
 #include "fralab/analyze/repeats.h"
 #include "fralab/core/frd.h"
 #include "fralab/core/json_util.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 
 namespace fralab {
@@ -78,9 +79,10 @@ std::vector<AdaptiveStep> adaptive_steps(const std::vector<Frd>& curves, double 
   o.sigma_target = target;
   std::map<int, std::pair<AdaptiveStep, std::vector<double>>> by_step;
   for (const Frd& f : curves) {
-    const auto [e1, e2] = split_pair(f.pair);
+    const PairId id = PairId::parse(f.pair);
     for (const FrdPoint& p : f.points) {
-      if (p.input.empty() || !(e1 == p.input || (e1 == "u_" + p.input && e2 == p.input))) continue;
+      // The input's own paths X:O and its actuator pair u_X:X.
+      if (p.input.empty() || id.input != p.input || (id.command && !id.actuator())) continue;
       auto& [s, rel] = by_step[p.step];
       s.input = p.input;
       s.step = p.step;
@@ -232,7 +234,7 @@ void AutoIntegrator::feed_events() {
     const auto store = std::make_shared<SampleStore>();  // each block's channels kept once
     for (const std::string& out : outputs_)
       an_.push_back(std::make_unique<PairAnalyzer>(in + ":" + out, ao, store));
-    an_.push_back(std::make_unique<PairAnalyzer>("u_" + in + ":" + in, ao, store));
+    an_.push_back(std::make_unique<PairAnalyzer>(PairId::actuator_pair(in).str(), ao, store));
   }
   const auto& ev = c_.events();
   while (fed_ < ev.size() && ev[fed_].sample < c_.window_end(g_) &&

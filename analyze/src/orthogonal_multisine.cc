@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "fralab/analyze/period_fft.h"
+#include "fralab/core/pair_id.h"
 #include "line_statistics.h"
 
 namespace fralab::analyze_detail {
@@ -26,11 +27,12 @@ OrthogonalExperiment orthogonal_experiment(const StatusEvent& st, const std::vec
   std::vector<const double*> u, pos;
   for (int i : ins) {
     const std::string& name = st.inputs[i];
-    u.push_back(channel("u_" + name));
+    u.push_back(channel(command_channel(name)));
     pos.push_back(channel(name));
     if (!u.back() || !pos.back()) {
       ex.valid = false;
-      ex.note = "orthogonal multisine: the tape has no channel " + (u.back() ? name : "u_" + name) +
+      ex.note = "orthogonal multisine: the tape has no channel " +
+                (u.back() ? name : command_channel(name)) +
                 " over the window (the analyser solves with every input's command and position)";
       return ex;
     }
@@ -218,7 +220,7 @@ std::vector<int> OrthogonalRealisations::wanted_inputs(const Group& grp) const {
   std::vector<int> want;
   for (int q = 0; q < nu; ++q)
     for (const std::string& ch : {e1_, e2_})
-      if ((ch == name(q) || ch == "u_" + name(q)) &&
+      if ((ch == name(q) || ch == command_channel(name(q))) &&
           std::find(want.begin(), want.end(), q) == want.end())
         want.push_back(q);
   if (want.empty())

@@ -9,6 +9,7 @@
 #include "fralab/analyze/fourier_filter.h"
 #include "fralab/analyze/period_fft.h"
 #include "fralab/analyze/repeats.h"
+#include "fralab/core/pair_id.h"
 #include "line_statistics.h"
 #include "orthogonal_multisine.h"
 
@@ -28,7 +29,9 @@ PairAnalyzer::PairAnalyzer(const std::string& pair, const AnalyzerOptions& optio
       opt_(options),
       store_(store ? std::move(store) : std::make_shared<SampleStore>()) {
   opt_.validate();
-  std::tie(e1_, e2_) = split_pair(pair);
+  const PairId id = PairId::parse(pair);
+  e1_ = id.e1();
+  e2_ = id.output;
   orthogonal_ = std::make_unique<OrthogonalRealisations>(e1_, e2_, opt_.distortion_threshold);
   for (const std::string& ch : {e1_, e2_, std::string("ref_phase")}) store_->keep(ch);
   reader_ = store_->add_reader();
@@ -65,7 +68,7 @@ bool PairAnalyzer::wants(const StatusEvent& st) const {
   };
   if (!opt_.input.empty()) return excited(opt_.input);
   for (const std::string& ch : {e1_, e2_}) {
-    const std::string base = ch.rfind("u_", 0) == 0 ? ch.substr(2) : ch;
+    const std::string base = commanded_input(ch).value_or(ch);
     if (is_input(base) && !excited(base)) return false;
   }
   return true;
@@ -117,7 +120,7 @@ void PairAnalyzer::on_status(const StatusEvent& st) {
     Window w{st, settle_step_ == st.step && settle_from_ <= st.sample ? settle_from_ : st.sample,
              st.excitation == Excitation::kMultisine ? orthogonal_inputs(st) : std::vector<int>{}};
     for (int i : w.ins)
-      for (const std::string& ch : {"u_" + st.inputs[i], st.inputs[i]}) store_->keep(ch);
+      for (const std::string& ch : {command_channel(st.inputs[i]), st.inputs[i]}) store_->keep(ch);
     pending_[st.sample] = std::move(w);
   } else if (st.state == RunState::kDone || st.state == RunState::kAbort) {
     done_seen_ = true;
@@ -394,7 +397,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
   int want = -1;
   for (size_t i = 0; i < st.inputs.size(); ++i) {
     for (const std::string& ch : {e1_, e2_}) {
-      if (ch == st.inputs[i] || ch == "u_" + st.inputs[i]) want = int(i);
+      if (ch == st.inputs[i] || ch == command_channel(st.inputs[i])) want = int(i);
     }
   }
   // Spectra of every period of both channels (window mean removed: DC does not touch lines k >= 1).
@@ -452,7 +455,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     for (int kk : nb) se += period_spread(M, [&](int p) { return X2[p][kk] - r * X1[p][kk]; });
     se /= double(1 + nb.size());
     q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
-    if (e1_ == "u_" + q.input) q.line_amplitude = 2 * std::abs(m1) / P;
+    if (e1_ == command_channel(q.input)) q.line_amplitude = 2 * std::abs(m1) / P;
     q.coherence = std::norm(s12) / (s11 * s22);
     double lvl = 0;
     for (int kk : nb) {

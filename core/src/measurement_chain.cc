@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "fralab/core/pair_id.h"
+
 namespace fralab {
 
 std::complex<double> MeasurementChain::command_factor(double w) const {
@@ -15,7 +17,7 @@ std::complex<double> MeasurementChain::command_factor(double w) const {
 }
 
 std::complex<double> MeasurementChain::pair_factor(const std::string& e1, double w) const {
-  if (e1.rfind("u_", 0) == 0) return command_factor(w);
+  if (commanded_input(e1)) return command_factor(w);
   for (const auto& x : reheld_inputs)
     if (x == e1) return command_factor(w);
   return 1.0;

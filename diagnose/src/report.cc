@@ -8,6 +8,7 @@
 
 #include "fralab/analyze/bode_plot.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/pair_id.h"
 
 namespace fralab {
 
@@ -36,8 +37,8 @@ std::vector<MeasuredPair> read_measured_dir(const std::string& dir) {
 bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
   std::vector<BodePlot> plots;
   for (const auto& p : d.pairs) {
-    const auto [x, y] = split_pair(p.pair);
-    plots.push_back({p.pair + " (response " + y + "/" + x + ")",
+    const PairId id = PairId::parse(p.pair);
+    plots.push_back({p.pair + " (response " + id.output + "/" + id.e1() + ")",
                      pair_file_stem(p.pair),
                      p.w,
                      p.meas,
@@ -54,18 +55,18 @@ bool render_diagnosis_plots(const Diagnosis& d, const std::string& dir) {
     if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
   };
   for (const auto& p : d.pairs) {
-    const auto [x, y] = split_pair(p.pair);
-    if (x.rfind("u_", 0) == 0) continue;
-    add(cols, x);
-    add(rows, y);
+    const PairId id = PairId::parse(p.pair);
+    if (id.command) continue;
+    add(cols, id.input);
+    add(rows, id.output);
   }
   if (rows.empty()) return true;
   std::vector<std::vector<const BodePlot*>> grid(rows.size(),
                                                  std::vector<const BodePlot*>(cols.size()));
   for (size_t i = 0; i < d.pairs.size(); ++i) {
-    const auto [x, y] = split_pair(d.pairs[i].pair);
-    const auto r = std::find(rows.begin(), rows.end(), y),
-               c = std::find(cols.begin(), cols.end(), x);
+    const PairId id = PairId::parse(d.pairs[i].pair);
+    const auto r = std::find(rows.begin(), rows.end(), id.output),
+               c = std::find(cols.begin(), cols.end(), id.e1());
     if (r != rows.end() && c != cols.end())
       grid[size_t(r - rows.begin())][size_t(c - cols.begin())] = &plots[i];
   }

@@ -8,6 +8,7 @@
 
 #include "data_quality_checks.h"
 #include "fralab/core/numerics.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 
 namespace fralab {
@@ -20,7 +21,7 @@ constexpr std::pair<DataFaultKind, const char*> kKindWords[] = {
     {DataFaultKind::kNoResponse, "no_response"}};
 
 bool checked_channel(const std::string& c) {
-  return !c.starts_with("u_") && !c.starts_with("ref_") && c != "underrun";
+  return !commanded_input(c) && !c.starts_with("ref_") && c != "underrun";
 }
 
 }  // namespace
@@ -149,9 +150,9 @@ TimeSeries mend_series(const TimeSeries& s, const DataQuality& q, const Schedule
 
 void widen_for_mending(std::vector<Frd>& curves, const DataQuality& q) {
   for (Frd& c : curves) {
-    const auto [e1, e2] = split_pair(c.pair);
+    const PairId id = PairId::parse(c.pair);
     for (const DataFault& f : q.faults) {
-      if (f.channel != e1 && f.channel != e2) continue;
+      if (f.channel != id.e1() && f.channel != id.output) continue;
       for (FrdPoint& p : c.points) {
         if (!p.valid || !(p.sigma > 0)) continue;
         double extra = 0;

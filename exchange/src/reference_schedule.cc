@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "fralab/core/error.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 #include "fralab/exchange/schedule.h"
 #include "fralab/exchange/time_series.h"
@@ -90,9 +91,9 @@ Schedule schedule_from_reference(const TimeSeries& s, const ReferenceScheduleOpt
   std::vector<int> cmds;
   std::vector<std::string> inputs;
   for (size_t c = 0; c < s.channels.size(); ++c)
-    if (s.channels[c].rfind("u_", 0) == 0) {
+    if (const auto x = commanded_input(s.channels[c])) {
       cmds.push_back(int(c));
-      inputs.push_back(s.channels[c].substr(2));
+      inputs.push_back(*x);
     }
   if (cmds.empty()) throw InputError(s.source + ": no command channel u_<input>");
   const double fs = s.sample_rate_hz;

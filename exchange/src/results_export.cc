@@ -11,6 +11,7 @@
 
 #include "fralab/core/error.h"
 #include "fralab/core/frd.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 #include "fralab/core/tf.h"
 #include "fralab/exchange/mat_file.h"
@@ -45,7 +46,7 @@ std::map<std::string, std::string> channel_units(const std::string& model_file) 
   std::map<std::string, std::string> units;
   if (!fs::exists(model_file)) return units;
   const Model m = load_model(model_file);
-  for (const auto& in : m.inputs) units[in.name] = units["u_" + in.name] = in.units;
+  for (const auto& in : m.inputs) units[in.name] = units[command_channel(in.name)] = in.units;
   for (const auto& out : m.outputs) units[out.name] = out.units;
   return units;
 }

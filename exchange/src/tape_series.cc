@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "fralab/core/error.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 
 namespace fralab {
@@ -53,7 +54,7 @@ std::vector<Block> series_to_blocks(const TimeSeries& s, const Schedule& schedul
                               std::to_string(e.seq) + ", " + to_string(e.state) + ")";
     for (size_t k = 0; k < e.inputs.size(); ++k) {
       if (e.amplitudes[k] <= 0) continue;
-      if (s.channel_index("u_" + e.inputs[k]) < 0 && s.channel_index(e.inputs[k]) < 0)
+      if (s.channel_index(command_channel(e.inputs[k])) < 0 && s.channel_index(e.inputs[k]) < 0)
         throw InputError(s.source + ": " + where + " excites " + e.inputs[k] +
                          " but the series has neither a channel u_" + e.inputs[k] + " nor " +
                          e.inputs[k]);

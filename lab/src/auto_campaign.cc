@@ -7,6 +7,7 @@
 #include "fralab/acquire/model_info.h"
 #include "fralab/core/frd.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/envelope/envelope.h"
 #include "fralab/lab/run_lock.h"
@@ -69,7 +70,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   double act_tc = 0;
   for (int i : excite) {
     const std::string x = model.inputs[i].name;
-    const std::string file = MeasureDir(m.out).frd("u_" + x + ":" + x);
+    const std::string file = MeasureDir(m.out).frd(PairId::actuator_pair(x).str());
     const double nl = fs::exists(file) ? actuator_distortion(load_frd(file), a.max_rel_sigma) : -1;
     res.nl[x] = nl;
     if (nl > a.nl_threshold) {
@@ -83,7 +84,8 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
   std::vector<Frd> curves;
   for (const MeasuredPair& p : read_measured_dir(m.out)) curves.push_back(p.frd);
   auto input_of_command_pair = [](const std::string& pair) {  // "u_X:..." -> X
-    return pair.rfind("u_", 0) == 0 ? pair.substr(2, pair.find(':') - 2) : std::string();
+    const PairId id = PairId::parse(pair);
+    return id.command ? id.input : std::string();
   };
   std::optional<RunRecord> sine_run;
   std::vector<ClockEstimate> clocks = mr.clock_estimates;  // the runs' own, for a later run
@@ -112,7 +114,7 @@ AutoCampaignResult run_auto_campaign(const MeasureOptions& opt, const AutoCampai
         merged.push_back(f);
     }
     for (const std::string& x : res.sine_inputs)
-      merged.push_back(load_frd(MeasureDir(s.out).frd("u_" + x + ":" + x)));
+      merged.push_back(load_frd(MeasureDir(s.out).frd(PairId::actuator_pair(x).str())));
     curves = std::move(merged);
   }
   // DIR/frd holds exactly the merged curves: an earlier run's frd files there go (its tapes stay).

@@ -10,6 +10,7 @@
 
 #include "fralab/analyze/pair_analyzer.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/diagnose/report.h"
 #include "fralab/exchange/tape_series.h"
 #include "fralab/lab/measure.h"
@@ -82,8 +83,9 @@ ClockRecheck recheck_clocks(const std::string& dir, const std::vector<ClockEstim
   if (const auto* a = std::get_if<AutoRunRecord>(&top)) {
     const std::vector<std::string> sine_inputs = a->sine.inputs;
     auto from_sine = [sine_inputs](const std::string& pair) {
-      return std::any_of(sine_inputs.begin(), sine_inputs.end(),
-                         [&](const std::string& x) { return pair == "u_" + x + ":" + x; });
+      return std::any_of(sine_inputs.begin(), sine_inputs.end(), [&](const std::string& x) {
+        return pair == PairId::actuator_pair(x).str();
+      });
     };
     sources.push_back(
         {a->multisine.dir, [from_sine](const std::string& p) { return !from_sine(p); }});
@@ -126,9 +128,9 @@ ClockRecheck recheck_clocks(const std::string& dir, const std::vector<ClockEstim
     run.data_quality = std::move(checked.quality);
     save_run_record(rd.run_json(), run);
     for (const Frd& f : curves) {
-      const auto [e1, e2] = split_pair(f.pair);
-      const bool touched = std::find(now.begin(), now.end(), e1) != now.end() ||
-                           std::find(now.begin(), now.end(), e2) != now.end();
+      const PairId id = PairId::parse(f.pair);
+      const bool touched = std::find(now.begin(), now.end(), id.e1()) != now.end() ||
+                           std::find(now.begin(), now.end(), id.output) != now.end();
       if (touched && src.gave(f.pair) && fs::exists(md.frd(f.pair))) replaced[f.pair] = f;
     }
   }

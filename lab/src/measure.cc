@@ -5,6 +5,7 @@
 
 #include "fralab/core/frd.h"
 #include "fralab/core/measure_dir.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/identify/fit_io.h"
 #include "fralab/lab/auto_campaign.h"
 #include "fralab/lab/run_lock.h"
@@ -20,8 +21,8 @@ std::vector<std::string> pairs_for_input(const std::string& x,
                                          const std::vector<std::string>& outs) {
   std::vector<std::string> p;
   for (const auto& o : outs) p.push_back(x + ":" + o);
-  p.push_back("u_" + x + ":" + x);
-  for (const auto& o : outs) p.push_back("u_" + x + ":" + o);
+  p.push_back(PairId::actuator_pair(x).str());
+  for (const auto& o : outs) p.push_back(PairId{x, o, true}.str());
   return p;
 }
 

@@ -1,5 +1,7 @@
 #include "fralab/plant/lockstep.h"
 
+#include "fralab/core/pair_id.h"
+
 namespace fralab {
 
 LockstepPlant::LockstepPlant(const Model& model, const SimulatorOptions& opt, std::string run_id)
@@ -24,7 +26,7 @@ Block LockstepPlant::advance(const Block& cmd) {
   }
   std::vector<int> idx;
   for (const auto& n : input_names_) {
-    int c = cmd.channel_index("u_" + n);
+    int c = cmd.channel_index(command_channel(n));
     if (c < 0) throw InputError("command block has no channel u_" + n);
     idx.push_back(c);
   }
@@ -36,10 +38,10 @@ Block LockstepPlant::advance(const Block& cmd) {
   tape.final_block = cmd.final_block;
   tape.n_samples = cmd.n_samples;
   std::vector<int> echo;
-  for (const auto& n : input_names_) tape.channels.push_back("u_" + n);
+  for (const auto& n : input_names_) tape.channels.push_back(command_channel(n));
   for (const auto& n : sim_.channel_names()) tape.channels.push_back(n);
   for (size_t c = 0; c < cmd.channels.size(); ++c) {
-    if (cmd.channels[c].rfind("u_", 0) != 0) {
+    if (!commanded_input(cmd.channels[c])) {
       echo.push_back(static_cast<int>(c));
       tape.channels.push_back(cmd.channels[c]);
     }

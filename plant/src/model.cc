@@ -2,6 +2,7 @@
 
 #include <set>
 
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 #include "fralab/plant/state_space.h"
 
@@ -65,7 +66,7 @@ static void check_name(const std::string& name, const JsonWhere& w) {
       json_fail(w, "channel name \"" + name + "\" may hold only letters, digits and '_'");
     }
   }
-  if (name.rfind("u_", 0) == 0 || name.rfind("ref_", 0) == 0) {
+  if (commanded_input(name) || name.rfind("ref_", 0) == 0) {
     json_fail(w,
               "channel name \"" + name + "\" is reserved (u_* are commands, ref_* the reference)");
   }
@@ -407,7 +408,7 @@ std::optional<Tf> Model::command_chain(const std::string& input, const std::stri
   const int i = input_index(input);
   if (i < 0) return std::nullopt;
   const Tf act = inputs[i].actuator ? *inputs[i].actuator : Tf{};
-  if (ch == "u_" + input) return Tf{};
+  if (ch == command_channel(input)) return Tf{};
   if (ch == input) return act;
   const int o = output_index(ch);
   if (o < 0) return std::nullopt;
