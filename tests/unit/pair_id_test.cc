@@ -27,6 +27,19 @@ TEST(PairId, TheLabsThreeKindsOfPairAreToldApartAndWrittenBack) {
   for (const char* t : {"Wf:P3", "u_A8:A8", "u_A8:N"}) EXPECT_EQ(PairId::parse(t).str(), t);
 }
 
+// The tape names an input X's command u_X and its position X; a pair's E1 is one of the two.
+TEST(PairId, AnInputsCommandChannelAndTheFirstChannelOfItsPairs) {
+  EXPECT_EQ(command_channel("A8"), "u_A8");
+  EXPECT_EQ(commanded_input("u_A8"), "A8");
+  EXPECT_EQ(commanded_input(command_channel("Wf")), "Wf");
+  for (const char* ch : {"A8", "ref_phase", "underrun", "N_u_"})
+    EXPECT_FALSE(commanded_input(ch).has_value()) << ch;
+  EXPECT_EQ(PairId::actuator_pair("A8").str(), "u_A8:A8");
+  EXPECT_TRUE(PairId::actuator_pair("A8").actuator());
+  EXPECT_EQ(PairId::parse("u_A8:N").e1(), "u_A8");
+  EXPECT_EQ(PairId::parse("A8:N").e1(), "A8");
+}
+
 TEST(PairId, TextThatIsNoPairIsRefusedNamingIt) {
   for (const char* t : {"WfP3", "u_:A8", ":P3", "Wf:"}) {
     try {
