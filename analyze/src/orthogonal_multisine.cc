@@ -13,6 +13,47 @@ namespace fralab::analyze_detail {
 
 using Complex = std::complex<double>;
 
+namespace {
+
+// A channel's mean level on line j's unexcited neighbours nbk[j], relative to line j (x: its
+// period-mean spectrum).
+double distortion(const std::vector<Complex>& x, const std::vector<int>& lines,
+                  const std::vector<std::vector<int>>& nbk, size_t j) {
+  double lvl = 0;
+  for (int kk : nbk[j]) lvl += std::abs(x[kk]);
+  return nbk[j].empty() ? 0.0
+                        : lvl / double(nbk[j].size()) / std::max(std::abs(x[lines[j]]), 1e-300);
+}
+
+// From the period spectra gathered: E2's distortion per line (ex.nl), and per input its
+// position's period mean at each line (ex.pos), that mean's variance pooled over the line and its
+// neighbours (ex.pos_var) and the median over lines of its distortion (ex.pos_nl).
+void distortion_and_position_noise(
+    const std::vector<int>& lines, const std::vector<std::vector<int>>& nbk,
+    const std::vector<Complex>& x2_mean, const std::vector<std::vector<Complex>>& pos_mean,
+    const std::vector<std::vector<std::vector<std::vector<Complex>>>>& posp, int M,
+    OrthogonalExperiment& ex) {
+  const size_t L = lines.size(), nu = pos_mean.size();
+  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, lines, nbk, j);
+  ex.pos_nl.assign(nu, 0.0);
+  ex.pos_var.assign(L, std::vector<double>(nu, 0.0));
+  for (size_t q = 0; q < nu; ++q) {
+    std::vector<double> d(L);
+    for (size_t j = 0; j < L; ++j) {
+      ex.pos[j][q] = pos_mean[q][lines[j]];
+      double ss = 0;
+      for (const std::vector<Complex>& v : posp[q][j])
+        ss += period_spread(M, [&](int p) { return v[size_t(p)]; });
+      ex.pos_var[j][q] = ss / (double(posp[q][j].size()) * double(M) * (M - 1));
+      d[j] = distortion(pos_mean[q], lines, nbk, j);
+    }
+    std::nth_element(d.begin(), d.begin() + L / 2, d.end());
+    ex.pos_nl[q] = L ? d[L / 2] : 0.0;
+  }
+}
+
+}  // namespace
+
 OrthogonalExperiment orthogonal_experiment(const StatusEvent& st, const std::vector<int>& ins,
                                            const double* a, const double* b,
                                            const WindowChannel& channel) {
@@ -90,29 +131,7 @@ OrthogonalExperiment orthogonal_experiment(const StatusEvent& st, const std::vec
       }
     }
   }
-  // A channel's mean level on line j's unexcited neighbours, relative to line j.
-  auto distortion = [&](const std::vector<Complex>& x, size_t j) {
-    double lvl = 0;
-    for (int kk : nbk[j]) lvl += std::abs(x[kk]);
-    return nbk[j].empty() ? 0.0
-                          : lvl / double(nbk[j].size()) / std::max(std::abs(x[lines[j]]), 1e-300);
-  };
-  for (size_t j = 0; j < L; ++j) ex.nl[j] = distortion(x2_mean, j);
-  ex.pos_nl.assign(ins.size(), 0.0);
-  ex.pos_var.assign(L, std::vector<double>(ins.size(), 0.0));
-  for (size_t q = 0; q < ins.size(); ++q) {
-    std::vector<double> d(L);
-    for (size_t j = 0; j < L; ++j) {
-      ex.pos[j][q] = pos_mean[q][lines[j]];
-      double ss = 0;
-      for (const std::vector<Complex>& v : posp[q][j])
-        ss += period_spread(M, [&](int p) { return v[size_t(p)]; });
-      ex.pos_var[j][q] = ss / (double(posp[q][j].size()) * double(M) * (M - 1));
-      d[j] = distortion(pos_mean[q], j);
-    }
-    std::nth_element(d.begin(), d.begin() + L / 2, d.end());
-    ex.pos_nl[q] = L ? d[L / 2] : 0.0;
-  }
+  distortion_and_position_noise(lines, nbk, x2_mean, pos_mean, posp, M, ex);
   return ex;
 }
 

@@ -283,25 +283,17 @@ SlowState::Value slow_value(const EnvelopePoint& pt,
   return v;
 }
 
-// The slow states (see the header): the plant's over the outputs that agree, then one per other
-// output, as sensor or output.
-std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
-                                   const EnvelopeOptions& o) {
-  using Paths = std::vector<std::pair<std::string, double>>;
-  std::vector<std::map<std::string, Paths>> by(points.size());
-  std::vector<std::string> outputs;
-  std::map<std::string, size_t> count;
-  for (size_t i = 0; i < points.size(); ++i) {
-    by[i] = slowest_by_output(points[i]);
-    for (const auto& [out, v] : by[i]) {
-      if (!count.count(out)) outputs.push_back(out);
-      count[out] += v.size();
-    }
-  }
-  std::vector<SlowState> res;
-  if (outputs.size() < 2) return res;
-  // a and b agree: at every point holding both their means within slow_ratio, at one point at
-  // least.
+using SlowPaths = std::vector<std::pair<std::string, double>>;       // (pair, tau) per path
+using SlowByOutput = std::vector<std::map<std::string, SlowPaths>>;  // [point][output]
+
+// The plant's outputs among `outputs` (in their order): from each output in turn, the outputs
+// agreeing with every member so far (nearest first); the group holding the most paths. Two
+// outputs agree when at every point holding both their means are within slow_ratio, at one point
+// at least.
+std::vector<std::string> plant_slow_outputs(const SlowByOutput& by,
+                                            const std::vector<std::string>& outputs,
+                                            const std::map<std::string, size_t>& count,
+                                            const EnvelopeOptions& o) {
   auto agree = [&](const std::string& a, const std::string& b) {
     int common = 0;
     for (const auto& m : by) {
@@ -318,8 +310,6 @@ std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
       if (m.count(a) && m.count(b)) d += std::abs(std::log(mean_tau(m.at(a)) / mean_tau(m.at(b))));
     return d;
   };
-  // The plant's group: from each output in turn, the outputs agreeing with every member so far
-  // (nearest first); the group holding the most paths.
   auto group_from = [&](const std::string& seed) {
     std::vector<std::string> g = {seed}, rest;
     for (const auto& out : outputs)
@@ -336,7 +326,7 @@ std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
   };
   auto paths_in = [&](const std::vector<std::string>& g) {
     size_t n = 0;
-    for (const auto& out : g) n += count[out];
+    for (const auto& out : g) n += count.at(out);
     return n;
   };
   std::vector<std::string> plant;
@@ -344,49 +334,83 @@ std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
     std::vector<std::string> g = group_from(out);
     if (paths_in(g) > paths_in(plant)) plant = g;
   }
-  std::vector<std::string> others;
-  for (const auto& out : outputs)
-    if (std::find(plant.begin(), plant.end(), out) == plant.end()) others.push_back(out);
-  if (plant.size() < 2) return res;
   std::stable_sort(plant.begin(), plant.end(), [&](const std::string& a, const std::string& b) {
     return std::find(outputs.begin(), outputs.end(), a) <
            std::find(outputs.begin(), outputs.end(), b);
   });
+  return plant;
+}
+
+// The plant's slow state over its outputs' paths at each point; plant_tau[i] its time constant
+// at point i (0 where none of those outputs has a slow path).
+SlowState plant_slow_state(const std::vector<EnvelopePoint>& points, const SlowByOutput& by,
+                           const std::vector<std::string>& plant, std::vector<double>* plant_tau) {
   SlowState ps;
   ps.label = "plant", ps.outputs = plant;
-  std::vector<double> plant_tau(points.size(), 0);
+  plant_tau->assign(points.size(), 0);
   for (size_t i = 0; i < points.size(); ++i) {
-    Paths members;
+    SlowPaths members;
     for (const auto& out : plant)
-      if (by[i].count(out)) members.insert(members.end(), by[i][out].begin(), by[i][out].end());
+      if (by[i].count(out))
+        members.insert(members.end(), by[i].at(out).begin(), by[i].at(out).end());
     if (members.empty()) continue;
     ps.values.push_back(slow_value(points[i], members));
-    plant_tau[i] = ps.values.back().tau_s;
+    (*plant_tau)[i] = ps.values.back().tau_s;
   }
-  res.push_back(ps);
-  for (const auto& out : outputs) {
-    if (std::find(others.begin(), others.end(), out) == others.end()) continue;
-    bool slower = true;
-    for (size_t i = 0; i < points.size(); ++i)
-      if (by[i].count(out) && plant_tau[i] > 0)
-        slower = slower && mean_tau(by[i][out]) > plant_tau[i];
-    SlowState s;
-    s.label = (slower ? "sensor " : "output ") + out, s.outputs = {out};
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (!by[i].count(out)) continue;
-      Paths members;
-      std::vector<std::string> without;
-      for (const auto& m : by[i][out]) {
-        if (slower && plant_tau[i] > 0 && !(m.second > plant_tau[i]))
-          without.push_back(m.first);
-        else
-          members.push_back(m);
-      }
-      if (members.empty()) continue;
-      s.values.push_back(slow_value(points[i], members));
-      s.values.back().without = without;
+  return ps;
+}
+
+// Another output's slow state: a sensor's where it is slower than the plant's at every point
+// (its paths not slower than the plant there left out, named), else the output's.
+SlowState output_slow_state(const std::vector<EnvelopePoint>& points, const SlowByOutput& by,
+                            const std::string& out, const std::vector<double>& plant_tau) {
+  bool slower = true;
+  for (size_t i = 0; i < points.size(); ++i)
+    if (by[i].count(out) && plant_tau[i] > 0)
+      slower = slower && mean_tau(by[i].at(out)) > plant_tau[i];
+  SlowState s;
+  s.label = (slower ? "sensor " : "output ") + out, s.outputs = {out};
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!by[i].count(out)) continue;
+    SlowPaths members;
+    std::vector<std::string> without;
+    for (const auto& m : by[i].at(out)) {
+      if (slower && plant_tau[i] > 0 && !(m.second > plant_tau[i]))
+        without.push_back(m.first);
+      else
+        members.push_back(m);
     }
-    if (!s.values.empty()) res.push_back(s);
+    if (members.empty()) continue;
+    s.values.push_back(slow_value(points[i], members));
+    s.values.back().without = without;
+  }
+  return s;
+}
+
+// The slow states (see the header): the plant's over the outputs that agree, then one per other
+// output, as sensor or output; each flagged for its steps over the points and the paths left out.
+std::vector<SlowState> slow_states(const std::vector<EnvelopePoint>& points,
+                                   const EnvelopeOptions& o) {
+  SlowByOutput by(points.size());
+  std::vector<std::string> outputs;
+  std::map<std::string, size_t> count;
+  for (size_t i = 0; i < points.size(); ++i) {
+    by[i] = slowest_by_output(points[i]);
+    for (const auto& [out, v] : by[i]) {
+      if (!count.count(out)) outputs.push_back(out);
+      count[out] += v.size();
+    }
+  }
+  std::vector<SlowState> res;
+  if (outputs.size() < 2) return res;
+  const std::vector<std::string> plant = plant_slow_outputs(by, outputs, count, o);
+  if (plant.size() < 2) return res;
+  std::vector<double> plant_tau;
+  res.push_back(plant_slow_state(points, by, plant, &plant_tau));
+  for (const auto& out : outputs) {
+    if (std::find(plant.begin(), plant.end(), out) != plant.end()) continue;
+    SlowState s = output_slow_state(points, by, out, plant_tau);
+    if (!s.values.empty()) res.push_back(std::move(s));
   }
   for (SlowState& s : res) {
     std::vector<Step> steps;
@@ -409,6 +433,99 @@ void EnvelopeOptions::validate() const {
   if (!(slow_ratio > 1)) throw InputError("envelope: slow_ratio must be > 1");
 }
 
+namespace {
+
+// Point pt's states into the tracks: the closest (state, track) couples first, each within
+// track_ratio and sharing a path with the track's last value (a change of label costs the whole
+// tracking window); a state no track takes starts one.
+void track_states(const EnvelopePoint& pt, const EnvelopeOptions& o,
+                  std::vector<StateTrack>& tracks) {
+  std::vector<TrackValue> states = point_states(pt);
+  std::vector<bool> taken(tracks.size(), false);
+  struct Couple {
+    double d;
+    size_t s, t;
+  };
+  std::vector<Couple> cs;
+  for (size_t s = 0; s < states.size(); ++s) {
+    for (size_t t = 0; t < tracks.size(); ++t) {
+      const StateTrack& tr = tracks[t];
+      const TrackValue& last = tr.values.back();
+      if (tr.pair != states[s].pair || last.point == pt.name) continue;
+      const double d = std::abs(std::log(states[s].value / last.value));
+      if (!(d < std::log(o.track_ratio)) || !share_path(states[s], last)) continue;
+      // A state keeps its label (sensor T5 stays T5's) unless another is much nearer.
+      const double cost = d + (label_of(states[s]) == label_of(last) ? 0 : std::log(o.track_ratio));
+      cs.push_back({cost, s, t});
+    }
+  }
+  std::sort(cs.begin(), cs.end(), [](const Couple& a, const Couple& b) { return a.d < b.d; });
+  std::vector<bool> used(states.size(), false);
+  for (const Couple& c : cs) {
+    if (used[c.s] || taken[c.t]) continue;
+    used[c.s] = taken[c.t] = true;
+    tracks[c.t].values.push_back(states[c.s]);
+  }
+  for (size_t s = 0; s < states.size(); ++s) {
+    if (used[s]) continue;
+    StateTrack t;
+    t.pair = states[s].pair;
+    t.values.push_back(states[s]);
+    tracks.push_back(t);
+  }
+}
+
+// A track's label (the one most of its values carry) and its flags over n_points.
+void label_and_flag(StateTrack& t, size_t n_points) {
+  std::map<std::string, int> votes;
+  for (const auto& v : t.values) ++votes[label_of(v)];
+  int best = -1;
+  for (const auto& [l, n] : votes)
+    if (n > best) best = n, t.label = l;
+  std::vector<Step> steps;
+  for (const auto& v : t.values)
+    steps.push_back({v.point, v.x, v.value, v.rel_sigma > 0 ? v.rel_sigma * v.value : 0});
+  flag_steps(steps, n_points, &t.at_every_point, &t.monotone, &t.flags);
+}
+
+// Finding f of point pt (its diagnosis' JSON) into its law (cause, scope, input, output): the
+// value of its first interval's parameter, that interval's half width as sigma, and the
+// simulation's value from its first from_* parameter. Findings without an interval are left out.
+void add_to_law(const Json& f, const EnvelopePoint& pt, std::map<std::string, FindingLaw>& laws) {
+  if (!f.contains("intervals") || !f["intervals"].is_object() || f["intervals"].empty()) return;
+  const std::string param = f["intervals"].begin().key();
+  if (!f.contains("parameters") || !f["parameters"].contains(param)) return;
+  auto str = [&](const char* k) {
+    return f.contains(k) && f[k].is_string() ? f[k].get<std::string>() : std::string();
+  };
+  const std::string key =
+      str("cause") + "|" + str("scope") + "|" + str("input") + "|" + str("output");
+  FindingLaw& l = laws[key];
+  l.cause = str("cause"), l.scope = str("scope"), l.input = str("input"), l.output = str("output"),
+  l.parameter = param;
+  FindingLaw::Value v;
+  v.point = pt.name, v.x = pt.x, v.value = f["parameters"][param].get<double>();
+  const Json& iv = f["intervals"][param];
+  if (iv.is_array() && iv.size() == 2) {
+    const bool lo = iv[0].is_number(), hi = iv[1].is_number();
+    if (lo && hi)
+      v.sigma = (iv[1].get<double>() - iv[0].get<double>()) / 2;
+    else if (lo)
+      v.sigma = v.value - iv[0].get<double>();
+    else if (hi)
+      v.sigma = iv[1].get<double>() - v.value;
+  }
+  for (auto it = f["parameters"].begin(); it != f["parameters"].end(); ++it) {
+    if (it.key().rfind("from_", 0) == 0 && it.value().is_number()) {
+      v.simulated = it.value().get<double>(), v.has_simulated = true;
+      break;
+    }
+  }
+  l.values.push_back(v);
+}
+
+}  // namespace
+
 EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOptions& o) {
   o.validate();
   std::sort(points.begin(), points.end(),
@@ -416,94 +533,14 @@ EnvelopeReport join_points(std::vector<EnvelopePoint> points, const EnvelopeOpti
   EnvelopeReport r;
   r.schedule_by = o.schedule_by;
   r.points = points;
-  // States into tracks.
-  for (const EnvelopePoint& pt : points) {
-    std::vector<TrackValue> states = point_states(pt);
-    std::vector<bool> taken(r.tracks.size(), false);
-    // The closest (state, track) couples first.
-    struct Couple {
-      double d;
-      size_t s, t;
-    };
-    std::vector<Couple> cs;
-    for (size_t s = 0; s < states.size(); ++s) {
-      for (size_t t = 0; t < r.tracks.size(); ++t) {
-        const StateTrack& tr = r.tracks[t];
-        const TrackValue& last = tr.values.back();
-        if (tr.pair != states[s].pair || last.point == pt.name) continue;
-        const double d = std::abs(std::log(states[s].value / last.value));
-        if (!(d < std::log(o.track_ratio)) || !share_path(states[s], last)) continue;
-        // A state keeps its label (sensor T5 stays T5's) unless another is much nearer: a change
-        // of label costs the whole tracking window.
-        const double cost =
-            d + (label_of(states[s]) == label_of(last) ? 0 : std::log(o.track_ratio));
-        cs.push_back({cost, s, t});
-      }
-    }
-    std::sort(cs.begin(), cs.end(), [](const Couple& a, const Couple& b) { return a.d < b.d; });
-    std::vector<bool> used(states.size(), false);
-    for (const Couple& c : cs) {
-      if (used[c.s] || taken[c.t]) continue;
-      used[c.s] = taken[c.t] = true;
-      r.tracks[c.t].values.push_back(states[c.s]);
-    }
-    for (size_t s = 0; s < states.size(); ++s) {
-      if (used[s]) continue;
-      StateTrack t;
-      t.pair = states[s].pair;
-      t.values.push_back(states[s]);
-      r.tracks.push_back(t);
-    }
-  }
-  for (StateTrack& t : r.tracks) {
-    std::map<std::string, int> votes;
-    for (const auto& v : t.values) ++votes[label_of(v)];
-    int best = -1;
-    for (const auto& [l, n] : votes)
-      if (n > best) best = n, t.label = l;
-    std::vector<Step> steps;
-    for (const auto& v : t.values)
-      steps.push_back({v.point, v.x, v.value, v.rel_sigma > 0 ? v.rel_sigma * v.value : 0});
-    flag_steps(steps, points.size(), &t.at_every_point, &t.monotone, &t.flags);
-  }
+  for (const EnvelopePoint& pt : points) track_states(pt, o, r.tracks);
+  for (StateTrack& t : r.tracks) label_and_flag(t, points.size());
   r.slow_states = slow_states(points, o);
   // Findings across points.
   std::map<std::string, FindingLaw> laws;
   for (const EnvelopePoint& pt : points) {
     if (!pt.diagnosis.is_object() || !pt.diagnosis.contains("findings")) continue;
-    for (const Json& f : pt.diagnosis["findings"]) {
-      if (!f.contains("intervals") || !f["intervals"].is_object() || f["intervals"].empty())
-        continue;
-      const std::string param = f["intervals"].begin().key();
-      if (!f.contains("parameters") || !f["parameters"].contains(param)) continue;
-      auto str = [&](const char* k) {
-        return f.contains(k) && f[k].is_string() ? f[k].get<std::string>() : std::string();
-      };
-      const std::string key =
-          str("cause") + "|" + str("scope") + "|" + str("input") + "|" + str("output");
-      FindingLaw& l = laws[key];
-      l.cause = str("cause"), l.scope = str("scope"), l.input = str("input"),
-      l.output = str("output"), l.parameter = param;
-      FindingLaw::Value v;
-      v.point = pt.name, v.x = pt.x, v.value = f["parameters"][param].get<double>();
-      const Json& iv = f["intervals"][param];
-      if (iv.is_array() && iv.size() == 2) {
-        const bool lo = iv[0].is_number(), hi = iv[1].is_number();
-        if (lo && hi)
-          v.sigma = (iv[1].get<double>() - iv[0].get<double>()) / 2;
-        else if (lo)
-          v.sigma = v.value - iv[0].get<double>();
-        else if (hi)
-          v.sigma = iv[1].get<double>() - v.value;
-      }
-      for (auto it = f["parameters"].begin(); it != f["parameters"].end(); ++it) {
-        if (it.key().rfind("from_", 0) == 0 && it.value().is_number()) {
-          v.simulated = it.value().get<double>(), v.has_simulated = true;
-          break;
-        }
-      }
-      l.values.push_back(v);
-    }
+    for (const Json& f : pt.diagnosis["findings"]) add_to_law(f, pt, laws);
   }
   for (auto& [k, l] : laws) {
     for (const EnvelopePoint& pt : points) {

@@ -1,5 +1,8 @@
 #include "plant_node.h"
 
+#include <chrono>
+#include <random>
+
 namespace fralab {
 
 PlantNode::PlantNode(lcm::LCM& data, lcm::LCM& control, LockstepPlant plant, size_t keep_blocks,
@@ -101,6 +104,56 @@ void PlantNode::on_flow(const lcm::ReceiveBuffer* rbuf, const std::string& chann
     }
   } catch (const std::exception& e) {
     error_ = e.what();
+  }
+}
+
+void ServeOptions::validate() const {
+  if (free_running && (!(speed > 0) || tick < 1 || jitter_ms < 0))
+    throw InputError(
+        "--free-running needs --speed > 0, --tick >= 1, --jitter-ms >= 0 and no --replay");
+}
+
+void serve(PlantNode& plant, lcm::LCM& lcm, const ServeOptions& o) {
+  o.validate();
+  using Clock = std::chrono::steady_clock;
+  auto last_ready = Clock::now() - std::chrono::seconds(1);
+  // After the final block the plant stays to republish tape blocks a consumer lost, until the
+  // acquisition's close (or linger_s without it: the acquisition is gone).
+  Clock::time_point done_at{};
+  const double period_s = double(o.tick) / (o.sample_rate_hz * o.speed);
+  std::mt19937_64 rng(o.seed ^ 0x6a09e667f3bcc909ULL);
+  std::uniform_real_distribution<double> jitter(-o.jitter_ms * 1e-3, o.jitter_ms * 1e-3);
+  Clock::time_point t0{}, due{};
+  int64_t ticks = 0;
+  while (o.keep_running || !(plant.done() && plant.closed())) {
+    if (o.free_running && plant.started() && !plant.done()) {
+      if (t0 == Clock::time_point{}) {
+        t0 = Clock::now();
+        due = t0 + std::chrono::duration_cast<Clock::duration>(
+                       std::chrono::duration<double>(period_s + jitter(rng)));
+      }
+      while (!plant.done() && Clock::now() >= due) {
+        plant.tick();
+        ++ticks;
+        due = t0 + std::chrono::duration_cast<Clock::duration>(
+                       std::chrono::duration<double>(double(ticks + 1) * period_s + jitter(rng)));
+      }
+      const double wait_ms = std::chrono::duration<double, std::milli>(due - Clock::now()).count();
+      lcm.handleTimeout(std::max(1, std::min(100, int(wait_ms))));
+      if (!plant.error().empty()) throw InputError(plant.error());
+      continue;
+    }
+    if (!plant.started() &&
+        std::chrono::duration<double>(Clock::now() - last_ready).count() > 0.1) {
+      plant.announce_ready();  // the acquisition waits for this before the first command
+      last_ready = Clock::now();
+    }
+    lcm.handleTimeout(100);  // the control URL is only published to
+    if (!plant.error().empty()) throw InputError(plant.error());
+    if (plant.done() && done_at == Clock::time_point{}) done_at = Clock::now();
+    if (!o.keep_running && plant.done() &&
+        std::chrono::duration<double>(Clock::now() - done_at).count() > o.linger_s)
+      break;
   }
 }
 

@@ -71,4 +71,24 @@ class PlantNode {
   std::string warnings_, error_;
 };
 
+/// How fralab-plant serves its node until the run ends (serve()).
+struct ServeOptions {
+  bool keep_running = false;  // do not return after the final block
+  double linger_s = 20;       // after the final block, wait this long for the acquisition's close
+  // Free-running: tick k is due at t0 + (k + 1) T + jitter_k, T = tick / (sample_rate_hz speed),
+  // jitter_k uniform in +-jitter_ms (seeded by seed), t0 the first command's arrival.
+  bool free_running = false;
+  int tick = 100;  // samples per tape block
+  double speed = 1.0, jitter_ms = 0.0, sample_rate_hz = 1000;
+  uint64_t seed = 0;
+  /// InputError unless speed > 0, tick >= 1 and jitter_ms >= 0 when free-running.
+  void validate() const;
+};
+
+/// fralab-plant's loop: handles `lcm` (the node's data instance) until the node is done and the
+/// acquisition has closed the run (or linger_s has passed without it), announcing readiness every
+/// 0.1 s until the first command and, free-running, calling tick() on the wall clock. InputError
+/// with the node's error when it has one.
+void serve(PlantNode& plant, lcm::LCM& lcm, const ServeOptions& o);
+
 }  // namespace fralab
