@@ -268,6 +268,22 @@ TEST(LabLoop, AConsumerThatNeverSaysReadyIsNamed) {
   }
 }
 
+// fralab-plant's loop refuses a free-running clock it cannot keep: no speed, no samples per
+// tick, a negative jitter; a lockstep plant takes no clock and is not checked for one.
+TEST(LabLoop, ThePlantsFreeRunningClockIsChecked) {
+  ServeOptions o;
+  o.free_running = true;
+  EXPECT_NO_THROW(o.validate());
+  for (auto bad : {+[](ServeOptions& x) { x.speed = 0; }, +[](ServeOptions& x) { x.tick = 0; },
+                   +[](ServeOptions& x) { x.jitter_ms = -1; }}) {
+    ServeOptions b = o;
+    bad(b);
+    EXPECT_THROW(b.validate(), InputError);
+    b.free_running = false;
+    EXPECT_NO_THROW(b.validate());
+  }
+}
+
 }  // namespace
 }  // namespace fralab
 
