@@ -150,28 +150,258 @@ void report(const RandomCase& c, const std::vector<Finding>& findings, Score& to
   std::fflush(stdout);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"fralab-bench-diagnose: precision and recall of the diagnosis on random plants"};
+// The self-check's options (main's flags).
+struct SelfCheckOptions {
   int cases = 60, first = 0;
   uint64_t seed = 1;
   std::string out = "out/selfcheck", band = "0.1:20", excitation = "stepped";
   int ppd = 5;
   double min_precision = 0, min_recall = 0;
-  app.add_option("--min-precision", min_precision, "exit 1 below this (ctest)");
-  app.add_option("--min-recall", min_recall, "exit 1 below this (ctest)");
-  app.add_option("--cases", cases)->capture_default_str();
-  app.add_option("--first", first, "index of the first case")->capture_default_str();
-  app.add_option("--seed", seed, "generator seed")->capture_default_str();
-  app.add_option("--out", out)->capture_default_str();
-  app.add_option("--band", band, "measure band, Hz")->capture_default_str();
-  app.add_option("--points-per-decade", ppd)->capture_default_str();
-  app.add_option("--excitation", excitation, "stepped or auto (any of fralab's)")
-      ->capture_default_str();
   std::string plants = "random";
+  bool faults = false, through_lab = false;
+  std::string lab_flags;
+};
+
+// The cases one by one, their scores summed; summary() prints the totals.
+class SelfCheck {
+ public:
+  explicit SelfCheck(const SelfCheckOptions& o)
+      : o_(o),
+        bin_(std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab") {}
+
+  void run_case(int i) {
+    RandomCase c = o_.plants == "machine" ? random_machine_case(o_.seed, i)
+                   : o_.plants == "modal" ? random_modal_case(o_.seed, i)
+                   : o_.plants == "state" ? random_state_case(o_.seed, i)
+                   : o_.plants == "j85"   ? j85_case(i)
+                                          : random_case(o_.seed, i);
+    const std::string dir = o_.out + "/" + c.name;
+    std::filesystem::create_directories(dir);
+    if (o_.through_lab) set_lab_noise(c);
+    save_model(dir + "/simulation.json", c.simulation);
+    const std::vector<InjectedFault> injected =
+        o_.faults ? add_faults(c.engine, o_.seed, i, o_.band, o_.ppd)
+                  : std::vector<InjectedFault>{};
+    for (const InjectedFault& f : injected)
+      std::printf("%s: recording fault on %s: %s\n", c.name.c_str(), f.channel.c_str(),
+                  f.text.c_str());
+    save_model(dir + "/engine.json", c.engine);
+    if (o_.plants == "state") return state_case(c, i, dir);
+    if (o_.plants == "modal" && !o_.through_lab) {
+      const Diagnosis d = diagnose(c.simulation, modal_measurement(c, o_.seed + uint64_t(i)));
+      json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
+      ++complete_;
+      report(c, d.findings, total_, failing_);
+      return;
+    }
+    lab_case(c, dir, injected);
+  }
+
+  // Prints the totals; true when precision and recall reach the options' minimums.
+  bool summary() const {
+    if (o_.faults) print_fault_summary();
+    const double precision = total_.findings ? double(total_.true_findings) / total_.findings : 1.0;
+    const double recall = total_.hidden ? double(total_.found) / total_.hidden : 1.0;
+    std::printf(
+        "selfcheck: %d %s cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d "
+        "findings), "
+        "recall %.3f (%d of %d hidden effects), %d failing cases; the true value inside the "
+        "finding's 2-sigma interval %.3f (%d of %d found with an interval); excitation %s: %d runs "
+        "complete, %d partial, %d failed\n",
+        o_.cases, o_.plants.c_str(), (unsigned long long)o_.seed, o_.band.c_str(), o_.ppd,
+        precision, total_.true_findings, total_.findings, recall, total_.found, total_.hidden,
+        failing_, total_.with_interval ? double(total_.in_two_sigma) / total_.with_interval : 1.0,
+        total_.in_two_sigma, total_.with_interval, o_.excitation.c_str(), complete_, partial_,
+        failed_);
+    if (o_.plants == "state") print_state_summary();
+    return precision >= o_.min_precision && recall >= o_.min_recall;
+  }
+
+ private:
+  // A state plant diagnosed in-process: scored as every case, at the data's resolution, and over
+  // the entries the data resolve.
+  void state_case(const RandomCase& c, int i, const std::string& dir) {
+    Diagnosis d;
+    try {
+      d = diagnose(c.simulation, state_measurement(c, o_.seed + uint64_t(i)));
+    } catch (const InputError& e) {
+      std::printf("%s: the diagnosis failed: %s\n", c.name.c_str(), e.what());
+      ++failed_, ++failing_;
+      total_.hidden += int(c.hidden.size());
+      total_.findings += 1;
+      return;
+    }
+    json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
+    ++complete_;
+    report(c, d.findings, total_, failing_);
+    for (const Finding& f : d.findings) {
+      ++at_resolution_.findings;
+      at_resolution_.true_findings += std::any_of(
+          c.hidden.begin(), c.hidden.end(),
+          [&](const HiddenEffect& e) { return e.matches(f) || named_at_resolution(e, f); });
+    }
+    for (const HiddenEffect& e : c.hidden) {
+      ++at_resolution_.hidden;
+      const bool named = std::any_of(d.findings.begin(), d.findings.end(), [&](const Finding& f) {
+        return e.matches(f) || named_at_resolution(e, f);
+      });
+      at_resolution_.found += named;
+      if (named && std::none_of(d.findings.begin(), d.findings.end(),
+                                [&](const Finding& f) { return e.matches(f); }))
+        std::printf("    named, the truth inside its 2-sigma interval: %s\n", e.describe().c_str());
+    }
+    for (const HiddenEffect& e : c.hidden) {
+      if (!state_effect_resolved(c, e)) {
+        std::printf("    not resolved by the data: %s\n", e.describe().c_str());
+        continue;
+      }
+      ++resolved_.hidden;
+      const bool found = std::any_of(d.findings.begin(), d.findings.end(),
+                                     [&](const Finding& f) { return e.matches(f); });
+      resolved_.found += found;
+      if (found) continue;
+      // Missed, but held by a set the data fit as well (diagnosis.json's state_alternatives).
+      for (const StateAlternative& a : d.state_alternatives)
+        if (std::any_of(a.findings.begin(), a.findings.end(),
+                        [&](const Finding& f) { return e.matches(f); })) {
+          std::printf("    in an as-well-fitted set: %s\n", e.describe().c_str());
+          ++in_alternatives_;
+          break;
+        }
+    }
+  }
+
+  // A case through the lab's processes (`fralab diagnose --engine`), its exit status counted.
+  void lab_case(const RandomCase& c, const std::string& dir,
+                const std::vector<InjectedFault>& injected) {
+    const std::string cmd = bin_ + " diagnose --simulation " + dir + "/simulation.json --engine " +
+                            dir + "/engine.json --out " + dir + "/diagnosis --no-plots --band " +
+                            o_.band + " --points-per-decade " + std::to_string(o_.ppd) +
+                            " --excitation " + o_.excitation + " --seed 5 " + o_.lab_flags + " > " +
+                            dir + "/log.txt 2>&1";
+    const int st = std::system(cmd.c_str());
+    const int status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    complete_ += status == 0, partial_ += status == 3;
+    if (status == 3)
+      std::printf("%s: partial (a step after measuring failed; see %s/log.txt)\n", c.name.c_str(),
+                  dir.c_str());
+    if (status != 0 && status != 3) {
+      ++failed_;
+      std::printf("%s: fralab diagnose failed (see %s/log.txt)\n", c.name.c_str(), dir.c_str());
+      ++failing_;
+      total_.hidden += int(c.hidden.size());
+      total_.findings += 1;  // a failed run counts against precision too
+      return;
+    }
+    const std::string dj = dir + "/diagnosis/diagnosis.json";
+    report(c, read_findings(dj), total_, failing_);
+    if (o_.faults) score_recording_faults(c, dj, injected);
+  }
+
+  // The faults put into the recording against those diagnosis.json names, and the case's score
+  // apart by whether it had faults (effects at an output a fault made dead counted apart too).
+  void score_recording_faults(const RandomCase& c, const std::string& dj,
+                              const std::vector<InjectedFault>& injected) {
+    const std::vector<DataFault> named = named_faults(dj);
+    const FaultScore fs = score_faults(injected, named);
+    fault_total_.add(fs);
+    for (const std::string& l : fs.lines) std::printf("    fault %s\n", l.c_str());
+    // A fault the checks did not name, named beside a finding it explains as well.
+    const auto alts = alternatives(dj);
+    for (const InjectedFault& f : injected) {
+      const bool in_section = std::any_of(named.begin(), named.end(), [&](const DataFault& n) {
+        return n.channel == f.channel && n.kind == f.kind;
+      });
+      const std::string kind = alternative_kind(f.kind);
+      if (in_section || kind.empty()) continue;
+      if (std::find(alts.begin(), alts.end(), std::pair{f.channel, kind}) == alts.end()) continue;
+      ++beside_findings_;
+      std::printf("    fault named beside a finding: %s %s\n", f.channel.c_str(), kind.c_str());
+    }
+    Score& part = injected.empty() ? without_faults_ : with_faults_;
+    const std::vector<Finding> found = read_findings(dj);
+    const Score sc = score(c, found);
+    part.findings += sc.findings, part.true_findings += sc.true_findings;
+    part.hidden += sc.hidden, part.found += sc.found;
+    // Effects at an output that a fault made dead: the recording holds nothing of them.
+    for (const HiddenEffect& e : c.hidden) {
+      bool dead = false;
+      for (const InjectedFault& f : injected)
+        dead |= f.kind == DataFaultKind::kNoResponse && f.channel == e.output;
+      if (!dead) continue;
+      ++on_dead_.hidden;
+      for (const Finding& f : found)
+        if (e.matches(f)) {
+          ++on_dead_.found;
+          break;
+        }
+    }
+  }
+
+  void print_fault_summary() const {
+    auto share = [](int a, int b) { return b ? double(a) / b : 1.0; };
+    std::printf(
+        "faults: named %d / %d (%.3f), sized within 10 %% %d / %d, named but not put in %d; "
+        "of the others, named beside a finding they explain %d; "
+        "cases with faults: precision %.3f recall %.3f (%.3f of the %d effects at outputs "
+        "alive, %d of %d at dead ones found); without: precision %.3f recall %.3f\n",
+        fault_total_.named, fault_total_.put, share(fault_total_.named, fault_total_.put),
+        fault_total_.sized, fault_total_.to_size, fault_total_.false_named, beside_findings_,
+        share(with_faults_.true_findings, with_faults_.findings),
+        share(with_faults_.found, with_faults_.hidden),
+        share(with_faults_.found - on_dead_.found, with_faults_.hidden - on_dead_.hidden),
+        with_faults_.hidden - on_dead_.hidden, on_dead_.found, on_dead_.hidden,
+        share(without_faults_.true_findings, without_faults_.findings),
+        share(without_faults_.found, without_faults_.hidden));
+  }
+
+  void print_state_summary() const {
+    std::printf(
+        "state entries the data resolve (undone alone, chi2 beyond ln 2N): %d of %d, "
+        "recall over them %.3f (%d of %d); of those missed, %d in a set the data fit as well "
+        "(state_alternatives)\n",
+        resolved_.hidden, total_.hidden,
+        resolved_.hidden ? double(resolved_.found) / resolved_.hidden : 1.0, resolved_.found,
+        resolved_.hidden, in_alternatives_);
+    std::printf(
+        "at the data's resolution (the value within tolerance, or the truth inside the "
+        "finding's 2-sigma interval): precision %.3f (%d of %d findings), recall %.3f (%d of %d "
+        "hidden effects)\n",
+        at_resolution_.findings ? double(at_resolution_.true_findings) / at_resolution_.findings
+                                : 1.0,
+        at_resolution_.true_findings, at_resolution_.findings,
+        at_resolution_.hidden ? double(at_resolution_.found) / at_resolution_.hidden : 1.0,
+        at_resolution_.found, at_resolution_.hidden);
+  }
+
+  SelfCheckOptions o_;
+  std::string bin_;
+  FaultScore fault_total_;
+  int beside_findings_ = 0;  // faults not named by the checks, named as a finding's alternative
+  Score with_faults_, without_faults_, on_dead_;
+  Score total_, resolved_;   // resolved: the state entries the data resolve
+  Score at_resolution_;      // state plants: a value inside its 2-sigma interval counted right
+  int in_alternatives_ = 0;  // resolved, missed, and in a set the data fit as well
+  int failing_ = 0, complete_ = 0, partial_ = 0, failed_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fralab-bench-diagnose: precision and recall of the diagnosis on random plants"};
+  SelfCheckOptions o;
+  app.add_option("--min-precision", o.min_precision, "exit 1 below this (ctest)");
+  app.add_option("--min-recall", o.min_recall, "exit 1 below this (ctest)");
+  app.add_option("--cases", o.cases)->capture_default_str();
+  app.add_option("--first", o.first, "index of the first case")->capture_default_str();
+  app.add_option("--seed", o.seed, "generator seed")->capture_default_str();
+  app.add_option("--out", o.out)->capture_default_str();
+  app.add_option("--band", o.band, "measure band, Hz")->capture_default_str();
+  app.add_option("--points-per-decade", o.ppd)->capture_default_str();
+  app.add_option("--excitation", o.excitation, "stepped or auto (any of fralab's)")
+      ->capture_default_str();
   app.add_option(
-         "--plants", plants,
+         "--plants", o.plants,
          "random (tests/util/random_plant.h) or machine (random_machine.h: a slow mode in "
          "every path, shared fast dynamics, weak paths, 0-3 effects that may overlap) or "
          "modal (random_modal.h: structures, measured in-process) or state (random_state.h: "
@@ -179,207 +409,19 @@ int main(int argc, char** argv) {
          "its nine findings hidden, the lab's band and density)")
       ->check(CLI::IsMember({"random", "machine", "modal", "state", "j85"}))
       ->capture_default_str();
-  bool faults = false;
-  app.add_flag("--faults", faults, "machine and j85 plants: 0-2 recording faults per case");
-  bool through_lab = false;
-  app.add_flag("--through-lab", through_lab,
+  app.add_flag("--faults", o.faults, "machine and j85 plants: 0-2 recording faults per case");
+  app.add_flag("--through-lab", o.through_lab,
                "modal plants: measured through the lab's processes as the others are (outputs "
                "with noise 0.2 % of their strongest response), not in-process");
-  std::string lab_flags;
-  app.add_option("--lab-flags", lab_flags,
+  app.add_option("--lab-flags", o.lab_flags,
                  "more flags for `fralab diagnose` (e.g. \"--zoom-period-factor 4\", "
                  "\"--no-zoom\")");
   CLI11_PARSE(app, argc, argv);
-  if (faults && plants != "machine" && plants != "j85")
+  if (o.faults && o.plants != "machine" && o.plants != "j85")
     throw InputError("--faults needs --plants machine or j85");
-  if (plants == "j85") band = "0.04:100", ppd = 10;  // the lab's own (fralab run's defaults)
-  if (through_lab && plants != "modal") throw InputError("--through-lab needs --plants modal");
-  FaultScore fault_total;
-  int beside_findings = 0;  // faults not named by the checks, named as a finding's alternative
-  Score with_faults, without_faults, on_dead;
-  const std::string bin =
-      std::filesystem::canonical("/proc/self/exe").parent_path().string() + "/fralab";
-  Score total, resolved;    // resolved: the state entries the data resolve
-  Score at_resolution;      // state plants: a value inside its 2-sigma interval counted right
-  int in_alternatives = 0;  // resolved, missed, and in a set the data fit as well
-  int failing = 0, complete = 0, partial = 0, failed = 0;
-  for (int i = first; i < first + cases; ++i) {
-    RandomCase c = plants == "machine" ? random_machine_case(seed, i)
-                   : plants == "modal" ? random_modal_case(seed, i)
-                   : plants == "state" ? random_state_case(seed, i)
-                   : plants == "j85"   ? j85_case(i)
-                                       : random_case(seed, i);
-    const std::string dir = out + "/" + c.name;
-    std::filesystem::create_directories(dir);
-    if (through_lab) set_lab_noise(c);
-    save_model(dir + "/simulation.json", c.simulation);
-    const std::vector<InjectedFault> injected =
-        faults ? add_faults(c.engine, seed, i, band, ppd) : std::vector<InjectedFault>{};
-    for (const InjectedFault& f : injected)
-      std::printf("%s: recording fault on %s: %s\n", c.name.c_str(), f.channel.c_str(),
-                  f.text.c_str());
-    save_model(dir + "/engine.json", c.engine);
-    if (plants == "state") {
-      Diagnosis d;
-      try {
-        d = diagnose(c.simulation, state_measurement(c, seed + uint64_t(i)));
-      } catch (const InputError& e) {
-        std::printf("%s: the diagnosis failed: %s\n", c.name.c_str(), e.what());
-        ++failed, ++failing;
-        total.hidden += int(c.hidden.size());
-        total.findings += 1;
-        continue;
-      }
-      json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
-      ++complete;
-      report(c, d.findings, total, failing);
-      for (const Finding& f : d.findings) {
-        ++at_resolution.findings;
-        at_resolution.true_findings += std::any_of(
-            c.hidden.begin(), c.hidden.end(),
-            [&](const HiddenEffect& e) { return e.matches(f) || named_at_resolution(e, f); });
-      }
-      for (const HiddenEffect& e : c.hidden) {
-        ++at_resolution.hidden;
-        const bool named = std::any_of(d.findings.begin(), d.findings.end(), [&](const Finding& f) {
-          return e.matches(f) || named_at_resolution(e, f);
-        });
-        at_resolution.found += named;
-        if (named && std::none_of(d.findings.begin(), d.findings.end(),
-                                  [&](const Finding& f) { return e.matches(f); }))
-          std::printf("    named, the truth inside its 2-sigma interval: %s\n",
-                      e.describe().c_str());
-      }
-      for (const HiddenEffect& e : c.hidden) {
-        if (!state_effect_resolved(c, e)) {
-          std::printf("    not resolved by the data: %s\n", e.describe().c_str());
-          continue;
-        }
-        ++resolved.hidden;
-        const bool found = std::any_of(d.findings.begin(), d.findings.end(),
-                                       [&](const Finding& f) { return e.matches(f); });
-        resolved.found += found;
-        if (found) continue;
-        // Missed, but held by a set the data fit as well (diagnosis.json's state_alternatives).
-        for (const StateAlternative& a : d.state_alternatives)
-          if (std::any_of(a.findings.begin(), a.findings.end(),
-                          [&](const Finding& f) { return e.matches(f); })) {
-            std::printf("    in an as-well-fitted set: %s\n", e.describe().c_str());
-            ++in_alternatives;
-            break;
-          }
-      }
-      continue;
-    }
-    if (plants == "modal" && !through_lab) {
-      const Diagnosis d = diagnose(c.simulation, modal_measurement(c, seed + uint64_t(i)));
-      json_save_file(dir + "/diagnosis.json", diagnosis_to_json(d));
-      ++complete;
-      report(c, d.findings, total, failing);
-      continue;
-    }
-    const std::string cmd = bin + " diagnose --simulation " + dir + "/simulation.json --engine " +
-                            dir + "/engine.json --out " + dir + "/diagnosis --no-plots --band " +
-                            band + " --points-per-decade " + std::to_string(ppd) +
-                            " --excitation " + excitation + " --seed 5 " + lab_flags + " > " + dir +
-                            "/log.txt 2>&1";
-    const int st = std::system(cmd.c_str());
-    const int status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    complete += status == 0, partial += status == 3;
-    if (status == 3)
-      std::printf("%s: partial (a step after measuring failed; see %s/log.txt)\n", c.name.c_str(),
-                  dir.c_str());
-    if (status != 0 && status != 3) {
-      ++failed;
-      std::printf("%s: fralab diagnose failed (see %s/log.txt)\n", c.name.c_str(), dir.c_str());
-      ++failing;
-      total.hidden += int(c.hidden.size());
-      total.findings += 1;  // a failed run counts against precision too
-      continue;
-    }
-    const std::string dj = dir + "/diagnosis/diagnosis.json";
-    report(c, read_findings(dj), total, failing);
-    if (faults) {
-      const std::vector<DataFault> named = named_faults(dj);
-      const FaultScore fs = score_faults(injected, named);
-      fault_total.add(fs);
-      for (const std::string& l : fs.lines) std::printf("    fault %s\n", l.c_str());
-      // A fault the checks did not name, named beside a finding it explains as well.
-      const auto alts = alternatives(dj);
-      for (const InjectedFault& f : injected) {
-        const bool in_section = std::any_of(named.begin(), named.end(), [&](const DataFault& n) {
-          return n.channel == f.channel && n.kind == f.kind;
-        });
-        const std::string kind = alternative_kind(f.kind);
-        if (in_section || kind.empty()) continue;
-        if (std::find(alts.begin(), alts.end(), std::pair{f.channel, kind}) == alts.end()) continue;
-        ++beside_findings;
-        std::printf("    fault named beside a finding: %s %s\n", f.channel.c_str(), kind.c_str());
-      }
-      Score& part = injected.empty() ? without_faults : with_faults;
-      const std::vector<Finding> found = read_findings(dj);
-      const Score sc = score(c, found);
-      part.findings += sc.findings, part.true_findings += sc.true_findings;
-      part.hidden += sc.hidden, part.found += sc.found;
-      // Effects at an output that a fault made dead: the recording holds nothing of them.
-      for (const HiddenEffect& e : c.hidden) {
-        bool dead = false;
-        for (const InjectedFault& f : injected)
-          dead |= f.kind == DataFaultKind::kNoResponse && f.channel == e.output;
-        if (!dead) continue;
-        ++on_dead.hidden;
-        for (const Finding& f : found)
-          if (e.matches(f)) {
-            ++on_dead.found;
-            break;
-          }
-      }
-    }
-  }
-  if (faults) {
-    auto share = [](int a, int b) { return b ? double(a) / b : 1.0; };
-    std::printf(
-        "faults: named %d / %d (%.3f), sized within 10 %% %d / %d, named but not put in %d; "
-        "of the others, named beside a finding they explain %d; "
-        "cases with faults: precision %.3f recall %.3f (%.3f of the %d effects at outputs "
-        "alive, %d of %d at dead ones found); without: precision %.3f recall %.3f\n",
-        fault_total.named, fault_total.put, share(fault_total.named, fault_total.put),
-        fault_total.sized, fault_total.to_size, fault_total.false_named, beside_findings,
-        share(with_faults.true_findings, with_faults.findings),
-        share(with_faults.found, with_faults.hidden),
-        share(with_faults.found - on_dead.found, with_faults.hidden - on_dead.hidden),
-        with_faults.hidden - on_dead.hidden, on_dead.found, on_dead.hidden,
-        share(without_faults.true_findings, without_faults.findings),
-        share(without_faults.found, without_faults.hidden));
-  }
-  const double precision = total.findings ? double(total.true_findings) / total.findings : 1.0;
-  const double recall = total.hidden ? double(total.found) / total.hidden : 1.0;
-  std::printf(
-      "selfcheck: %d %s cases (seed %llu, band %s Hz, %d/decade): precision %.3f (%d of %d "
-      "findings), "
-      "recall %.3f (%d of %d hidden effects), %d failing cases; the true value inside the "
-      "finding's 2-sigma interval %.3f (%d of %d found with an interval); excitation %s: %d runs "
-      "complete, %d partial, %d failed\n",
-      cases, plants.c_str(), (unsigned long long)seed, band.c_str(), ppd, precision,
-      total.true_findings, total.findings, recall, total.found, total.hidden, failing,
-      total.with_interval ? double(total.in_two_sigma) / total.with_interval : 1.0,
-      total.in_two_sigma, total.with_interval, excitation.c_str(), complete, partial, failed);
-  if (plants == "state")
-    std::printf(
-        "state entries the data resolve (undone alone, chi2 beyond ln 2N): %d of %d, "
-        "recall over them %.3f (%d of %d); of those missed, %d in a set the data fit as well "
-        "(state_alternatives)\n",
-        resolved.hidden, total.hidden,
-        resolved.hidden ? double(resolved.found) / resolved.hidden : 1.0, resolved.found,
-        resolved.hidden, in_alternatives);
-  if (plants == "state")
-    std::printf(
-        "at the data's resolution (the value within tolerance, or the truth inside the "
-        "finding's 2-sigma interval): precision %.3f (%d of %d findings), recall %.3f (%d of %d "
-        "hidden effects)\n",
-        at_resolution.findings ? double(at_resolution.true_findings) / at_resolution.findings : 1.0,
-        at_resolution.true_findings, at_resolution.findings,
-        at_resolution.hidden ? double(at_resolution.found) / at_resolution.hidden : 1.0,
-        at_resolution.found, at_resolution.hidden);
-  return precision >= min_precision && recall >= min_recall ? 0 : 1;
+  if (o.plants == "j85") o.band = "0.04:100", o.ppd = 10;  // the lab's own (fralab run's defaults)
+  if (o.through_lab && o.plants != "modal") throw InputError("--through-lab needs --plants modal");
+  SelfCheck check(o);
+  for (int i = o.first; i < o.first + o.cases; ++i) check.run_case(i);
+  return check.summary() ? 0 : 1;
 }
