@@ -379,6 +379,51 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   return p;
 }
 
+// One line k of a one-window multisine of period P samples from the M periods' spectra X1, X2 of
+// the pair's channels
+// (m1, m2 their means at k): R = m2 / m1 into q with its sigma (the spread of X2 - R X1 pooled
+// over the line and its nearest unexcited neighbours), coherence, nl_rel and, for a pair from the
+// input's command (e1 = u_X), the line's command amplitude; invalid where E1 has nothing at k.
+static void multisine_line(const std::vector<std::vector<std::complex<double>>>& X1,
+                           const std::vector<std::vector<std::complex<double>>>& X2,
+                           std::complex<double> m1, std::complex<double> m2, int k, int P,
+                           const std::vector<bool>& excited, const std::string& e1, FrdPoint& q) {
+  const int M = int(X1.size());
+  if (std::abs(m1) == 0.0 || !std::isfinite(std::abs(m1)) || !std::isfinite(std::abs(m2))) {
+    q.valid = false;
+    q.note = "channel " + e1 + " has no component at line " + std::to_string(k);
+    return;
+  }
+  const std::complex<double> r = m2 / m1;
+  q.mag = std::abs(r);
+  q.phase_deg = std::arg(r) * 180 / std::numbers::pi;
+  double se = 0, s11 = 0, s22 = 0;
+  std::complex<double> s12 = 0;
+  for (int p = 0; p < M; ++p) {
+    se += std::norm(X2[p][k] - r * X1[p][k]);
+    s11 += std::norm(X1[p][k]);
+    s22 += std::norm(X2[p][k]);
+    s12 += std::conj(X1[p][k]) * X2[p][k];
+  }
+  // Non-excited neighbours: the nearest unexcited line on each side.
+  const std::vector<int> nb = unexcited_neighbours(excited, k, P);
+  // The spread over periods of z = X2 - r X1, pooled over the line (where z's mean is 0) and
+  // its neighbours (about their own mean: a periodic distortion there cancels), as the
+  // orthogonal design's: a few periods' spread on one line alone is too few degrees of freedom.
+  for (int kk : nb) se += period_spread(M, [&](int p) { return X2[p][kk] - r * X1[p][kk]; });
+  se /= double(1 + nb.size());
+  q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
+  if (e1 == command_channel(q.input)) q.line_amplitude = 2 * std::abs(m1) / P;
+  q.coherence = std::norm(s12) / (s11 * s22);
+  double lvl = 0;
+  for (int kk : nb) {
+    std::complex<double> v = 0;
+    for (int p = 0; p < M; ++p) v += X2[p][kk];
+    lvl += std::abs(v / double(M));
+  }
+  q.nl_rel = nb.empty() ? 0.0 : lvl / double(nb.size()) / std::max(std::abs(m2), 1e-300);
+}
+
 std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
   const StatusEvent& st = win.st;
   const int P = st.period_samples;
@@ -430,40 +475,7 @@ std::vector<FrdPoint> PairAnalyzer::compute_multisine(const Window& win) {
     q.input = st.inputs[st.line_input[j]];
     q.amplitude =
         st.amplitudes.size() > size_t(st.line_input[j]) ? st.amplitudes[st.line_input[j]] : 0.0;
-    if (std::abs(m1) == 0.0 || !std::isfinite(std::abs(m1)) || !std::isfinite(std::abs(m2))) {
-      q.valid = false;
-      q.note = "channel " + e1_ + " has no component at line " + std::to_string(k);
-      out.push_back(q);
-      continue;
-    }
-    const std::complex<double> r = m2 / m1;
-    q.mag = std::abs(r);
-    q.phase_deg = std::arg(r) * 180 / std::numbers::pi;
-    double se = 0, s11 = 0, s22 = 0;
-    std::complex<double> s12 = 0;
-    for (int p = 0; p < M; ++p) {
-      se += std::norm(X2[p][k] - r * X1[p][k]);
-      s11 += std::norm(X1[p][k]);
-      s22 += std::norm(X2[p][k]);
-      s12 += std::conj(X1[p][k]) * X2[p][k];
-    }
-    // Non-excited neighbours: the nearest unexcited line on each side.
-    const std::vector<int> nb = unexcited_neighbours(excited, k, P);
-    // The spread over periods of z = X2 - r X1, pooled over the line (where z's mean is 0) and
-    // its neighbours (about their own mean: a periodic distortion there cancels), as the
-    // orthogonal design's: a few periods' spread on one line alone is too few degrees of freedom.
-    for (int kk : nb) se += period_spread(M, [&](int p) { return X2[p][kk] - r * X1[p][kk]; });
-    se /= double(1 + nb.size());
-    q.sigma = positive_sigma(std::sqrt(se / (double(M) * (M - 1))) / std::abs(m1), q.mag);
-    if (e1_ == command_channel(q.input)) q.line_amplitude = 2 * std::abs(m1) / P;
-    q.coherence = std::norm(s12) / (s11 * s22);
-    double lvl = 0;
-    for (int kk : nb) {
-      std::complex<double> v = 0;
-      for (int p = 0; p < M; ++p) v += X2[p][kk];
-      lvl += std::abs(v / double(M));
-    }
-    q.nl_rel = nb.empty() ? 0.0 : lvl / double(nb.size()) / std::max(std::abs(m2), 1e-300);
+    multisine_line(X1, X2, m1, m2, k, P, excited, e1_, q);
     out.push_back(q);
   }
   return out;
