@@ -24,6 +24,82 @@ double nonnegative(const Json& j, const JsonWhere& w, const std::string& key, do
   return v;
 }
 
+// One fault's fields by its kind, checked (a stuck actuator only on an input).
+ChannelFault channel_fault_fields(const Json& f, const JsonWhere& w, ChannelFaultKind kind,
+                                  bool on_input) {
+  ChannelFault c;
+  c.kind = kind;
+  switch (c.kind) {
+    case ChannelFaultKind::kClip:
+      if (f.contains("min")) c.min = json_number(f["min"], w / "min");
+      if (f.contains("max")) c.max = json_number(f["max"], w / "max");
+      if (!c.min && !c.max) json_fail(w, "a clip needs min, max or both (channel units)");
+      if (c.min && c.max && !(*c.min < *c.max)) json_fail(w / "max", "max must exceed min");
+      break;
+    case ChannelFaultKind::kHum: {
+      c.frequency_hz = json_number_member(f, w, "frequency_hz", 50.0);
+      if (!(c.frequency_hz > 0.0)) json_fail(w / "frequency_hz", "frequency_hz must be > 0");
+      c.amplitude = nonnegative(f, w, "amplitude", 0.0);
+      c.phase_deg = json_number_member(f, w, "phase_deg", 0.0);
+      if (f.contains("harmonics")) {
+        const Json& hs = json_array_member(f, w, "harmonics");
+        c.harmonics.clear();
+        for (size_t m = 0; m < hs.size(); ++m) {
+          const int64_t v = json_integer(hs[m], w / "harmonics" / m);
+          if (v < 1 || v > 100) json_fail(w / "harmonics" / m, "a harmonic must be in 1..100");
+          c.harmonics.push_back(int(v));
+        }
+      }
+      break;
+    }
+    case ChannelFaultKind::kDrift:
+      c.rate = json_number_member(f, w, "rate");
+      c.from_s = nonnegative(f, w, "from_s", 0.0);
+      break;
+    case ChannelFaultKind::kSign:
+      break;
+    case ChannelFaultKind::kScale:
+      c.factor = json_number_member(f, w, "factor");
+      if (c.factor == 0.0) json_fail(w / "factor", "factor must not be 0 (that is a dead channel)");
+      break;
+    case ChannelFaultKind::kDead:
+      c.from_s = nonnegative(f, w, "from_s", 0.0);
+      if (f.contains("value")) c.value = json_number(f["value"], w / "value");
+      break;
+    case ChannelFaultKind::kDropouts: {
+      c.rate_hz = nonnegative(f, w, "rate_hz", 0.0);
+      const int64_t len = f.contains("length") ? json_integer(f["length"], w / "length") : 1;
+      if (len < 1 || len > 1000000) json_fail(w / "length", "length must be 1..1e6 samples");
+      c.length = int(len);
+      const std::string mode = f.contains("mode") ? json_string(f["mode"], w / "mode") : "held";
+      if (mode != "held" && mode != "lost")
+        json_fail(w / "mode", "mode must be \"held\" or \"lost\", got \"" + mode + "\"");
+      c.held = mode == "held";
+      break;
+    }
+    case ChannelFaultKind::kClock:
+      c.rate_error = json_number_member(f, w, "rate_error");
+      if (!(c.rate_error >= 0.0 && c.rate_error <= 0.01)) {
+        json_fail(w / "rate_error",
+                  "rate_error must be in [0, 0.01] (a fast clock; a slow one is every other "
+                  "channel's fast one)");
+      }
+      c.offset_s = nonnegative(f, w, "offset_s", 0.0);
+      if (c.offset_s > 10.0) json_fail(w / "offset_s", "offset_s must be <= 10 s");
+      break;
+    case ChannelFaultKind::kSwap:
+      c.with = json_string_member(f, w, "with");
+      break;
+    case ChannelFaultKind::kStuck:
+      if (!on_input) json_fail(w / "kind", "stuck is an actuator's fault: list it on an input");
+      c.from_s = nonnegative(f, w, "from_s", 0.0);
+      c.for_s = json_number_member(f, w, "for_s");
+      if (!(c.for_s > 0.0)) json_fail(w / "for_s", "for_s must be > 0 s");
+      break;
+  }
+  return c;
+}
+
 }  // namespace
 
 const char* to_string(ChannelFaultKind k) {
@@ -53,77 +129,7 @@ std::vector<ChannelFault> channel_faults_from_json(const Json& j, const JsonWher
                                 "\" (clock, hum, drift, clip, sign, scale, dead, dropouts, swap, "
                                 "stuck)");
     }
-    ChannelFault c;
-    c.kind = *kind;
-    switch (c.kind) {
-      case ChannelFaultKind::kClip:
-        if (f.contains("min")) c.min = json_number(f["min"], w / "min");
-        if (f.contains("max")) c.max = json_number(f["max"], w / "max");
-        if (!c.min && !c.max) json_fail(w, "a clip needs min, max or both (channel units)");
-        if (c.min && c.max && !(*c.min < *c.max)) json_fail(w / "max", "max must exceed min");
-        break;
-      case ChannelFaultKind::kHum: {
-        c.frequency_hz = json_number_member(f, w, "frequency_hz", 50.0);
-        if (!(c.frequency_hz > 0.0)) json_fail(w / "frequency_hz", "frequency_hz must be > 0");
-        c.amplitude = nonnegative(f, w, "amplitude", 0.0);
-        c.phase_deg = json_number_member(f, w, "phase_deg", 0.0);
-        if (f.contains("harmonics")) {
-          const Json& hs = json_array_member(f, w, "harmonics");
-          c.harmonics.clear();
-          for (size_t m = 0; m < hs.size(); ++m) {
-            const int64_t v = json_integer(hs[m], w / "harmonics" / m);
-            if (v < 1 || v > 100) json_fail(w / "harmonics" / m, "a harmonic must be in 1..100");
-            c.harmonics.push_back(int(v));
-          }
-        }
-        break;
-      }
-      case ChannelFaultKind::kDrift:
-        c.rate = json_number_member(f, w, "rate");
-        c.from_s = nonnegative(f, w, "from_s", 0.0);
-        break;
-      case ChannelFaultKind::kSign:
-        break;
-      case ChannelFaultKind::kScale:
-        c.factor = json_number_member(f, w, "factor");
-        if (c.factor == 0.0)
-          json_fail(w / "factor", "factor must not be 0 (that is a dead channel)");
-        break;
-      case ChannelFaultKind::kDead:
-        c.from_s = nonnegative(f, w, "from_s", 0.0);
-        if (f.contains("value")) c.value = json_number(f["value"], w / "value");
-        break;
-      case ChannelFaultKind::kDropouts: {
-        c.rate_hz = nonnegative(f, w, "rate_hz", 0.0);
-        const int64_t len = f.contains("length") ? json_integer(f["length"], w / "length") : 1;
-        if (len < 1 || len > 1000000) json_fail(w / "length", "length must be 1..1e6 samples");
-        c.length = int(len);
-        const std::string mode = f.contains("mode") ? json_string(f["mode"], w / "mode") : "held";
-        if (mode != "held" && mode != "lost")
-          json_fail(w / "mode", "mode must be \"held\" or \"lost\", got \"" + mode + "\"");
-        c.held = mode == "held";
-        break;
-      }
-      case ChannelFaultKind::kClock:
-        c.rate_error = json_number_member(f, w, "rate_error");
-        if (!(c.rate_error >= 0.0 && c.rate_error <= 0.01)) {
-          json_fail(w / "rate_error",
-                    "rate_error must be in [0, 0.01] (a fast clock; a slow one is every other "
-                    "channel's fast one)");
-        }
-        c.offset_s = nonnegative(f, w, "offset_s", 0.0);
-        if (c.offset_s > 10.0) json_fail(w / "offset_s", "offset_s must be <= 10 s");
-        break;
-      case ChannelFaultKind::kSwap:
-        c.with = json_string_member(f, w, "with");
-        break;
-      case ChannelFaultKind::kStuck:
-        if (!on_input) json_fail(w / "kind", "stuck is an actuator's fault: list it on an input");
-        c.from_s = nonnegative(f, w, "from_s", 0.0);
-        c.for_s = json_number_member(f, w, "for_s");
-        if (!(c.for_s > 0.0)) json_fail(w / "for_s", "for_s must be > 0 s");
-        break;
-    }
+    ChannelFault c = channel_fault_fields(f, w, *kind, on_input);
     for (const ChannelFault& o : out) {
       if (o.kind == c.kind && c.kind != ChannelFaultKind::kHum &&
           c.kind != ChannelFaultKind::kStuck)

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <memory>
 #include <set>
 #include <tuple>
@@ -60,54 +61,71 @@ Eigen::MatrixXd matrix(const Json& doc, const JsonWhere& root, const std::string
 
 }  // namespace
 
-void StateSpace::validate(const std::string& source) const {
-  const Eigen::Index n = A.rows(), m = Eigen::Index(inputs.size()),
-                     p = Eigen::Index(outputs.size());
-  auto fail = [&](const std::string& what) { throw InputError(source + ": " + what); };
+namespace {
+
+using Fail = std::function<void(const std::string&)>;
+
+// The matrices' sizes against the names (A square, B states x inputs, C outputs x states, D
+// outputs x inputs or empty), and every entry finite.
+void check_matrix_sizes(const StateSpace& s, const Fail& fail) {
+  const Eigen::Index n = s.A.rows(), m = Eigen::Index(s.inputs.size()),
+                     p = Eigen::Index(s.outputs.size());
   if (n == 0) fail("A: no states");
-  if (A.cols() != n) fail("A is " + size_str(A) + ": it must be square");
-  if (Eigen::Index(states.size()) != n)
-    fail(std::to_string(states.size()) + " state names for " + std::to_string(n) + " states (A)");
+  if (s.A.cols() != n) fail("A is " + size_str(s.A) + ": it must be square");
+  if (Eigen::Index(s.states.size()) != n)
+    fail(std::to_string(s.states.size()) + " state names for " + std::to_string(n) + " states (A)");
   if (m == 0) fail("no inputs");
   if (p == 0) fail("no outputs");
-  if (B.rows() != n || B.cols() != m)
-    fail("B is " + size_str(B) + ", expected " + std::to_string(n) + " x " + std::to_string(m) +
+  if (s.B.rows() != n || s.B.cols() != m)
+    fail("B is " + size_str(s.B) + ", expected " + std::to_string(n) + " x " + std::to_string(m) +
          " (states x inputs)");
-  if (C.rows() != p || C.cols() != n)
-    fail("C is " + size_str(C) + ", expected " + std::to_string(p) + " x " + std::to_string(n) +
+  if (s.C.rows() != p || s.C.cols() != n)
+    fail("C is " + size_str(s.C) + ", expected " + std::to_string(p) + " x " + std::to_string(n) +
          " (outputs x states)");
-  if (D.size() != 0 && (D.rows() != p || D.cols() != m))
-    fail("D is " + size_str(D) + ", expected " + std::to_string(p) + " x " + std::to_string(m) +
+  if (s.D.size() != 0 && (s.D.rows() != p || s.D.cols() != m))
+    fail("D is " + size_str(s.D) + ", expected " + std::to_string(p) + " x " + std::to_string(m) +
          " (outputs x inputs)");
-  for (const auto& [name, mat] :
-       {std::pair<const char*, const Eigen::MatrixXd*>{"A", &A}, {"B", &B}, {"C", &C}, {"D", &D}})
+  for (const auto& [name, mat] : {std::pair<const char*, const Eigen::MatrixXd*>{"A", &s.A},
+                                  {"B", &s.B},
+                                  {"C", &s.C},
+                                  {"D", &s.D}})
     for (Eigen::Index r = 0; r < mat->rows(); ++r)
       for (Eigen::Index c = 0; c < mat->cols(); ++c)
         if (!std::isfinite((*mat)(r, c)))
           fail(std::string(name) + "(" + std::to_string(r + 1) + ", " + std::to_string(c + 1) +
                ") is not a finite number");
+}
+
+// Names given once and not empty; the delays' counts against the channels, each >= 0 and finite.
+void check_names_and_delays(const StateSpace& s, const Fail& fail) {
+  const Eigen::Index m = Eigen::Index(s.inputs.size()), p = Eigen::Index(s.outputs.size());
   std::set<std::string> seen;
-  for (const auto* names : {&states, &inputs, &outputs})
-    for (const std::string& s : *names) {
-      if (s.empty()) fail("a state, input or output name is empty");
-      if (!seen.insert(s).second) fail("the name \"" + s + "\" is given twice");
+  for (const auto* names : {&s.states, &s.inputs, &s.outputs})
+    for (const std::string& x : *names) {
+      if (x.empty()) fail("a state, input or output name is empty");
+      if (!seen.insert(x).second) fail("the name \"" + x + "\" is given twice");
     }
-  if (!input_delay_s.empty() && input_delay_s.size() != inputs.size())
-    fail(std::to_string(input_delay_s.size()) + " input delays for " +
-         std::to_string(inputs.size()) + " inputs");
-  if (!output_delay_s.empty() && output_delay_s.size() != outputs.size())
-    fail(std::to_string(output_delay_s.size()) + " output delays for " +
-         std::to_string(outputs.size()) + " outputs");
-  if (path_delay_s.size() != 0 && (path_delay_s.rows() != p || path_delay_s.cols() != m))
-    fail("delay_s is " + size_str(path_delay_s) + ", expected " + std::to_string(p) + " x " +
+  if (!s.input_delay_s.empty() && s.input_delay_s.size() != s.inputs.size())
+    fail(std::to_string(s.input_delay_s.size()) + " input delays for " +
+         std::to_string(s.inputs.size()) + " inputs");
+  if (!s.output_delay_s.empty() && s.output_delay_s.size() != s.outputs.size())
+    fail(std::to_string(s.output_delay_s.size()) + " output delays for " +
+         std::to_string(s.outputs.size()) + " outputs");
+  if (s.path_delay_s.size() != 0 && (s.path_delay_s.rows() != p || s.path_delay_s.cols() != m))
+    fail("delay_s is " + size_str(s.path_delay_s) + ", expected " + std::to_string(p) + " x " +
          std::to_string(m) + " (outputs x inputs)");
-  std::vector<double> all(input_delay_s);
-  all.insert(all.end(), output_delay_s.begin(), output_delay_s.end());
-  all.insert(all.end(), path_delay_s.data(), path_delay_s.data() + path_delay_s.size());
+  std::vector<double> all(s.input_delay_s);
+  all.insert(all.end(), s.output_delay_s.begin(), s.output_delay_s.end());
+  all.insert(all.end(), s.path_delay_s.data(), s.path_delay_s.data() + s.path_delay_s.size());
   for (double d : all)
     if (!(d >= 0) || !std::isfinite(d)) fail("a delay is negative or not finite");
+}
+
+// Each named parameter: a unique name, a finite nonzero value, entries inside their matrices,
+// nonzero (a zero entry no value moves) and each given once.
+void check_named_parameters(const StateSpace& s, const Fail& fail) {
   std::set<std::string> named;
-  for (const NamedParameter& np : parameters) {
+  for (const NamedParameter& np : s.parameters) {
     const std::string what = "parameter \"" + np.name + "\"";
     if (np.name.empty()) fail("a parameter's name is empty");
     if (!named.insert(np.name).second) fail(what + " is given twice");
@@ -115,10 +133,10 @@ void StateSpace::validate(const std::string& source) const {
     if (np.entries.empty()) fail(what + " sets no entry");
     std::set<std::tuple<char, int, int>> set;
     for (const NamedParameter::Entry& e : np.entries) {
-      const Eigen::MatrixXd* mat = e.matrix == 'A'   ? &A
-                                   : e.matrix == 'B' ? &B
-                                   : e.matrix == 'C' ? &C
-                                   : e.matrix == 'D' ? &D
+      const Eigen::MatrixXd* mat = e.matrix == 'A'   ? &s.A
+                                   : e.matrix == 'B' ? &s.B
+                                   : e.matrix == 'C' ? &s.C
+                                   : e.matrix == 'D' ? &s.D
                                                      : nullptr;
       const std::string entry = std::string(1, e.matrix) + "(" + std::to_string(e.row + 1) + ", " +
                                 std::to_string(e.col + 1) + ")";
@@ -132,9 +150,13 @@ void StateSpace::validate(const std::string& source) const {
         fail(what + ": its entry " + entry + " is given twice");
     }
   }
-  const Eigen::EigenSolver<Eigen::MatrixXd> es(A, false);
+}
+
+// Every mode of A in the open left half plane.
+void check_stable_modes(const StateSpace& s, const Fail& fail) {
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(s.A, false);
   if (es.info() != Eigen::Success) fail("A: its eigenvalues could not be computed");
-  for (Eigen::Index k = 0; k < n; ++k) {
+  for (Eigen::Index k = 0; k < s.A.rows(); ++k) {
     const Cd l = es.eigenvalues()(k);
     if (!(l.real() < 0))
       fail("A has a mode at " + std::to_string(l.real()) + (l.imag() >= 0 ? " + " : " - ") +
@@ -142,6 +164,16 @@ void StateSpace::validate(const std::string& source) const {
            "j rad/s, not in the open left half plane (an unstable or marginal mode: fralab's "
            "simulations are stable)");
   }
+}
+
+}  // namespace
+
+void StateSpace::validate(const std::string& source) const {
+  const Fail fail = [&](const std::string& what) { throw InputError(source + ": " + what); };
+  check_matrix_sizes(*this, fail);
+  check_names_and_delays(*this, fail);
+  check_named_parameters(*this, fail);
+  check_stable_modes(*this, fail);
 }
 
 StateSpace with_parameter(const StateSpace& ss, size_t k, double p) {
