@@ -98,14 +98,22 @@ double variance_ratio(const double* x, int64_t n) {
 constexpr double kSilentRatio = 1.5, kLiveRatio = 30.0;
 constexpr int kEighths = 8;
 
-void check_silent_eighths(const std::string& ch, const double* x, const TimeSeries& s,
-                          const std::vector<Window>& windows, std::vector<DataFault>* out) {
-  struct Eighth {
-    int64_t from, to, period_from, period_to;  // samples (absolute)
-    bool shown;   // another period's same eighth stands above the noise (kLiveRatio)
-    bool silent;  // shown, and this one at the noise
-    double live;  // the largest ratio of the same eighth over the window's periods
-  };
+namespace {
+
+// One eighth of a multisine period (samples, absolute) and how it compares with the same eighth
+// of the window's other periods.
+struct Eighth {
+  int64_t from, to, period_from, period_to;
+  bool shown;   // another period's same eighth stands above the noise (kLiveRatio)
+  bool silent;  // shown, and this one at the noise
+  double live;  // the largest ratio of the same eighth over the window's periods
+};
+
+// Every multisine window's measured periods cut into eighths, each with its variance ratio
+// against the same eighth of the window's other periods (the settle's last one included where the
+// series holds it), in time order.
+std::vector<Eighth> period_eighths(const double* x, const TimeSeries& s,
+                                   const std::vector<Window>& windows) {
   std::vector<Eighth> eighths;
   for (const Window& w : windows) {
     if (!w.multisine) continue;
@@ -133,6 +141,14 @@ void check_silent_eighths(const std::string& ch, const double* x, const TimeSeri
   }
   std::sort(eighths.begin(), eighths.end(),
             [](const Eighth& a, const Eighth& b) { return a.from < b.from; });
+  return eighths;
+}
+
+}  // namespace
+
+void check_silent_eighths(const std::string& ch, const double* x, const TimeSeries& s,
+                          const std::vector<Window>& windows, std::vector<DataFault>* out) {
+  const std::vector<Eighth> eighths = period_eighths(x, s, windows);
   const double fs = s.sample_rate_hz;
   auto named = [&](const Eighth& e) {
     for (const DataFault& f : *out)
