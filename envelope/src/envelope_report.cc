@@ -103,10 +103,10 @@ void point_columns(std::ostringstream& md, const std::vector<EnvelopePoint>& poi
 }
 }  // namespace
 
-std::string envelope_markdown(const EnvelopeReport& r) {
-  std::ostringstream md;
-  md << "# Envelope\n\nOperating points by " << r.schedule_by << ":";
-  for (const auto& p : r.points) md << " " << num(p.x) << " (`" << p.name << "/`)";
+namespace {
+
+// The states' table: each track's root per point with its spread and sigma, and its flags.
+void tracks_table(std::ostringstream& md, const EnvelopeReport& r) {
   md << ".\n\n## States across paths and points\n\nEach state's root per point: a real pole as "
         "its time constant (s), a pair as wn (rad/s) and zeta; in brackets the spread over its "
         "paths' own fits; sigma the paths' median relative sigma.\n\n| state | kind |";
@@ -130,31 +130,65 @@ std::string envelope_markdown(const EnvelopeReport& r) {
     }
     md << " " << t.flags << " |\n";
   }
-  if (!r.slow_states.empty()) {
-    md << "\n### Slow states, as the report's Section III averages them\n\nEach path's slowest "
-          "real pole; the plant's over the outputs whose values agree, a sensor's where an "
-          "output's is slower at every point. Per point the time constant (s) averaged over the "
-          "paths, in brackets their range and count, and the inverse of their poles' mean (the "
-          "report's tables use either).\n\n| state | outputs |";
-    point_columns(md, r.points);
-    for (const auto& t : r.slow_states) {
-      md << "| " << t.label << " |";
-      for (size_t k = 0; k < t.outputs.size(); ++k) md << (k ? ", " : " ") << t.outputs[k];
-      md << " |";
-      for (const auto& p : r.points) {
-        const SlowState::Value* v = nullptr;
-        for (const auto& x : t.values)
-          if (x.point == p.name) v = &x;
-        if (!v)
-          md << " - |";
-        else
-          md << " " << num(v->tau_s) << " [" << num(v->lo) << "-" << num(v->hi) << ", "
-             << v->paths.size() << (v->paths.size() == 1 ? " path" : " paths") << "; 1/mean pole "
-             << num(v->tau_of_mean_pole_s) << "] |";
-      }
-      md << " " << t.flags << " |\n";
+}
+
+// The slow states' table, as the report's Section III averages them (none: nothing).
+void slow_states_table(std::ostringstream& md, const EnvelopeReport& r) {
+  if (r.slow_states.empty()) return;
+  md << "\n### Slow states, as the report's Section III averages them\n\nEach path's slowest "
+        "real pole; the plant's over the outputs whose values agree, a sensor's where an "
+        "output's is slower at every point. Per point the time constant (s) averaged over the "
+        "paths, in brackets their range and count, and the inverse of their poles' mean (the "
+        "report's tables use either).\n\n| state | outputs |";
+  point_columns(md, r.points);
+  for (const auto& t : r.slow_states) {
+    md << "| " << t.label << " |";
+    for (size_t k = 0; k < t.outputs.size(); ++k) md << (k ? ", " : " ") << t.outputs[k];
+    md << " |";
+    for (const auto& p : r.points) {
+      const SlowState::Value* v = nullptr;
+      for (const auto& x : t.values)
+        if (x.point == p.name) v = &x;
+      if (!v)
+        md << " - |";
+      else
+        md << " " << num(v->tau_s) << " [" << num(v->lo) << "-" << num(v->hi) << ", "
+           << v->paths.size() << (v->paths.size() == 1 ? " path" : " paths") << "; 1/mean pole "
+           << num(v->tau_of_mean_pole_s) << "] |";
     }
+    md << " " << t.flags << " |\n";
   }
+}
+
+// The leave-one-out table (none: nothing).
+void leave_one_out_table(std::ostringstream& md, const EnvelopeReport& r) {
+  if (r.leave_one_out.empty()) return;
+  md << "\n## Leave-one-out\n\nAt each inner point, the scheduled extended model built "
+        "without it (its simulation extended by the other points' findings, their laws fitted "
+        "without it) against its measurement; the diagnosis' error metric.\n\n| point | from | "
+        "simulation | "
+        "scheduled | own extended model | notes |\n|---|---|---|---|---|---|\n";
+  for (const auto& l : r.leave_one_out) {
+    md << "| " << num(l.x) << " | " << l.from_lo << ", " << l.from_hi << " |";
+    if (!l.refused.empty()) {
+      md << " - | - | - | refused: " << l.refused << " |\n";
+      continue;
+    }
+    md << " " << num(l.error_simulation) << " | " << num(l.error_scheduled) << " | "
+       << num(l.error_extended) << " |";
+    for (size_t k = 0; k < l.left_out.size(); ++k) md << (k ? "; " : " ") << l.left_out[k];
+    md << " |\n";
+  }
+}
+
+}  // namespace
+
+std::string envelope_markdown(const EnvelopeReport& r) {
+  std::ostringstream md;
+  md << "# Envelope\n\nOperating points by " << r.schedule_by << ":";
+  for (const auto& p : r.points) md << " " << num(p.x) << " (`" << p.name << "/`)";
+  tracks_table(md, r);
+  slow_states_table(md, r);
   md << "\n## Findings across points\n\n";
   if (r.findings.empty()) md << "None.\n";
   for (const auto& f : r.findings) md << "- " << f.text << "\n";
@@ -165,24 +199,7 @@ std::string envelope_markdown(const EnvelopeReport& r) {
           "extended by the findings above, their parameters by their laws. A model at X: "
           "`--engine "
        << r.scheduled_model << "@X` (docs/formats.md §28).\n";
-  if (!r.leave_one_out.empty()) {
-    md << "\n## Leave-one-out\n\nAt each inner point, the scheduled extended model built "
-          "without it (its simulation extended by the other points' findings, their laws fitted "
-          "without it) against its measurement; the diagnosis' error metric.\n\n| point | from | "
-          "simulation | "
-          "scheduled | own extended model | notes |\n|---|---|---|---|---|---|\n";
-    for (const auto& l : r.leave_one_out) {
-      md << "| " << num(l.x) << " | " << l.from_lo << ", " << l.from_hi << " |";
-      if (!l.refused.empty()) {
-        md << " - | - | - | refused: " << l.refused << " |\n";
-        continue;
-      }
-      md << " " << num(l.error_simulation) << " | " << num(l.error_scheduled) << " | "
-         << num(l.error_extended) << " |";
-      for (size_t k = 0; k < l.left_out.size(); ++k) md << (k ? "; " : " ") << l.left_out[k];
-      md << " |\n";
-    }
-  }
+  leave_one_out_table(md, r);
   if (r.plots)
     md << "\n## Pictures\n\n![Root migration: each state's root against " << r.schedule_by
        << "](plots/roots.png)\n\n![Findings across points with their laws](plots/findings.png)\n";

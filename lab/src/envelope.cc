@@ -50,14 +50,14 @@ std::vector<LeaveOneOut> leave_one_out(const std::string& dir,
   return out;
 }
 
-EnvelopeReport run_envelope(const EnvelopeCommand& c,
-                            const std::function<void(const std::string&)>& log) {
-  c.options.validate();
-  auto say = [&](const std::string& s) {
-    if (log) log(s);
-  };
-  const auto engines = load_model_set(c.engine, c.options.schedule_by);
-  const auto sims = load_model_set(c.simulation, c.options.schedule_by);
+namespace {
+
+using Say = std::function<void(const std::string&)>;
+
+// The engine set's models, each with the simulation at its operating point.
+std::vector<std::pair<SetModel, SetModel>> engine_simulation_pairs(
+    const EnvelopeCommand& c, const std::vector<SetModel>& engines,
+    const std::vector<SetModel>& sims) {
   std::vector<std::pair<SetModel, SetModel>> pairs;
   for (const auto& e : engines) {
     const SetModel* s = nullptr;
@@ -68,48 +68,52 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
                        " in " + c.simulation);
     pairs.push_back({e, *s});
   }
-  fs::create_directories(c.out);
-  std::vector<EnvelopePoint> points;
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    const auto& [e, s] = pairs[i];
-    const std::string name = envelope_point_name(c.options.schedule_by, e.x);
-    const std::string dir = c.out + "/" + name;
-    if (fs::exists(dir + "/diagnosis.json")) {
-      say("point " + std::to_string(i + 1) + " of " + std::to_string(pairs.size()) + ", " + name +
-          ": done before, kept");
-    } else {
-      if (fs::exists(dir)) {
-        // Nothing recorded is lost: the interrupted point's folder (its tapes) is kept aside.
-        std::string aside = dir + ".interrupted";
-        for (int k = 2; fs::exists(aside); ++k) aside = dir + ".interrupted-" + std::to_string(k);
-        fs::rename(dir, aside);
-        say("point " + name + ": an interrupted run's folder, kept as " + aside +
-            ", measured again");
-      }
-      say("point " + std::to_string(i + 1) + " of " + std::to_string(pairs.size()) + ", " + name +
-          ": measuring " + e.spec + " and diagnosing " + s.spec + " ...");
-      DiagnoseCommand d;
-      d.simulation = s.spec;
-      d.engine = e.spec;
-      d.out = dir;
-      d.measure = c.measure;
-      d.measure.engine = e.spec;
-      d.plots = c.plots;
-      d.validation = c.validation;
-      const DiagnoseResult res = run_diagnose(d);
-      say("point " + name + ": " + res.summary);
+  return pairs;
+}
+
+// Point i of n: measured and diagnosed into its folder unless a diagnosis is there (an
+// interrupted run's folder kept aside); read back as an envelope point.
+EnvelopePoint measure_point(const EnvelopeCommand& c, const SetModel& e, const SetModel& s,
+                            size_t i, size_t n, const Say& say) {
+  const std::string name = envelope_point_name(c.options.schedule_by, e.x);
+  const std::string dir = c.out + "/" + name;
+  if (fs::exists(dir + "/diagnosis.json")) {
+    say("point " + std::to_string(i + 1) + " of " + std::to_string(n) + ", " + name +
+        ": done before, kept");
+  } else {
+    if (fs::exists(dir)) {
+      // Nothing recorded is lost: the interrupted point's folder (its tapes) is kept aside.
+      std::string aside = dir + ".interrupted";
+      for (int k = 2; fs::exists(aside); ++k) aside = dir + ".interrupted-" + std::to_string(k);
+      fs::rename(dir, aside);
+      say("point " + name + ": an interrupted run's folder, kept as " + aside + ", measured again");
     }
-    EnvelopePoint p;
-    p.name = name;
-    p.x = e.x;
-    p.simulation = s.spec;
-    if (fs::exists(dir + "/measure/transfer_matrix.json"))
-      p.transfer_matrix = json_load_file(dir + "/measure/transfer_matrix.json");
-    if (fs::exists(dir + "/diagnosis.json")) p.diagnosis = json_load_file(dir + "/diagnosis.json");
-    points.push_back(p);
+    say("point " + std::to_string(i + 1) + " of " + std::to_string(n) + ", " + name +
+        ": measuring " + e.spec + " and diagnosing " + s.spec + " ...");
+    DiagnoseCommand d;
+    d.simulation = s.spec;
+    d.engine = e.spec;
+    d.out = dir;
+    d.measure = c.measure;
+    d.measure.engine = e.spec;
+    d.plots = c.plots;
+    d.validation = c.validation;
+    const DiagnoseResult res = run_diagnose(d);
+    say("point " + name + ": " + res.summary);
   }
-  EnvelopeReport r = join_points(points, c.options);
-  // The scheduled extended model: the simulation set and the points' diagnoses.
+  EnvelopePoint p;
+  p.name = name;
+  p.x = e.x;
+  p.simulation = s.spec;
+  if (fs::exists(dir + "/measure/transfer_matrix.json"))
+    p.transfer_matrix = json_load_file(dir + "/measure/transfer_matrix.json");
+  if (fs::exists(dir + "/diagnosis.json")) p.diagnosis = json_load_file(dir + "/diagnosis.json");
+  return p;
+}
+
+// The scheduled extended model's file (the simulation set and the points' diagnoses).
+void save_scheduled_model(const EnvelopeCommand& c, const std::vector<SetModel>& sims,
+                          const std::vector<EnvelopePoint>& points) {
   Json sm{{"format", kScheduledModelFormat},
           {"schedule_by", c.options.schedule_by},
           {"simulation", Json::array()},
@@ -120,6 +124,25 @@ EnvelopeReport run_envelope(const EnvelopeCommand& c,
     sm["points"].push_back(
         {{"name", p.name}, {"x", p.x}, {"diagnosis", p.name + "/diagnosis.json"}});
   json_save_file(c.out + "/scheduled_model.json", sm);
+}
+
+}  // namespace
+
+EnvelopeReport run_envelope(const EnvelopeCommand& c,
+                            const std::function<void(const std::string&)>& log) {
+  c.options.validate();
+  const Say say = [&](const std::string& s) {
+    if (log) log(s);
+  };
+  const auto engines = load_model_set(c.engine, c.options.schedule_by);
+  const auto sims = load_model_set(c.simulation, c.options.schedule_by);
+  const auto pairs = engine_simulation_pairs(c, engines, sims);
+  fs::create_directories(c.out);
+  std::vector<EnvelopePoint> points;
+  for (size_t i = 0; i < pairs.size(); ++i)
+    points.push_back(measure_point(c, pairs[i].first, pairs[i].second, i, pairs.size(), say));
+  EnvelopeReport r = join_points(points, c.options);
+  save_scheduled_model(c, sims, points);
   r.scheduled_model = "scheduled_model.json";
   say("the scheduled extended model: " + c.out + "/scheduled_model.json (a model at X: --engine " +
       c.out + "/scheduled_model.json@X)");
