@@ -47,12 +47,11 @@ std::vector<const StateTrack*> plotted_tracks(const EnvelopeReport& r) {
   return t;
 }
 
-}  // namespace
-
-bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
-  const std::string pd = dir + "/plots";
-  fs::create_directories(pd);
-  const auto tracks = plotted_tracks(r);
+// The plots' data: roots.dat (each plotted track's |root| and its sigma per point, then the slow
+// states' 1/mean tau and their paths' range as 1/hi, 1/lo) and findings.dat (each finding's
+// value and sigma per point), one gnuplot index each.
+void write_plot_data(const EnvelopeReport& r, const std::vector<const StateTrack*>& tracks,
+                     const std::string& pd) {
   {
     std::ofstream d(pd + "/roots.dat");
     for (const StateTrack* t : tracks) {
@@ -64,7 +63,6 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
       }
       d << "\n\n";
     }
-    // The slow states: x, 1/mean tau, and their paths' range as 1/hi, 1/lo.
     for (const SlowState& t : r.slow_states) {
       d << "# slow state " << t.label << "\n";
       for (const auto& v : t.values)
@@ -73,16 +71,59 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
       d << "\n\n";
     }
   }
-  {
-    std::ofstream d(pd + "/findings.dat");
-    for (const FindingLaw& f : r.findings) {
-      d << "# " << f.cause << " " << f.parameter << "\n";
-      for (const auto& v : f.values)
-        d << lossless(v.x) << " " << lossless(v.value) << " " << lossless(std::max(v.sigma, 0.0))
-          << "\n";
-      d << "\n\n";
-    }
+  std::ofstream d(pd + "/findings.dat");
+  for (const FindingLaw& f : r.findings) {
+    d << "# " << f.cause << " " << f.parameter << "\n";
+    for (const auto& v : f.values)
+      d << lossless(v.x) << " " << lossless(v.value) << " " << lossless(std::max(v.sigma, 0.0))
+        << "\n";
+    d << "\n\n";
   }
+}
+
+// The root migration plot's gnuplot lines (the terminal and output already set).
+void roots_plot(std::ostringstream& gp, const EnvelopeReport& r,
+                const std::vector<const StateTrack*>& tracks, const std::string& pd) {
+  if (tracks.empty() && r.slow_states.empty()) {
+    gp << "set label 'no state at two points or more' at graph 0.3, 0.5\nplot 1/0 notitle\n";
+    return;
+  }
+  gp << "plot ";
+  for (size_t i = 0; i < tracks.size(); ++i)
+    gp << (i ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index " << i
+       << " using 1:2:3 with yerrorlines title "
+       << quoted(tracks[i]->label + (tracks[i]->pair ? " (pair)" : ""));
+  for (size_t i = 0; i < r.slow_states.size(); ++i)
+    gp << (i + tracks.size() ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index "
+       << tracks.size() + i << " using 1:2:3:4 with yerrorlines lw 3 dt 2 title "
+       << quoted("slow state " + r.slow_states[i].label + " (mean, range over paths)");
+  gp << "\n";
+}
+
+// The findings' multiplot (rows x cols panels, each finding's values and its law) over x range
+// [xlo, xhi].
+void findings_plot(std::ostringstream& gp, const EnvelopeReport& r, size_t rows, size_t cols,
+                   double xlo, double xhi, const std::string& pd) {
+  gp << "set multiplot layout " << rows << "," << cols
+     << " title 'Findings across points with their laws'\nset grid\nset xrange [" << lossless(xlo)
+     << ":" << lossless(xhi) << "]\nset key off\n";
+  for (size_t i = 0; i < r.findings.size(); ++i) {
+    const FindingLaw& f = r.findings[i];
+    std::string where = f.input + (f.output.empty() ? "" : " -> " + f.output);
+    gp << "set title " << quoted(f.cause + " " + where + ": " + f.parameter + " (" + f.law + ")")
+       << " font ',9'\nplot " << quoted(pd + "/findings.dat") << " index " << i
+       << " using 1:2:3 with yerrorbars pt 7, " << law_expression(f) << " with lines lw 2\n";
+  }
+  gp << "unset multiplot\nset output\n";
+}
+
+}  // namespace
+
+bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
+  const std::string pd = dir + "/plots";
+  fs::create_directories(pd);
+  const auto tracks = plotted_tracks(r);
+  write_plot_data(r, tracks, pd);
   const size_t nf = r.findings.size();
   const size_t cols = nf < 3 ? std::max<size_t>(nf, 1) : 3, rows = (nf + cols - 1) / cols;
   double xlo = r.points.empty() ? 0 : r.points.front().x;
@@ -101,37 +142,14 @@ bool render_envelope_plots(const EnvelopeReport& r, const std::string& dir) {
        << "'\nset logscale y\nset grid\nset xrange [" << lossless(xlo) << ":" << lossless(xhi)
        << "]\nset xlabel " << quoted(r.schedule_by) << "\nset ylabel '|root| (rad/s)'\n"
        << "set key outside right font ',8'\n";
-    if (tracks.empty() && r.slow_states.empty()) {
-      gp << "set label 'no state at two points or more' at graph 0.3, 0.5\nplot 1/0 notitle\n";
-    } else {
-      gp << "plot ";
-      for (size_t i = 0; i < tracks.size(); ++i)
-        gp << (i ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index " << i
-           << " using 1:2:3 with yerrorlines title "
-           << quoted(tracks[i]->label + (tracks[i]->pair ? " (pair)" : ""));
-      for (size_t i = 0; i < r.slow_states.size(); ++i)
-        gp << (i + tracks.size() ? ", \\\n  " : "") << quoted(pd + "/roots.dat") << " index "
-           << tracks.size() + i << " using 1:2:3:4 with yerrorlines lw 3 dt 2 title "
-           << quoted("slow state " + r.slow_states[i].label + " (mean, range over paths)");
-      gp << "\n";
-    }
+    roots_plot(gp, r, tracks, pd);
     gp << "set output\nreset\nset terminal " << term(220 * std::max<size_t>(rows, 1))
        << "\nset output " << quoted(pd + "/findings." + ext) << "\n";
     if (nf == 0) {
       gp << "set label 'no findings' at graph 0.4, 0.5\nplot 1/0 notitle\nset output\n";
       continue;
     }
-    gp << "set multiplot layout " << rows << "," << cols
-       << " title 'Findings across points with their laws'\nset grid\nset xrange [" << lossless(xlo)
-       << ":" << lossless(xhi) << "]\nset key off\n";
-    for (size_t i = 0; i < nf; ++i) {
-      const FindingLaw& f = r.findings[i];
-      std::string where = f.input + (f.output.empty() ? "" : " -> " + f.output);
-      gp << "set title " << quoted(f.cause + " " + where + ": " + f.parameter + " (" + f.law + ")")
-         << " font ',9'\nplot " << quoted(pd + "/findings.dat") << " index " << i
-         << " using 1:2:3 with yerrorbars pt 7, " << law_expression(f) << " with lines lw 2\n";
-    }
-    gp << "unset multiplot\nset output\n";
+    findings_plot(gp, r, rows, cols, xlo, xhi, pd);
   }
   std::ofstream(pd + "/envelope.gp") << gp.str();
   return run_gnuplot(pd + "/envelope.gp");
