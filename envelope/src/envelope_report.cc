@@ -101,9 +101,16 @@ void point_columns(std::ostringstream& md, const std::vector<EnvelopePoint>& poi
   for (size_t i = 0; i < points.size(); ++i) md << "---|";
   md << "---|\n";
 }
-}  // namespace
 
-namespace {
+// The value of `values` (a track's or a slow state's, each naming its point) at point `name`,
+// the last one there; nullptr where it has none.
+template <class Value>
+const Value* value_at(const std::vector<Value>& values, const std::string& name) {
+  const Value* v = nullptr;
+  for (const auto& x : values)
+    if (x.point == name) v = &x;
+  return v;
+}
 
 // The states' table: each track's root per point with its spread and sigma, and its flags.
 void tracks_table(std::ostringstream& md, const EnvelopeReport& r) {
@@ -114,9 +121,7 @@ void tracks_table(std::ostringstream& md, const EnvelopeReport& r) {
   for (const auto& t : r.tracks) {
     md << "| " << t.label << " | " << (t.pair ? "pair" : "real") << " |";
     for (const auto& p : r.points) {
-      const TrackValue* v = nullptr;
-      for (const auto& x : t.values)
-        if (x.point == p.name) v = &x;
+      const TrackValue* v = value_at(t.values, p.name);
       if (!v) {
         md << " - |";
         continue;
@@ -146,9 +151,7 @@ void slow_states_table(std::ostringstream& md, const EnvelopeReport& r) {
     for (size_t k = 0; k < t.outputs.size(); ++k) md << (k ? ", " : " ") << t.outputs[k];
     md << " |";
     for (const auto& p : r.points) {
-      const SlowState::Value* v = nullptr;
-      for (const auto& x : t.values)
-        if (x.point == p.name) v = &x;
+      const SlowState::Value* v = value_at(t.values, p.name);
       if (!v)
         md << " - |";
       else

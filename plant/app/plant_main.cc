@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
     if (serve_opt.free_running && !replay.empty())
       throw InputError(
           "--free-running needs --speed > 0, --tick >= 1, --jitter-ms >= 0 and no --replay");
-    serve_opt.validate();
+    serve_opt.validate();  // before the node subscribes: a bad clock is refused first
     PlantNode plant(io.data, io.control, std::move(lockstep), 1024,
                     serve_opt.free_running ? serve_opt.tick : 0);
     serve(plant, io.data, serve_opt);
