@@ -133,7 +133,8 @@ int main(int argc, char** argv) {
       for (const Json& f : env.at("findings")) {
         if (f.at("cause") != to_string(e.cause) || f.at("scope") != to_string(e.scope) ||
             f.at("input").get<std::string>() != e.input ||
-            f.at("output").get<std::string>() != e.output || f.at("parameter") != e.param)
+            f.at("output").get<std::string>() != e.output || !e.param ||
+            f.at("parameter") != to_string(*e.param))
           continue;
         const auto [s, sigma] = secant(f.at("law"), x0, x1);
         const double tol = 2 * std::max(sigma, 0.02 * std::abs(truth));
@@ -144,7 +145,8 @@ int main(int argc, char** argv) {
       }
       recovered += ok;
       std::printf("    %s: %s, slope %g (exponent %.2f); %s: %s\n", e.describe().c_str(),
-                  e.param.c_str(), truth, p[k], got.c_str(), ok ? "recovered" : "MISSED");
+                  e.param ? to_string(*e.param) : "", truth, p[k], got.c_str(),
+                  ok ? "recovered" : "MISSED");
     }
     std::fflush(stdout);
   }

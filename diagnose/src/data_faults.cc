@@ -135,10 +135,10 @@ std::optional<DataAlternative> clock_alternative(
   const auto c = clocks.find(f.output);
   if (c == clocks.end()) return std::nullopt;
   double tau = 0;
-  if (f.cause == CauseKind::kTimeDelay && f.parameters.count("delay_s"))
-    tau = f.parameters.at("delay_s");
-  else if (f.cause == CauseKind::kMissingLag && f.parameters.count("corner_rad_s"))
-    tau = 1 / f.parameters.at("corner_rad_s");
+  if (f.cause == CauseKind::kTimeDelay && f.parameters.count(Param::kDelayS))
+    tau = f.parameters.at(Param::kDelayS);
+  else if (f.cause == CauseKind::kMissingLag && f.parameters.count(Param::kCornerRadS))
+    tau = 1 / f.parameters.at(Param::kCornerRadS);
   const ClockEvidence& e = c->second;
   const double lo = (std::abs(e.eps) - 2 * e.sigma) * e.t_mid_s,
                hi = (std::abs(e.eps) + 2 * e.sigma) * e.t_mid_s;
@@ -170,8 +170,8 @@ void channel_alternatives(const Finding& f, int i, std::vector<DataAlternative>&
     a.text = "or " + ch + " is wired with the wrong sign: check its wiring and the sign in " +
              "the channel list before changing the model";
     out.push_back(std::move(a));
-  } else if (f.cause == CauseKind::kGainMismatch && f.parameters.count("gain_db")) {
-    const double k = std::pow(10.0, f.parameters.at("gain_db") / 20);
+  } else if (f.cause == CauseKind::kGainMismatch && f.parameters.count(Param::kGainDb)) {
+    const double k = std::pow(10.0, f.parameters.at(Param::kGainDb) / 20);
     for (const UnitsFactor& u : kUnits) {
       for (const double want : {u.factor, 1.0 / u.factor}) {
         if (std::abs(std::log(k / want)) > std::log(1.01)) continue;

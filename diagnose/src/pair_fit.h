@@ -32,7 +32,7 @@ struct PairFit {
 /// "peak"/"notch", or a nonlinearity's explanation).
 struct Cause {
   CauseKind cause = CauseKind::kGainMismatch;
-  std::map<std::string, double> params;
+  Parameters params;
   std::vector<C> F;
   double chi2 = INFINITY;
   int k = 1;

@@ -126,10 +126,10 @@ void report_findings(std::ostream& md, const Diagnosis& d, const DataNotes& data
     if (!f.input.empty()) md << ", input " << f.input;
     if (!f.output.empty()) md << ", output " << f.output;
     md << "):";
-    for (const auto& [k, v] : f.parameters) md << " " << k << " = " << v;
+    for (const auto& [k, v] : f.parameters) md << " " << to_string(k) << " = " << v;
     for (const auto& [k, v] : f.text_parameters) md << " " << k << " = " << v;
     for (const auto& [k, v] : f.intervals)
-      md << " (" << k << " 1-sigma " << v[0] << " .. " << v[1] << ")";
+      md << " (" << to_string(k) << " 1-sigma " << v[0] << " .. " << v[1] << ")";
     md << ". " << f.explanation << ". Error " << f.error_before << " -> " << f.error_after
        << " over ";
     for (size_t i = 0; i < f.pairs.size(); ++i) md << (i ? ", " : "") << f.pairs[i];
@@ -149,7 +149,7 @@ void report_beside_findings(std::ostream& md, const Diagnosis& d) {
       for (const Finding& f : a.findings) {
         md << " **" << to_string(f.cause) << "**";
         for (const auto& [k, v] : f.text_parameters) md << " " << k << " = " << v;
-        for (const auto& [k, v] : f.parameters) md << " " << k << " = " << v;
+        for (const auto& [k, v] : f.parameters) md << " " << to_string(k) << " = " << v;
         md << ";";
       }
       md << " chi2 above the named set's by " << a.chi2_above
@@ -163,7 +163,7 @@ void report_beside_findings(std::ostream& md, const Diagnosis& d) {
       if (!x.finding.input.empty()) md << ", input " << x.finding.input;
       if (!x.finding.output.empty()) md << ", output " << x.finding.output;
       md << "):";
-      for (const auto& [k, v] : x.finding.parameters) md << " " << k << " = " << v;
+      for (const auto& [k, v] : x.finding.parameters) md << " " << to_string(k) << " = " << v;
       md << ": " << x.reason << ".\n";
     }
   }
@@ -217,7 +217,7 @@ std::string diagnosis_summary(const Diagnosis& d, const std::string& dir) {
   for (const auto& f : d.findings) {
     s << "\n  " << to_string(f.cause) << " [" << to_string(f.scope)
       << (f.input.empty() ? "" : " " + f.input) << (f.output.empty() ? "" : " " + f.output) << "]";
-    for (const auto& [k, v] : f.parameters) s << " " << k << "=" << v;
+    for (const auto& [k, v] : f.parameters) s << " " << to_string(k) << "=" << v;
     for (const auto& [k, v] : f.text_parameters) s << " " << k << "=" << v;
   }
   s << "\n  report: " << dir << "/report.md, " << dir << "/report.html";

@@ -82,7 +82,7 @@ std::vector<Finding> scheduled_findings(const std::vector<EnvelopePoint>& points
     Finding f = *a;
     for (auto& [key, v] : f.parameters) {
       const auto it = b->parameters.find(key);
-      if (key == l.parameter)
+      if (to_string(key) == l.parameter)
         v = law_value(l, x);
       else if (it != b->parameters.end())
         v = v + (it->second - v) * t;  // the finding's other figures between its two points

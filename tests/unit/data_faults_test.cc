@@ -51,7 +51,7 @@ std::vector<MeasuredPair> measured(const Model& m, const std::string& read_as_a,
   return out;
 }
 
-Finding at_output(CauseKind c, const std::string& o, std::map<std::string, double> params) {
+Finding at_output(CauseKind c, const std::string& o, Parameters params) {
   Finding f;
   f.cause = c;
   f.scope = Scope::kOutput;
@@ -64,7 +64,7 @@ Finding at_output(CauseKind c, const std::string& o, std::map<std::string, doubl
 
 TEST(DataAlternatives, ASignAtAnOutputMayBeItsWiring) {
   Diagnosis d;
-  d.findings = {at_output(CauseKind::kSignError, "B", {{"sign", -1.0}})};
+  d.findings = {at_output(CauseKind::kSignError, "B", {{Param::kSign, -1.0}})};
   const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"));
   ASSERT_EQ(a.size(), 1u);
   EXPECT_EQ(a[0].kind, DataAlternative::Kind::kWiringSign);
@@ -74,9 +74,10 @@ TEST(DataAlternatives, ASignAtAnOutputMayBeItsWiring) {
 
 TEST(DataAlternatives, AGainThatIsAUnitsFactorNamesTheUnits) {
   Diagnosis d;
-  d.findings = {at_output(CauseKind::kGainMismatch, "A", {{"gain_db", 20 * std::log10(6.894757)}}),
-                at_output(CauseKind::kGainMismatch, "B", {{"gain_db", 20 * std::log10(1.3)}}),
-                at_output(CauseKind::kGainMismatch, "B", {{"gain_db", -20 * std::log10(1.8)}})};
+  d.findings = {
+      at_output(CauseKind::kGainMismatch, "A", {{Param::kGainDb, 20 * std::log10(6.894757)}}),
+      at_output(CauseKind::kGainMismatch, "B", {{Param::kGainDb, 20 * std::log10(1.3)}}),
+      at_output(CauseKind::kGainMismatch, "B", {{Param::kGainDb, -20 * std::log10(1.8)}})};
   const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"));
   ASSERT_EQ(a.size(), 2u);
   EXPECT_EQ(a[0].kind, DataAlternative::Kind::kUnits);
@@ -103,10 +104,10 @@ TEST(DataAlternatives, TwoOutputsExchangedAreNamedAndStraightOnesAreNot) {
 
 TEST(DataAlternatives, AFindingAtAClippedChannelMayBeTheClipping) {
   Diagnosis d;
-  Finding lag = at_output(CauseKind::kMissingLag, "B", {{"corner_rad_s", 20.0}});
+  Finding lag = at_output(CauseKind::kMissingLag, "B", {{Param::kCornerRadS, 20.0}});
   lag.scope = Scope::kPath;
   lag.input = "X";
-  d.findings = {at_output(CauseKind::kGainMismatch, "A", {{"gain_db", -0.3}}), lag};
+  d.findings = {at_output(CauseKind::kGainMismatch, "A", {{Param::kGainDb, -0.3}}), lag};
   const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"), {}, {{"B", 0.037}});
   ASSERT_EQ(a.size(), 1u);
   EXPECT_EQ(a[0].kind, DataAlternative::Kind::kClipping);
@@ -121,12 +122,12 @@ TEST(DataAlternatives, ADelayAClockBelowTheChecksWouldGiveNamesTheClock) {
   // 2 sigma band 1.0-4.4 ms. A path delay of 2.67 ms at B and a lag of corner 370 rad/s (2.7 ms)
   // are within it; a delay of 9 ms, and any delay at A, are not.
   Diagnosis d;
-  Finding delay = at_output(CauseKind::kTimeDelay, "B", {{"delay_s", 0.00267}});
+  Finding delay = at_output(CauseKind::kTimeDelay, "B", {{Param::kDelayS, 0.00267}});
   delay.scope = Scope::kPath;
   delay.input = "X";
-  Finding lag = at_output(CauseKind::kMissingLag, "B", {{"corner_rad_s", 370.0}});
-  d.findings = {delay, lag, at_output(CauseKind::kTimeDelay, "B", {{"delay_s", 0.009}}),
-                at_output(CauseKind::kTimeDelay, "A", {{"delay_s", 0.00267}})};
+  Finding lag = at_output(CauseKind::kMissingLag, "B", {{Param::kCornerRadS, 370.0}});
+  d.findings = {delay, lag, at_output(CauseKind::kTimeDelay, "B", {{Param::kDelayS, 0.009}}),
+                at_output(CauseKind::kTimeDelay, "A", {{Param::kDelayS, 0.00267}})};
   const std::map<std::string, ClockEvidence> clocks{{"B", {1.6e-4, 0.5e-4, 17.0}}};
   const auto a = data_alternatives(d, sim(), measured(sim(), "A", "B"), {}, {}, {}, clocks);
   ASSERT_EQ(a.size(), 2u);
@@ -175,7 +176,7 @@ TEST(SilentOutputs, AnOutputHoldingOnlyNoiseWhereTheSimulationExpectsMuchMoreIsD
   EXPECT_THAT(s[0].text, HasSubstr("dead channel"));
   // A finding at B names the dead channel beside it.
   Diagnosis d;
-  d.findings = {at_output(CauseKind::kGainMismatch, "B", {{"gain_db", -30.0}})};
+  d.findings = {at_output(CauseKind::kGainMismatch, "B", {{Param::kGainDb, -30.0}})};
   const auto a = data_alternatives(d, sim(), data, {}, {}, s);
   ASSERT_EQ(a.size(), 1u);
   EXPECT_EQ(a[0].kind, DataAlternative::Kind::kDeadChannel);

@@ -104,7 +104,7 @@ std::vector<MeasuredPair> measure(const Model& m, uint64_t seed, const std::vect
 const Finding* moved(const Diagnosis& d, double from_wn) {
   for (const Finding& f : d.findings)
     if (f.cause == CauseKind::kPoleShift &&
-        std::abs(f.parameters.at("from_rad_s") / from_wn - 1) < 1e-3)
+        std::abs(f.parameters.at(Param::kFromRadS) / from_wn - 1) < 1e-3)
       return &f;
   return nullptr;
 }
@@ -123,9 +123,9 @@ TEST(DiagnoseModes, ModesMovedTogetherAreOneFindingEachOverEveryPair) {
     ASSERT_NE(f, nullptr) << "mode at " << kSim[k].wn;
     EXPECT_EQ(f->scope, Scope::kPlant) << kSim[k].wn;
     EXPECT_EQ(f->pairs.size(), 3u) << kSim[k].wn;
-    EXPECT_NEAR(f->parameters.at("to_rad_s") / truth[k].wn, 1, kWnTol) << kSim[k].wn;
+    EXPECT_NEAR(f->parameters.at(Param::kToRadS) / truth[k].wn, 1, kWnTol) << kSim[k].wn;
   }
-  EXPECT_NEAR(moved(d, 35)->parameters.at("to_zeta") / 0.03, 1, kZetaTol);
+  EXPECT_NEAR(moved(d, 35)->parameters.at(Param::kToZeta) / 0.03, 1, kZetaTol);
   EXPECT_LT(d.error_after, 0.2 * d.error_before)
       << "error " << d.error_before << " -> " << d.error_after;
 }
@@ -187,7 +187,7 @@ TEST(DiagnoseModes, AModeMovedWithItsShapeMovesTheAntiresonancesToo) {
   EXPECT_EQ(f.scope, Scope::kPlant);
   ASSERT_TRUE(f.text_parameters.count("form"));
   EXPECT_EQ(f.text_parameters.at("form"), "residue");
-  EXPECT_NEAR(f.parameters.at("to_rad_s") / 20.6, 1, kWnTol);
+  EXPECT_NEAR(f.parameters.at(Param::kToRadS) / 20.6, 1, kWnTol);
   EXPECT_LT(d.error_after, kAtTheNoise * kRelSigma) << d.error_before << " -> " << d.error_after;
 }
 
@@ -208,7 +208,7 @@ TEST(DiagnoseModes, ABaselinesMisfitIsTheSimulationsOwnNotAFinding) {
   EXPECT_EQ(s.left_out, 0);
   ASSERT_EQ(d.findings.size(), 1u);
   ASSERT_NE(moved(d, 20), nullptr);
-  EXPECT_NEAR(moved(d, 20)->parameters.at("to_rad_s") / 19.5, 1, kWnTol);
+  EXPECT_NEAR(moved(d, 20)->parameters.at(Param::kToRadS) / 19.5, 1, kWnTol);
   const Diagnosis raw = diagnose(sim, data);
   bool gain = false;
   for (const Finding& f : raw.findings) gain = gain || f.cause == CauseKind::kGainMismatch;

@@ -85,11 +85,11 @@ Model without(const Diagnosis& d, size_t i) {
   Tf& t = m.paths.at(0).tf;
   const Finding& f = d.findings[i];
   if (f.cause == CauseKind::kGainMismatch) {
-    t.gain /= std::pow(10.0, f.parameters.at("gain_db") / 20);
+    t.gain /= std::pow(10.0, f.parameters.at(Param::kGainDb) / 20);
   } else if (f.cause == CauseKind::kPoleShift) {
     Root& r = t.poles.at(0);
-    r.wn = f.parameters.at("from_rad_s");
-    r.zeta = f.parameters.at("from_zeta");
+    r.wn = f.parameters.at(Param::kFromRadS);
+    r.zeta = f.parameters.at(Param::kFromZeta);
   } else {
     ADD_FAILURE() << "unexpected finding " << to_string(f.cause);
   }
@@ -110,16 +110,16 @@ void check_level(const Level& l) {
   for (const Finding& f : d.findings)
     if (f.cause == CauseKind::kPoleShift) shift = &f;
   ASSERT_NE(shift, nullptr) << l.file << json;
-  EXPECT_NEAR(shift->parameters.at("to_rad_s") / l.wn_rad_s, 1.0, kWnTol) << l.file << json;
+  EXPECT_NEAR(shift->parameters.at(Param::kToRadS) / l.wn_rad_s, 1.0, kWnTol) << l.file << json;
   ASSERT_EQ(d.extended.paths.size(), 1u);
   const Tf& ext = d.extended.paths[0].tf;
   ASSERT_EQ(ext.poles.size(), 1u);
   EXPECT_NEAR(ext.poles[0].wn / l.wn_rad_s, 1.0, kWnTol) << l.file;
   // Its damping too: the data resolve it (the simulation's 0.0480 lies outside its interval).
-  EXPECT_NEAR(shift->parameters.at("to_zeta") / l.zeta, 1.0, kZetaTol) << l.file << json;
+  EXPECT_NEAR(shift->parameters.at(Param::kToZeta) / l.zeta, 1.0, kZetaTol) << l.file << json;
   EXPECT_NEAR(ext.poles[0].zeta / l.zeta, 1.0, kZetaTol) << l.file;
-  ASSERT_TRUE(shift->intervals.count("to_zeta")) << l.file;
-  EXPECT_GT(shift->intervals.at("to_zeta")[0], kSimZeta) << l.file << json;
+  ASSERT_TRUE(shift->intervals.count(Param::kToZeta)) << l.file;
+  EXPECT_GT(shift->intervals.at(Param::kToZeta)[0], kSimZeta) << l.file << json;
   // The gain: the extended model's static gain against the simulation's.
   EXPECT_NEAR(20 * std::log10(ext.gain / kSimGain), l.gain_db, kGainTolDb) << l.file << json;
   // The extended model errs less than the simulation, and each finding it reports helps.
@@ -158,7 +158,7 @@ TEST(DiagnoseRealData, SilverboxAtTwoLevelsIsNamedLevelDependent) {
   ASSERT_NE(shift, nullptr) << json;
   ASSERT_TRUE(shift->level.has_value()) << json;
   const LevelDependence& l = *shift->level;
-  EXPECT_EQ(l.parameter, "to_rad_s");
+  EXPECT_EQ(l.parameter, Param::kToRadS);
   ASSERT_EQ(l.values.size(), 2u);
   EXPECT_EQ(l.levels, (std::vector<double>{kBla, kHigh}));
   EXPECT_NEAR(l.values[0] / 436.9, 1.0, kWnTol) << json;
@@ -215,7 +215,7 @@ Model f16_level1_simulation(const std::vector<MeasuredPair>& l1) {
 const Finding* moved_mode(const Diagnosis& d, double sim_hz) {
   const Finding* best = nullptr;
   auto from_hz = [](const Finding& f) {
-    return f.parameters.at("from_rad_s") / (2 * std::numbers::pi);
+    return f.parameters.at(Param::kFromRadS) / (2 * std::numbers::pi);
   };
   for (const Finding& f : d.findings) {
     if (f.cause != CauseKind::kPoleShift) continue;
@@ -239,11 +239,11 @@ TEST(DiagnoseRealData, F16TorsionAndBendingSoftenAtLevel3EachOneFindingOverEvery
     EXPECT_EQ(f->scope, Scope::kPlant) << json;
     EXPECT_EQ(f->pairs.size(), 3u) << json;
   }
-  EXPECT_NEAR(torsion->parameters.at("to_rad_s") / (2 * std::numbers::pi) / kTorsionL3Hz, 1,
+  EXPECT_NEAR(torsion->parameters.at(Param::kToRadS) / (2 * std::numbers::pi) / kTorsionL3Hz, 1,
               kModeRel);
-  EXPECT_NEAR(bending->parameters.at("to_rad_s") / (2 * std::numbers::pi) / kBendingL3Hz, 1,
+  EXPECT_NEAR(bending->parameters.at(Param::kToRadS) / (2 * std::numbers::pi) / kBendingL3Hz, 1,
               kModeRel);
-  EXPECT_GT(bending->parameters.at("to_zeta"), bending->parameters.at("from_zeta"));
+  EXPECT_GT(bending->parameters.at(Param::kToZeta), bending->parameters.at(Param::kFromZeta));
   EXPECT_LE(d.error_after, 0.5 * d.error_before) << d.error_before << " -> " << d.error_after;
 }
 
@@ -267,7 +267,7 @@ TEST(DiagnoseRealData, F16LevelsOneToThreeGiveEachModesLawInTheForce) {
     ASSERT_NE(f, nullptr) << sim_hz << json;
     ASSERT_TRUE(f->level.has_value()) << sim_hz << json;
     const LevelDependence& l = *f->level;
-    EXPECT_EQ(l.parameter, "to_rad_s");
+    EXPECT_EQ(l.parameter, Param::kToRadS);
     ASSERT_EQ(l.levels, (std::vector<double>{kForceRmsN[2], kForceRmsN[0], kForceRmsN[1]}));
     EXPECT_NEAR(l.values[2] / (2 * std::numbers::pi) / l2_hz, 1, kModeRel) << json;
     EXPECT_LT(l.values[2], l.values[1]) << json;  // level 2 below level 1
@@ -280,7 +280,7 @@ TEST(DiagnoseRealData, F16LevelsOneToThreeGiveEachModesLawInTheForce) {
   const Finding* bending = moved_mode(d, kBendingL1Hz);
   ASSERT_EQ(bending->level_secondary.size(), 1u) << json;
   const LevelDependence& zeta = bending->level_secondary[0];
-  EXPECT_EQ(zeta.parameter, "to_zeta");
+  EXPECT_EQ(zeta.parameter, Param::kToZeta);
   EXPECT_GT(zeta.slope, 0) << json;
 }
 

@@ -53,9 +53,9 @@ TEST(DiagnoseStates, OneStatesTimeConstantIsOneFindingNamingTheState) {
   EXPECT_EQ(f.scope, Scope::kPlant);
   EXPECT_EQ(f.text_parameters.at("matrix"), "A");
   EXPECT_EQ(f.text_parameters.at("state"), "T4");
-  EXPECT_EQ(f.parameters.at("row"), 2);
-  EXPECT_EQ(f.parameters.at("col"), 2);
-  EXPECT_NEAR(f.parameters.at("time_constant_to_s") / 4.5, 1, kValueRel);
+  EXPECT_EQ(f.parameters.at(Param::kRow), 2);
+  EXPECT_EQ(f.parameters.at(Param::kCol), 2);
+  EXPECT_NEAR(f.parameters.at(Param::kTimeConstantToS) / 4.5, 1, kValueRel);
   EXPECT_EQ(f.pairs.size(), 6u);
   EXPECT_LE(d.error_after, kErrorShare * d.error_before)
       << d.error_before << " -> " << d.error_after;
@@ -72,7 +72,7 @@ TEST(DiagnoseStates, AnInputsCouplingToAStateIsOneFindingNamingBoth) {
   EXPECT_EQ(f.text_parameters.at("matrix"), "B");
   EXPECT_EQ(f.text_parameters.at("state"), "Wf");
   EXPECT_EQ(f.text_parameters.at("input"), "nozzle");
-  EXPECT_NEAR(f.parameters.at("to") / 1.6, 1, kValueRel);
+  EXPECT_NEAR(f.parameters.at(Param::kTo) / 1.6, 1, kValueRel);
   EXPECT_LE(d.error_after, kErrorShare * d.error_before)
       << d.error_before << " -> " << d.error_after;
 }
@@ -110,7 +110,7 @@ TEST(DiagnoseStates, APathsPoleShiftNamesTheStateModelsModeAndItsStates) {
   const Finding* shift = nullptr;
   for (const Finding& f : d.findings)
     if (f.cause == CauseKind::kPoleShift &&
-        std::abs(f.parameters.at("from_rad_s") + from) < 1e-6 * std::abs(from))
+        std::abs(f.parameters.at(Param::kFromRadS) + from) < 1e-6 * std::abs(from))
       shift = &f;
   ASSERT_NE(shift, nullptr) << json;
   EXPECT_THAT(shift->explanation, ::testing::HasSubstr("the state model's mode at")) << json;
@@ -150,9 +150,9 @@ TEST(DiagnoseStates, EntriesFittedTogetherHaveTheSetsIntervals) {
     const auto f = std::find_if(d.findings.begin(), d.findings.end(),
                                 [&](const Finding& f) { return anywhere.matches(f); });
     ASSERT_NE(f, d.findings.end()) << e.describe() << json;
-    ASSERT_TRUE(f->intervals.count("to")) << json;
-    const double v = f->parameters.at("to");
-    const auto [lo, hi] = f->intervals.at("to");
+    ASSERT_TRUE(f->intervals.count(Param::kTo)) << json;
+    const double v = f->parameters.at(Param::kTo);
+    const auto [lo, hi] = f->intervals.at(Param::kTo);
     EXPECT_LE(v - 2 * (v - lo), e.value) << e.describe() << json;
     EXPECT_GE(v + 2 * (hi - v), e.value) << e.describe() << json;
     EXPECT_LT(hi - lo, 2 * 0.1 * std::abs(v)) << e.describe() << json;
@@ -192,15 +192,15 @@ TEST(DiagnoseStates, AStateChangeAndALagTheSimulationLacksAreEachNamed) {
     ASSERT_NE(entry, nullptr) << json;
     ASSERT_NE(added, nullptr) << json;
     EXPECT_EQ(entry->text_parameters.at("matrix"), c.matrix);
-    EXPECT_EQ(entry->parameters.at("row"), c.row + 1);
-    EXPECT_EQ(entry->parameters.at("col"), c.col + 1);
-    EXPECT_NEAR(entry->parameters.at("to") / c.value, 1, kValueRel) << json;
+    EXPECT_EQ(entry->parameters.at(Param::kRow), c.row + 1);
+    EXPECT_EQ(entry->parameters.at(Param::kCol), c.col + 1);
+    EXPECT_NEAR(entry->parameters.at(Param::kTo) / c.value, 1, kValueRel) << json;
     EXPECT_EQ(added->cause, CauseKind::kMissingLag) << json;
     EXPECT_EQ(added->scope, c.before_input ? Scope::kInput : Scope::kOutput) << json;
     EXPECT_EQ(c.before_input ? added->input : added->output, c.before_input ? "nozzle" : "temp");
     EXPECT_EQ(added->text_parameters.at("state"),
               c.before_input ? "lag before nozzle" : "lag after temp");
-    EXPECT_NEAR(added->parameters.at("corner_rad_s") / c.corner, 1, kValueRel) << json;
+    EXPECT_NEAR(added->parameters.at(Param::kCornerRadS) / c.corner, 1, kValueRel) << json;
     EXPECT_LE(d.error_after, kErrorShare * d.error_before)
         << d.error_before << " -> " << d.error_after;
   }
@@ -235,16 +235,16 @@ TEST(DiagnoseStates, AStateChangeAndADelayTheSimulationLacksAreEachNamed) {
     ASSERT_NE(entry, nullptr) << json;
     ASSERT_NE(delay, nullptr) << json;
     EXPECT_EQ(entry->text_parameters.at("matrix"), c.matrix);
-    EXPECT_EQ(entry->parameters.at("row"), c.row + 1);
-    EXPECT_EQ(entry->parameters.at("col"), c.col + 1);
-    EXPECT_NEAR(entry->parameters.at("to") / c.value, 1, kValueRel) << json;
+    EXPECT_EQ(entry->parameters.at(Param::kRow), c.row + 1);
+    EXPECT_EQ(entry->parameters.at(Param::kCol), c.col + 1);
+    EXPECT_NEAR(entry->parameters.at(Param::kTo) / c.value, 1, kValueRel) << json;
     const bool at_input = c.channels == "inputs";
     EXPECT_EQ(delay->cause, CauseKind::kTimeDelay) << json;
     EXPECT_EQ(delay->scope, at_input ? Scope::kInput : Scope::kOutput) << json;
     EXPECT_EQ(at_input ? delay->input : delay->output, name);
     EXPECT_EQ(delay->text_parameters.at("delay"),
               (at_input ? "InputDelay " : "OutputDelay ") + name);
-    EXPECT_NEAR(delay->parameters.at("delay_s") / c.added_s, 1, kValueRel) << json;
+    EXPECT_NEAR(delay->parameters.at(Param::kDelayS) / c.added_s, 1, kValueRel) << json;
     EXPECT_LE(d.error_after, kErrorShare * d.error_before)
         << d.error_before << " -> " << d.error_after;
     // The extended model as a state model: the simulation's states, the delay its input's or
@@ -287,7 +287,8 @@ TEST(DiagnoseStates, EntriesTheDataCannotTellApartAreEachGiven) {
     ASSERT_EQ(f->cause, CauseKind::kStateParameter) << json;
     EXPECT_EQ(f->text_parameters.at("state"), "slow") << json;
     matrices.insert(f->text_parameters.at("matrix"));
-    EXPECT_NEAR(f->parameters.at("to") / f->parameters.at("from"), kFactor, kValueRel * kFactor)
+    EXPECT_NEAR(f->parameters.at(Param::kTo) / f->parameters.at(Param::kFrom), kFactor,
+                kValueRel * kFactor)
         << json;
   }
   EXPECT_EQ(matrices, (std::set<std::string>{"B", "C"})) << json;
@@ -324,7 +325,7 @@ TEST(DiagnoseStates, ANamedParameterIsOneFindingNamingIt) {
     EXPECT_EQ(f.cause, CauseKind::kStateParameter) << json;
     EXPECT_EQ(f.text_parameters.at("parameter"), name) << json;
     EXPECT_EQ(f.text_parameters.count("matrix"), 0u) << json;
-    EXPECT_NEAR(f.parameters.at("to") / to, 1, kValueRel) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kTo) / to, 1, kValueRel) << json;
     EXPECT_LE(d.error_after, kErrorShare * d.error_before)
         << d.error_before << " -> " << d.error_after;
   }

@@ -150,7 +150,7 @@ TEST(Diagnose, TimeDelayInOnePath) {
   EXPECT_EQ(f.cause, CauseKind::kTimeDelay);
   EXPECT_EQ(f.scope, Scope::kPath);
   EXPECT_EQ(f.output, "y");
-  EXPECT_NEAR(f.parameters.at("delay_s"), 0.011, 0.2e-3);
+  EXPECT_NEAR(f.parameters.at(Param::kDelayS), 0.011, 0.2e-3);
   EXPECT_THAT(f.explanation, HasSubstr("phase residual linear in w"));
 }
 
@@ -161,14 +161,14 @@ TEST(Diagnose, AFindingsIntervalIsWhereChi2RisesByOne) {
   Model truth = simulation();
   path(truth, "y").tf.delay_s = 0.011;
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
-  ASSERT_TRUE(f.intervals.count("delay_s"));
-  const auto [lo, hi] = f.intervals.at("delay_s");
+  ASSERT_TRUE(f.intervals.count(Param::kDelayS));
+  const auto [lo, hi] = f.intervals.at(Param::kDelayS);
   const double r = std::hypot(kRelSigma, DiagnoseOptions{}.sigma_floor);
   double sw2 = 0;
   for (int k = 0; k <= 36; ++k) sw2 += std::pow(0.05 * std::pow(10.0, k / 10.0), 2);
   const double half = r / std::sqrt(sw2);
-  EXPECT_NEAR(hi - f.parameters.at("delay_s"), half, 0.05 * half);
-  EXPECT_NEAR(f.parameters.at("delay_s") - lo, half, 0.05 * half);
+  EXPECT_NEAR(hi - f.parameters.at(Param::kDelayS), half, 0.05 * half);
+  EXPECT_NEAR(f.parameters.at(Param::kDelayS) - lo, half, 0.05 * half);
   EXPECT_LT(lo, 0.011);
   EXPECT_GT(hi, 0.011);
   EXPECT_GT(lo, 0.0) << "the simulation's 0 is outside: resolved";
@@ -196,9 +196,9 @@ TEST(Diagnose, APathTheSimulationLacksIsFittedAndAdded) {
   EXPECT_EQ(f.scope, Scope::kPath);
   EXPECT_EQ(f.input, "u");
   EXPECT_EQ(f.output, "w");
-  EXPECT_NEAR(f.parameters.at("gain"), 0.5, 0.01 * 0.5);
-  EXPECT_NEAR(f.parameters.at("delay_s"), 0.02, 0.5e-3);
-  EXPECT_EQ(f.parameters.at("poles"), 1.0);
+  EXPECT_NEAR(f.parameters.at(Param::kGain), 0.5, 0.01 * 0.5);
+  EXPECT_NEAR(f.parameters.at(Param::kDelayS), 0.02, 0.5e-3);
+  EXPECT_EQ(f.parameters.at(Param::kPoles), 1.0);
   ASSERT_TRUE(f.tf);
   EXPECT_NEAR(f.tf->poles.at(0).real, -5.0, 0.05);
   EXPECT_EQ(f.error_before, 1.0);
@@ -218,7 +218,7 @@ TEST(Diagnose, MissingLag) {
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kMissingLag);
   EXPECT_EQ(f.output, "z");
-  EXPECT_NEAR(f.parameters.at("corner_rad_s"), 15, 0.03 * 15);
+  EXPECT_NEAR(f.parameters.at(Param::kCornerRadS), 15, 0.03 * 15);
 }
 
 // A lag above the band (400 rad/s, the data end at 200) whose gain the data resolve (-1 dB at
@@ -228,7 +228,7 @@ TEST(Diagnose, ALagAboveTheBandWhoseGainTheDataResolveStaysALag) {
   path(truth, "z").tf.poles.push_back(Root::Real(-400));
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kMissingLag);
-  EXPECT_NEAR(f.parameters.at("corner_rad_s"), 400, 0.03 * 400);
+  EXPECT_NEAR(f.parameters.at(Param::kCornerRadS), 400, 0.03 * 400);
 }
 
 TEST(Diagnose, MissingLead) {
@@ -236,7 +236,7 @@ TEST(Diagnose, MissingLead) {
   path(truth, "y").tf.zeros.push_back(Root::Real(-6));
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kMissingLead);
-  EXPECT_NEAR(f.parameters.at("corner_rad_s"), 6, 0.03 * 6);
+  EXPECT_NEAR(f.parameters.at(Param::kCornerRadS), 6, 0.03 * 6);
 }
 
 TEST(Diagnose, GainMismatch) {
@@ -244,7 +244,7 @@ TEST(Diagnose, GainMismatch) {
   path(truth, "y").tf.gain *= std::pow(10.0, 1.0 / 20);  // +1 dB
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kGainMismatch);
-  EXPECT_NEAR(f.parameters.at("gain_db"), 1.0, 0.05);
+  EXPECT_NEAR(f.parameters.at(Param::kGainDb), 1.0, 0.05);
 }
 
 TEST(Diagnose, PoleShiftInAPath) {
@@ -252,8 +252,8 @@ TEST(Diagnose, PoleShiftInAPath) {
   path(truth, "y").tf.poles[0] = Root::Real(-4.5);
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kPoleShift);
-  EXPECT_NEAR(f.parameters.at("from_rad_s"), 3, 1e-12);
-  EXPECT_NEAR(f.parameters.at("to_rad_s"), 4.5, 0.03 * 4.5);
+  EXPECT_NEAR(f.parameters.at(Param::kFromRadS), 3, 1e-12);
+  EXPECT_NEAR(f.parameters.at(Param::kToRadS), 4.5, 0.03 * 4.5);
 }
 
 // Two effects on one path that overlap: the pole moved from 3 to 3.3 rad/s and the gain 0.5 dB
@@ -274,8 +274,9 @@ TEST(Diagnose, TwoOverlappingEffectsOnOnePathAreSizedJointly) {
   }
   ASSERT_NE(pole, nullptr) << diagnosis_to_json(d).dump(1);
   ASSERT_NE(gain, nullptr) << diagnosis_to_json(d).dump(1);
-  EXPECT_NEAR(pole->parameters.at("to_rad_s") / 3.3, 1.0, kPoleTol) << diagnosis_to_json(d).dump(1);
-  EXPECT_NEAR(gain->parameters.at("gain_db"), 0.5, kGainTolDb) << diagnosis_to_json(d).dump(1);
+  EXPECT_NEAR(pole->parameters.at(Param::kToRadS) / 3.3, 1.0, kPoleTol)
+      << diagnosis_to_json(d).dump(1);
+  EXPECT_NEAR(gain->parameters.at(Param::kGainDb), 0.5, kGainTolDb) << diagnosis_to_json(d).dump(1);
   EXPECT_LT(d.validation_after, kAtTheNoise * kRelSigma);
 }
 
@@ -331,10 +332,10 @@ TEST(Diagnose, PathFindingsConsistentAfterJointSizingBecomeOnePlantFinding) {
   ASSERT_EQ(moved.cause, CauseKind::kPoleShift);
   ASSERT_EQ(calibration.cause, CauseKind::kGainMismatch);
   EXPECT_EQ(pole->scope, Scope::kPlant) << json;
-  EXPECT_NEAR(pole->parameters.at("to_rad_s") / moved.value, 1.0, kPoleTol) << json;
+  EXPECT_NEAR(pole->parameters.at(Param::kToRadS) / moved.value, 1.0, kPoleTol) << json;
   EXPECT_EQ(gain->scope, Scope::kPath);
   EXPECT_EQ(gain->output, calibration.output);
-  EXPECT_NEAR(gain->parameters.at("gain_db"), calibration.value, kGainTolDb) << json;
+  EXPECT_NEAR(gain->parameters.at(Param::kGainDb), calibration.value, kGainTolDb) << json;
 }
 
 // A machine-shaped self-check case measured offline: every actuator pair and path at 12 points,
@@ -419,7 +420,7 @@ TEST(Diagnose, ASensorDelayTheWeakPathCannotTellIsStillTheOutputs) {
   EXPECT_EQ(f.cause, CauseKind::kTimeDelay) << json;
   EXPECT_EQ(f.scope, Scope::kOutput) << json;
   EXPECT_EQ(f.output, out) << json;
-  EXPECT_NEAR(f.parameters.at("delay_s"), c.hidden[0].value, kDelayTolS) << json;
+  EXPECT_NEAR(f.parameters.at(Param::kDelayS), c.hidden[0].value, kDelayTolS) << json;
 }
 
 // The hidden effect of `cause` at `scope` in case c (the last drawn, when several), or nullptr.
@@ -461,9 +462,9 @@ static void expect_the_plants_pole_and_a_lag(int index, Scope lag_scope) {
   }
   ASSERT_NE(plant, nullptr) << json;
   ASSERT_NE(found_lag, nullptr) << json;
-  EXPECT_NEAR(plant->parameters.at("to_rad_s") / pole->value, 1.0, kPoleTol) << json;
+  EXPECT_NEAR(plant->parameters.at(Param::kToRadS) / pole->value, 1.0, kPoleTol) << json;
   EXPECT_EQ(found_lag->output, lag->output) << json;
-  EXPECT_NEAR(found_lag->parameters.at("corner_rad_s") / lag->value, 1.0, kCornerTol) << json;
+  EXPECT_NEAR(found_lag->parameters.at(Param::kCornerRadS) / lag->value, 1.0, kCornerTol) << json;
 }
 
 // The machine-shaped self-check's case 10 (seed 1): one input, five outputs, the plant's slow pole
@@ -492,7 +493,7 @@ TEST(Diagnose, AnOutputsPoleShiftMovesThePoleWhereItIs) {
     f.cause = CauseKind::kPoleShift;
     f.scope = Scope::kOutput;
     f.output = "y";
-    f.parameters = {{"from_rad_s", from}, {"to_rad_s", to}};
+    f.parameters = {{Param::kFromRadS, from}, {Param::kToRadS, to}};
     return f;
   };
   for (const auto& [from, to] : {std::pair{3.0, 5.0}, std::pair{50.0, 40.0}}) {
@@ -549,7 +550,7 @@ TEST(Diagnose, AnInputsAndAnOutputsCalibrationsAreNamedWhereTheyAre) {
     const testing::HiddenEffect& h = *hidden.at(f.scope);
     EXPECT_EQ(f.input, h.input) << json;
     EXPECT_EQ(f.output, h.output) << json;
-    EXPECT_NEAR(f.parameters.at("gain_db"), h.value, kGainTolDb) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kGainDb), h.value, kGainTolDb) << json;
   }
   EXPECT_EQ(gains, 2) << json;
 }
@@ -601,11 +602,11 @@ TEST(Diagnose, AScopesPairThatSplitAnOverlapIsDiagnosedAgainAgainstTheOthers) {
   for (const Finding& f : d.findings) {
     if (f.cause == CauseKind::kPoleShift) {
       EXPECT_EQ(f.scope, pole->scope) << json;
-      EXPECT_NEAR(f.parameters.at("to_rad_s") / pole->value, 1.0, kPoleTol) << json;
+      EXPECT_NEAR(f.parameters.at(Param::kToRadS) / pole->value, 1.0, kPoleTol) << json;
     } else {
       EXPECT_EQ(f.cause, CauseKind::kTimeDelay) << json;
       EXPECT_EQ(f.output, delay->output) << json;
-      EXPECT_NEAR(f.parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+      EXPECT_NEAR(f.parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
     }
   }
 }
@@ -626,7 +627,7 @@ TEST(Diagnose, ALagAnotherOutputWouldUndoStaysAtItsOutput) {
   EXPECT_EQ(f.cause, CauseKind::kMissingLag) << json;
   EXPECT_EQ(f.scope, Scope::kOutput) << json;
   EXPECT_EQ(f.output, c.hidden[0].output) << json;
-  EXPECT_NEAR(f.parameters.at("corner_rad_s") / c.hidden[0].value, 1.0, kCornerTol) << json;
+  EXPECT_NEAR(f.parameters.at(Param::kCornerRadS) / c.hidden[0].value, 1.0, kCornerTol) << json;
 }
 
 // An output's sensor lag and delay together, on all three of its paths (tests/data/lab/
@@ -652,9 +653,9 @@ TEST(Diagnose, AnOutputsLagAndDelayTogetherAreTheOutputsTwoFindings) {
     ASSERT_EQ(f.output, lag->output) << json;
     ++at_output;
     if (f.cause == CauseKind::kMissingLag)
-      EXPECT_NEAR(f.parameters.at("corner_rad_s") / lag->value, 1.0, kCornerTol) << json;
+      EXPECT_NEAR(f.parameters.at(Param::kCornerRadS) / lag->value, 1.0, kCornerTol) << json;
     else
-      EXPECT_NEAR(f.parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+      EXPECT_NEAR(f.parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
   }
   EXPECT_EQ(at_output, 2) << json;
 }
@@ -674,7 +675,7 @@ TEST(Diagnose, AnOutputsDelayOnePathSizedIsTheOutputsWhenItsOtherPathsAgree) {
   ASSERT_NE(found, nullptr) << json;
   EXPECT_EQ(found->scope, Scope::kOutput) << json;
   EXPECT_EQ(found->output, delay->output) << json;
-  EXPECT_NEAR(found->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+  EXPECT_NEAR(found->parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
 }
 
 // An input's and an output's calibration that the first pass of the stages leaves as three path
@@ -698,7 +699,7 @@ TEST(Diagnose, AnInputsAndAnOutputsCalibrationsLeftAsPathGainsAreNamedOnTheSecon
     EXPECT_EQ(f.scope == Scope::kInput ? f.input : f.output,
               f.scope == Scope::kInput ? h->input : h->output)
         << json;
-    EXPECT_NEAR(f.parameters.at("gain_db"), h->value, kGainTolDb) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kGainDb), h->value, kGainTolDb) << json;
   }
   EXPECT_EQ(gains, 2) << json;
 }
@@ -723,7 +724,7 @@ TEST(Diagnose, APlantsModeUnderTwoCalibrationsIsSizedOverEveryPairAtOnce) {
     ASSERT_NE(f.scope, Scope::kPath) << json;
     if (f.cause == CauseKind::kPoleShift) {
       EXPECT_EQ(f.scope, Scope::kPlant) << json;
-      EXPECT_NEAR(f.parameters.at("to_rad_s") / pole->value, 1.0, kPoleTol) << json;
+      EXPECT_NEAR(f.parameters.at(Param::kToRadS) / pole->value, 1.0, kPoleTol) << json;
       continue;
     }
     ASSERT_EQ(f.cause, CauseKind::kGainMismatch) << json;
@@ -731,7 +732,7 @@ TEST(Diagnose, APlantsModeUnderTwoCalibrationsIsSizedOverEveryPairAtOnce) {
     EXPECT_EQ(f.scope == Scope::kInput ? f.input : f.output,
               f.scope == Scope::kInput ? h->input : h->output)
         << json;
-    EXPECT_NEAR(f.parameters.at("gain_db"), h->value, kGainTolDb) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kGainDb), h->value, kGainTolDb) << json;
   }
 }
 
@@ -757,7 +758,7 @@ TEST(Diagnose, AnOutputsDelayWithAPathsOwnDelayOnTopAreTwoFindings) {
     if (f.scope == Scope::kPath) {
       EXPECT_EQ(f.input, h->input) << json;
     }
-    EXPECT_NEAR(f.parameters.at("delay_s"), h->value, kDelayTolS) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kDelayS), h->value, kDelayTolS) << json;
   }
   EXPECT_EQ(delays, 2) << json;
 }
@@ -779,7 +780,7 @@ TEST(Diagnose, ALagAboveTheBandThatADelayFitsAsWellIsTheDelay) {
   EXPECT_EQ(found->scope, Scope::kPath) << json;
   EXPECT_EQ(found->input, delay->input) << json;
   EXPECT_EQ(found->output, delay->output) << json;
-  EXPECT_NEAR(found->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+  EXPECT_NEAR(found->parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
 }
 
 // A one-input plant's -2.23 dB calibration beside lags on two of its four paths (tests/data/lab/
@@ -797,7 +798,7 @@ TEST(Diagnose, TwoGainsAtOnePlaceAreOneFindingTheirSum) {
     if (f.cause != CauseKind::kGainMismatch) continue;
     ++gains;
     EXPECT_EQ(f.scope, Scope::kPlant) << json;
-    EXPECT_NEAR(f.parameters.at("gain_db"), gain->value, kGainTolDb) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kGainDb), gain->value, kGainTolDb) << json;
   }
   EXPECT_EQ(gains, 1) << json;
 }
@@ -841,8 +842,8 @@ TEST(Diagnose, AResonancesAlternativeIsSizedWithTheFindingsBesideIt) {
   const Finding* fd = found_of(d, CauseKind::kTimeDelay);
   ASSERT_NE(fl, nullptr) << json;
   ASSERT_NE(fd, nullptr) << json;
-  EXPECT_NEAR(fl->parameters.at("corner_rad_s") / lag->value, 1, kCornerTol) << json;
-  EXPECT_NEAR(fd->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+  EXPECT_NEAR(fl->parameters.at(Param::kCornerRadS) / lag->value, 1, kCornerTol) << json;
+  EXPECT_NEAR(fd->parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
 }
 
 // A one-input plant's slow mode moved 1.58 -> 2.63 rad/s in every path, beside its actuator made
@@ -860,7 +861,7 @@ TEST(Diagnose, TwoMovesOfOneRootAreOneFinding) {
   for (const Finding& f : d.findings) {
     if (f.cause != CauseKind::kPoleShift || f.scope != Scope::kPlant) continue;
     ++plant_moves;
-    EXPECT_NEAR(f.parameters.at("to_rad_s") / mode->value, 1, kPoleTol) << json;
+    EXPECT_NEAR(f.parameters.at(Param::kToRadS) / mode->value, 1, kPoleTol) << json;
   }
   EXPECT_EQ(plant_moves, 1) << json;
 }
@@ -884,10 +885,10 @@ TEST(Diagnose, AnInputsGainIsTriedFromThePathThatDidNotSplitIt) {
   ASSERT_NE(found_lag, nullptr) << json;
   EXPECT_EQ(found_gain->scope, Scope::kInput) << json;
   EXPECT_EQ(found_gain->input, gain->input) << json;
-  EXPECT_NEAR(found_gain->parameters.at("gain_db"), gain->value, kGainTolDb) << json;
+  EXPECT_NEAR(found_gain->parameters.at(Param::kGainDb), gain->value, kGainTolDb) << json;
   EXPECT_EQ(found_lag->scope, Scope::kPath) << json;
   EXPECT_EQ(found_lag->output, lag->output) << json;
-  EXPECT_NEAR(found_lag->parameters.at("corner_rad_s") / lag->value, 1.0, kCornerTol) << json;
+  EXPECT_NEAR(found_lag->parameters.at(Param::kCornerRadS) / lag->value, 1.0, kCornerTol) << json;
 }
 
 // The machine-shaped self-check's case 13 of seed 4 as the lab measured it (tests/data/lab/
@@ -909,7 +910,7 @@ TEST(Diagnose, AResonanceAboveTheBandThatADelayFitsIsTheDelay) {
   ASSERT_NE(found, nullptr) << json;
   EXPECT_EQ(found->scope, Scope::kOutput) << json;
   EXPECT_EQ(found->output, delay->output) << json;
-  EXPECT_NEAR(found->parameters.at("delay_s"), delay->value, kDelayTolS) << json;
+  EXPECT_NEAR(found->parameters.at(Param::kDelayS), delay->value, kDelayTolS) << json;
   int true_findings = 0;
   for (const Finding& f : d.findings)
     for (const auto& h : c.hidden) true_findings += h.matches(f);
@@ -982,10 +983,10 @@ TEST(Diagnose, ADampingErrorWithoutItsPairOrFromZetaIsAnError) {
   f.input = "u";
   f.output = "y";
   f.pairs = {"u:y"};
-  f.parameters = {{"wn_rad_s", 77.0}, {"to_zeta", 0.2}};
+  f.parameters = {{Param::kWnRadS, 77.0}, {Param::kToZeta, 0.2}};
   EXPECT_THAT([&] { extend_model(simulation(), {f}); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("damping_error at 77 rad/s")));
-  f.parameters["from_zeta"] = 0.5;  // with it, the factor D_sim / D is added
+  f.parameters[Param::kFromZeta] = 0.5;  // with it, the factor D_sim / D is added
   const Model ext = extend_model(simulation(), {f});
   const Complex ratio = *model_pair_response(ext, "u:y", 77.0, 0.02) /
                         *model_pair_response(simulation(), "u:y", 77.0, 0.02);
@@ -1016,7 +1017,7 @@ TEST(Diagnose, ActuatorPoleShiftIsTheInputs) {
   const Finding f = only_finding(d);
   EXPECT_EQ(f.scope, Scope::kInput);
   EXPECT_EQ(f.input, "u");
-  EXPECT_NEAR(f.parameters.at("to_rad_s"), 35, 0.03 * 35);
+  EXPECT_NEAR(f.parameters.at(Param::kToRadS), 35, 0.03 * 35);
   EXPECT_THAT(f.explanation, HasSubstr("in the actuator's own response u_u:u"));
   // The extended model's actuator carries the moved pole.
   EXPECT_NEAR(-d.extended.inputs[0].actuator->poles.at(0).real, 35, 0.03 * 35);
@@ -1034,15 +1035,15 @@ TEST(Diagnose, APairsPoleShiftFitsItsDamping) {
   const Finding f = only_finding(d);
   EXPECT_EQ(f.cause, CauseKind::kPoleShift);
   EXPECT_EQ(f.output, "z");
-  EXPECT_NEAR(f.parameters.at("from_rad_s"), 30, 1e-12);
-  EXPECT_NEAR(f.parameters.at("to_rad_s") / 36, 1.0, kWnTol);
-  EXPECT_NEAR(f.parameters.at("from_zeta"), 0.3, 1e-12);
-  EXPECT_NEAR(f.parameters.at("to_zeta") / 0.15, 1.0, kZetaTol);
-  EXPECT_EQ(f.parameters.at("zeta"), f.parameters.at("to_zeta"));
-  ASSERT_TRUE(f.intervals.count("to_zeta"));
-  EXPECT_LT(f.intervals.at("to_zeta")[0], 0.15 * (1 + kZetaTol));
-  EXPECT_GT(f.intervals.at("to_zeta")[1], 0.15 * (1 - kZetaTol));
-  EXPECT_LT(f.intervals.at("to_zeta")[1], 0.3);
+  EXPECT_NEAR(f.parameters.at(Param::kFromRadS), 30, 1e-12);
+  EXPECT_NEAR(f.parameters.at(Param::kToRadS) / 36, 1.0, kWnTol);
+  EXPECT_NEAR(f.parameters.at(Param::kFromZeta), 0.3, 1e-12);
+  EXPECT_NEAR(f.parameters.at(Param::kToZeta) / 0.15, 1.0, kZetaTol);
+  EXPECT_EQ(f.parameters.at(Param::kZeta), f.parameters.at(Param::kToZeta));
+  ASSERT_TRUE(f.intervals.count(Param::kToZeta));
+  EXPECT_LT(f.intervals.at(Param::kToZeta)[0], 0.15 * (1 + kZetaTol));
+  EXPECT_GT(f.intervals.at(Param::kToZeta)[1], 0.15 * (1 - kZetaTol));
+  EXPECT_LT(f.intervals.at(Param::kToZeta)[1], 0.3);
   EXPECT_THAT(f.explanation, HasSubstr("damped"));
   for (const auto& p : d.extended.paths) {
     if (p.output == "z") {
@@ -1059,13 +1060,13 @@ TEST(Diagnose, APairsPoleShiftKeepsADampingTheDataDoNotResolve) {
   path(truth, "z").tf.poles[1] = Root::Pair(36, 0.3);
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kPoleShift);
-  EXPECT_NEAR(f.parameters.at("to_rad_s") / 36, 1.0, 0.01);
-  EXPECT_EQ(f.parameters.at("to_zeta"), f.parameters.at("from_zeta"));
-  EXPECT_EQ(f.parameters.at("to_zeta"), 0.3);
+  EXPECT_NEAR(f.parameters.at(Param::kToRadS) / 36, 1.0, 0.01);
+  EXPECT_EQ(f.parameters.at(Param::kToZeta), f.parameters.at(Param::kFromZeta));
+  EXPECT_EQ(f.parameters.at(Param::kToZeta), 0.3);
   EXPECT_THAT(f.explanation, HasSubstr("the simulated damping 0.3 is kept"));
-  ASSERT_TRUE(f.intervals.count("to_zeta"));
-  EXPECT_LT(f.intervals.at("to_zeta")[0], 0.3);
-  EXPECT_GT(f.intervals.at("to_zeta")[1], 0.3);
+  ASSERT_TRUE(f.intervals.count(Param::kToZeta));
+  EXPECT_LT(f.intervals.at(Param::kToZeta)[0], 0.3);
+  EXPECT_GT(f.intervals.at(Param::kToZeta)[1], 0.3);
 }
 
 TEST(Diagnose, MissingResonancePeak) {
@@ -1073,8 +1074,8 @@ TEST(Diagnose, MissingResonancePeak) {
   path(truth, "y").tf.poles.push_back(Root::Pair(12, 0.1));
   const Finding f = only_finding(diagnose(simulation(), measure(truth)));
   EXPECT_EQ(f.cause, CauseKind::kMissingResonance);
-  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 12, 0.03 * 12);
-  EXPECT_NEAR(f.parameters.at("zeta"), 0.1, 0.02);
+  EXPECT_NEAR(f.parameters.at(Param::kWnRadS), 12, 0.03 * 12);
+  EXPECT_NEAR(f.parameters.at(Param::kZeta), 0.1, 0.02);
   EXPECT_EQ(f.text_parameters.count("shape"), 0u);
 }
 
@@ -1085,7 +1086,7 @@ TEST(Diagnose, MissingResonanceNotch) {
   const Finding f = only_finding(d);
   EXPECT_EQ(f.cause, CauseKind::kMissingResonance);
   EXPECT_EQ(f.text_parameters.at("shape"), "notch");
-  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 12, 0.03 * 12);
+  EXPECT_NEAR(f.parameters.at(Param::kWnRadS), 12, 0.03 * 12);
   // The notch extends the path's zeros, not its poles.
   const Model& ext = d.extended;
   for (const auto& p : ext.paths) {
@@ -1103,7 +1104,7 @@ TEST(Diagnose, ActuatorBacklashFromItsDescribingFunction) {
   const Finding& f = d.findings.at(0);
   EXPECT_EQ(f.cause, CauseKind::kHysteresis);
   EXPECT_EQ(f.input, "u");
-  EXPECT_NEAR(f.parameters.at("width"), 0.012, 0.05 * 0.012);
+  EXPECT_NEAR(f.parameters.at(Param::kWidth), 0.012, 0.05 * 0.012);
   EXPECT_THAT(f.explanation, HasSubstr("describing function of a hysteresis"));
   EXPECT_LT(d.error_after, 0.2 * d.error_before);
   // Validated at another amplitude, where the describing function is another: the width found
@@ -1147,8 +1148,8 @@ TEST(Diagnose, ActuatorBacklashFromItsMultisineBla) {
   }
   ASSERT_NE(nl, nullptr);
   ASSERT_NE(shift, nullptr);
-  EXPECT_NEAR(nl->parameters.at("width"), 0.03, 0.05 * 0.03);
-  EXPECT_NEAR(shift->parameters.at("to_rad_s"), 60, 0.02 * 60);
+  EXPECT_NEAR(nl->parameters.at(Param::kWidth), 0.03, 0.05 * 0.03);
+  EXPECT_NEAR(shift->parameters.at(Param::kToRadS), 60, 0.02 * 60);
   EXPECT_THAT(nl->explanation, HasSubstr("best linear approximation of a hysteresis"));
   EXPECT_LT(d.validation_after, 0.5 * d.validation_before);
 }
@@ -1173,7 +1174,7 @@ TEST(Diagnose, ActuatorBacklashFromItsMultisineBlaOnRandomCases) {
     for (const Finding& f : d.findings)
       if (f.cause == CauseKind::kHysteresis) nl = &f;
     ASSERT_NE(nl, nullptr) << width << " " << pole;
-    within += std::abs(nl->parameters.at("width") / width - 1) < 0.2;
+    within += std::abs(nl->parameters.at(Param::kWidth) / width - 1) < 0.2;
     EXPECT_LT(d.validation_after, 0.5 * d.validation_before) << width << " " << pole;
   }
   EXPECT_GE(within, 3);
@@ -1186,8 +1187,8 @@ TEST(Diagnose, DampingErrorOfASimulatedPair) {
   const Finding f = only_finding(d);
   EXPECT_EQ(f.cause, CauseKind::kDampingError);
   EXPECT_EQ(f.output, "z");
-  EXPECT_NEAR(f.parameters.at("wn_rad_s"), 30, 1e-12);
-  EXPECT_NEAR(f.parameters.at("to_zeta"), 0.08, 0.1 * 0.08);
+  EXPECT_NEAR(f.parameters.at(Param::kWnRadS), 30, 1e-12);
+  EXPECT_NEAR(f.parameters.at(Param::kToZeta), 0.08, 0.1 * 0.08);
   for (const auto& p : d.extended.paths) {
     if (p.output == "z") {
       EXPECT_NEAR(p.tf.poles[1].zeta, 0.08, 0.1 * 0.08);
@@ -1250,7 +1251,7 @@ TEST(Diagnose, DelaySearchRangeIsAnOption) {
   const Diagnosis d = diagnose(simulation(), measure(truth), o);
   ASSERT_EQ(d.findings.size(), 1u);
   EXPECT_EQ(d.findings[0].cause, CauseKind::kTimeDelay);
-  EXPECT_NEAR(d.findings[0].parameters.at("delay_s"), 0.08, 0.5e-3);
+  EXPECT_NEAR(d.findings[0].parameters.at(Param::kDelayS), 0.08, 0.5e-3);
 }
 
 // A fit that the independent validation measurement does not confirm is dropped, with the figures:
@@ -1284,7 +1285,7 @@ TEST(Diagnose, WithoutValidationAFindingEarnsItsPlaceOnTheDataFitted) {
   const Diagnosis d = diagnose(simulation(), data);
   ASSERT_EQ(d.findings.size(), 1u);
   EXPECT_EQ(d.findings[0].cause, CauseKind::kGainMismatch);
-  EXPECT_NEAR(d.findings[0].parameters.at("gain_db"), 1.0, 0.05);
+  EXPECT_NEAR(d.findings[0].parameters.at(Param::kGainDb), 1.0, 0.05);
   EXPECT_THAT(d.dropped, IsEmpty());
   EXPECT_EQ(d.validation_after, -1);
   std::vector<MeasuredPair> noisy = measure(simulation());

@@ -192,10 +192,10 @@ TEST(Envelope, ScheduledFindingsFollowTheirLawsBetweenThePoints) {
   std::map<std::string, const Finding*> by;
   for (const Finding& f : fs) by[to_string(f.cause)] = &f;
   ASSERT_EQ(by.size(), 3u);
-  EXPECT_NEAR(by["pole_shift"]->parameters.at("to_rad_s"), 33.8, kArithmetic);
-  EXPECT_NEAR(by["pole_shift"]->parameters.at("from_rad_s"), 3.14, kArithmetic);
-  EXPECT_NEAR(by["hysteresis"]->parameters.at("width"), 9.275, kArithmetic);
-  EXPECT_NEAR(by["time_delay"]->parameters.at("delay_s"), 0.011, kArithmetic);
+  EXPECT_NEAR(by["pole_shift"]->parameters.at(Param::kToRadS), 33.8, kArithmetic);
+  EXPECT_NEAR(by["pole_shift"]->parameters.at(Param::kFromRadS), 3.14, kArithmetic);
+  EXPECT_NEAR(by["hysteresis"]->parameters.at(Param::kWidth), 9.275, kArithmetic);
+  EXPECT_NEAR(by["time_delay"]->parameters.at(Param::kDelayS), 0.011, kArithmetic);
 
   std::sort(pts.begin(), pts.end(),
             [](const EnvelopePoint& a, const EnvelopePoint& b) { return a.x < b.x; });
@@ -210,7 +210,7 @@ TEST(Envelope, ScheduledFindingsFollowTheirLawsBetweenThePoints) {
   ASSERT_EQ(at85.size(), 2u);
   for (const Finding& f : at85) {
     if (f.cause == CauseKind::kPoleShift) {
-      EXPECT_EQ(f.parameters.at("to_rad_s"), 32.4);
+      EXPECT_EQ(f.parameters.at(Param::kToRadS), 32.4);
     }
   }
 }

@@ -78,7 +78,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       case 0: {  // a sensor lag: every path into the output
         if (!take("sensor-lag:" + out) || !take("sensor:" + out)) continue;
         ModelOutput& eo = c.engine.outputs[size_t(c.engine.output_index(out))];
-        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(3, 30);
+        e.cause = CauseKind::kMissingLag, e.param = Param::kCornerRadS, e.value = logu(3, 30);
         e.tol_rel = 0.1;
         if (ni > 1) e.scope = Scope::kOutput, e.input = "";
         if (!eo.sensor) eo.sensor = Tf{};
@@ -88,7 +88,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       case 1: {  // a sensor's delay
         if (!take("sensor-delay:" + out)) continue;
         ModelOutput& eo = c.engine.outputs[size_t(c.engine.output_index(out))];
-        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.cause = CauseKind::kTimeDelay, e.param = Param::kDelayS, e.value = logu(0.005, 0.03);
         e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
         if (ni > 1) e.scope = Scope::kOutput, e.input = "";
         if (!eo.sensor) eo.sensor = Tf{};
@@ -98,7 +98,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       case 2: {  // an input's calibration: every path from it
         if (!take("gain-in:" + in)) continue;
         const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
-        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        e.cause = CauseKind::kGainMismatch, e.param = Param::kGainDb, e.value = db, e.tol_abs = 0.3;
         // Every path from the input; with one input that is every path: the plant's, once the
         // scope stage sees three pairs or more.
         e.scope = ni == 1 && no >= 3 ? Scope::kPlant : Scope::kInput, e.output = "";
@@ -110,7 +110,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       case 3: {  // an output's calibration: every path into it
         if (!take("gain-out:" + out)) continue;
         const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
-        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        e.cause = CauseKind::kGainMismatch, e.param = Param::kGainDb, e.value = db, e.tol_abs = 0.3;
         if (ni > 1) e.scope = Scope::kOutput, e.input = "";
         for (auto& p : c.engine.paths)
           if (p.output == out) p.tf.gain *= std::pow(10.0, db / 20);
@@ -121,7 +121,7 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
         ModelInput& ein = c.engine.inputs[size_t(c.engine.input_index(in))];
         const double from = -ein.actuator->poles[0].real, to = from * logu(1.8, 3);
         e.cause = CauseKind::kPoleShift, e.scope = Scope::kInput, e.output = "";
-        e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        e.param = Param::kToRadS, e.value = to, e.tol_rel = 0.1;
         ein.actuator->poles[0].real = -to;
         break;
       }
@@ -129,14 +129,14 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
         if (!take("backlash:" + in)) continue;
         ModelInput& ein = c.engine.inputs[size_t(c.engine.input_index(in))];
         e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
-        e.param = "width", e.value = ein.full_scale * logu(0.003, 0.008), e.tol_rel = 0.25;
+        e.param = Param::kWidth, e.value = ein.full_scale * logu(0.003, 0.008), e.tol_rel = 0.25;
         ein.nonlinearity.push_back({NonlinearityKind::kHysteresis, e.value});
         break;
       }
       case 6: {  // the rotor's mode, moved in every path
         if (!take("rotor")) continue;
         const double to = (1 / rotor) * logu(1.5, 2.5);
-        e.cause = CauseKind::kPoleShift, e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        e.cause = CauseKind::kPoleShift, e.param = Param::kToRadS, e.value = to, e.tol_rel = 0.1;
         // Every path: the plant's from three pairs on; a 1 x 2 plant's two paths are its input's.
         e.scope = ni * no >= 3 ? Scope::kPlant : Scope::kInput;
         e.output = "";
@@ -146,21 +146,21 @@ RandomCase random_machine_case(uint64_t seed, int index, int n_hidden, int input
       }
       case 7: {  // a path's delay
         if (!take("path-delay:" + in + ":" + out)) continue;
-        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.cause = CauseKind::kTimeDelay, e.param = Param::kDelayS, e.value = logu(0.005, 0.03);
         e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
         c.engine.path(out, in)->tf.delay_s += e.value;
         break;
       }
       case 8: {  // a path's missing lag
         if (!take("path-lag:" + in + ":" + out)) continue;
-        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(2, 30);
+        e.cause = CauseKind::kMissingLag, e.param = Param::kCornerRadS, e.value = logu(2, 30);
         e.tol_rel = 0.1;
         c.engine.path(out, in)->tf.poles.push_back(Root::Real(-e.value));
         break;
       }
       case 9: {  // a path the simulation lacks
         if (!take("path-missing:" + in + ":" + out)) continue;
-        e.cause = CauseKind::kMissingPath, e.param = "gain";
+        e.cause = CauseKind::kMissingPath, e.param = Param::kGain;
         e.value = c.engine.path(out, in)->tf.gain;
         e.tol_rel = 0.1;
         auto& sp = c.simulation.paths;

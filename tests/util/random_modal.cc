@@ -101,22 +101,22 @@ RandomCase random_modal_case(uint64_t seed, int index, int n_hidden) {
       const double db = sign() * logu(1.5, 4);
       calibrations.push_back({out, db});
       c.hidden.push_back(
-          {CauseKind::kGainMismatch, Scope::kOutput, "", out, "gain_db", db, 0.3, 0, {}, {}});
+          {CauseKind::kGainMismatch, Scope::kOutput, "", out, Param::kGainDb, db, 0.3, 0, {}, {}});
       continue;
     }
     const int k = int(g() % size_t(nm));
     if (std::find(moved.begin(), moved.end(), k) != moved.end()) continue;
     moved.push_back(k);
-    HiddenEffect he{CauseKind::kPoleShift, Scope::kPlant, "", "", "", 0, 0, 0, {}, {}};
+    HiddenEffect he{CauseKind::kPoleShift, Scope::kPlant, "", "", std::nullopt, 0, 0, 0, {}, {}};
     if (kind != 1) {  // the frequency (and, kind 2, the damping too)
       e.wn[size_t(k)] *= 1 + sign() * logu(0.01, 0.05);
-      he.param = "to_rad_s", he.value = e.wn[size_t(k)], he.tol_rel = 0.003;
+      he.param = Param::kToRadS, he.value = e.wn[size_t(k)], he.tol_rel = 0.003;
     }
     if (kind >= 1) {  // the damping (kind 1 alone: a damping_error of the plant's)
       e.zeta[size_t(k)] *= u(g) < 0.3 ? 0.5 : logu(1.5, 3);
       if (kind == 1)
-        he.cause = CauseKind::kDampingError, he.param = "to_zeta", he.value = e.zeta[size_t(k)],
-        he.tol_rel = 0.15;
+        he.cause = CauseKind::kDampingError, he.param = Param::kToZeta,
+        he.value = e.zeta[size_t(k)], he.tol_rel = 0.15;
     }
     c.hidden.push_back(he);
   }

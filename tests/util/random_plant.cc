@@ -26,16 +26,18 @@ std::string name_of(std::mt19937_64& g, const char* prefix, int i) {
 std::string HiddenEffect::describe() const {
   std::ostringstream s;
   s << to_string(cause) << " [" << to_string(scope) << (input.empty() ? "" : " " + input)
-    << (output.empty() ? "" : " " + output) << "] " << param << "=" << value;
+    << (output.empty() ? "" : " " + output) << "] " << (param ? to_string(*param) : "") << "="
+    << value;
   for (const auto& [k, v] : text) s << " " << k << "=" << v;
-  for (const auto& [k, v] : exact) s << " " << k << "=" << v;
+  for (const auto& [k, v] : exact) s << " " << to_string(k) << "=" << v;
   return s.str();
 }
 
 bool HiddenEffect::matches(const Finding& f) const {
   if (f.cause != cause || f.scope != scope || f.input != input || f.output != output) return false;
-  const auto it = f.parameters.find(param);
-  if (it == f.parameters.end()) return param.empty();
+  if (!param) return true;
+  const auto it = f.parameters.find(*param);
+  if (it == f.parameters.end()) return false;
   const double tol = std::max(tol_abs, tol_rel * std::abs(value));
   for (const auto& [k, v] : text) {
     const auto t = f.text_parameters.find(k);
@@ -114,24 +116,24 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
     e.scope = Scope::kPath;
     switch (kind) {
       case 0:  // a delay in one path
-        e.cause = CauseKind::kTimeDelay, e.param = "delay_s", e.value = logu(0.005, 0.03);
+        e.cause = CauseKind::kTimeDelay, e.param = Param::kDelayS, e.value = logu(0.005, 0.03);
         e.tol_abs = 0.5e-3, e.tol_rel = 0.1;
         ep->tf.delay_s = e.value;
         break;
       case 1:  // a lag the simulation lacks
-        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(2, 30);
+        e.cause = CauseKind::kMissingLag, e.param = Param::kCornerRadS, e.value = logu(2, 30);
         e.tol_rel = 0.1;
         ep->tf.poles.push_back(Root::Real(-e.value));
         break;
       case 2: {  // a gain error
         const double db = (u(g) < 0.5 ? -1 : 1) * logu(1.5, 4);
-        e.cause = CauseKind::kGainMismatch, e.param = "gain_db", e.value = db, e.tol_abs = 0.3;
+        e.cause = CauseKind::kGainMismatch, e.param = Param::kGainDb, e.value = db, e.tol_abs = 0.3;
         ep->tf.gain *= std::pow(10.0, db / 20);
         break;
       }
       case 3: {  // a path pole in the wrong place
         const double from = -ep->tf.poles[0].real, to = from * logu(1.6, 3);
-        e.cause = CauseKind::kPoleShift, e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        e.cause = CauseKind::kPoleShift, e.param = Param::kToRadS, e.value = to, e.tol_rel = 0.1;
         ep->tf.poles[0].real = -to;
         break;
       }
@@ -139,31 +141,31 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
         ModelInput& ein = c.engine.inputs[c.engine.input_index(in)];
         const double from = -ein.actuator->poles[0].real, to = from * logu(1.8, 3);
         e.cause = CauseKind::kPoleShift, e.scope = Scope::kInput, e.output = "";
-        e.param = "to_rad_s", e.value = to, e.tol_rel = 0.1;
+        e.param = Param::kToRadS, e.value = to, e.tol_rel = 0.1;
         ein.actuator->poles[0].real = -to;
         break;
       }
       case 5: {  // the actuator's backlash (2 % amplitude = 0.2: width 0.03-0.08)
         ModelInput& ein = c.engine.inputs[c.engine.input_index(in)];
         e.cause = CauseKind::kHysteresis, e.scope = Scope::kInput, e.output = "";
-        e.param = "width", e.value = logu(0.03, 0.08), e.tol_rel = 0.25;
+        e.param = Param::kWidth, e.value = logu(0.03, 0.08), e.tol_rel = 0.25;
         ein.nonlinearity.push_back({NonlinearityKind::kHysteresis, e.value});
         break;
       }
       case 6: {  // a lead (a real zero) the simulation lacks
-        e.cause = CauseKind::kMissingLead, e.param = "corner_rad_s", e.value = logu(2, 20);
+        e.cause = CauseKind::kMissingLead, e.param = Param::kCornerRadS, e.value = logu(2, 20);
         e.tol_rel = 0.1;
         ep->tf.zeros.push_back(Root::Real(-e.value));
         break;
       }
       case 7: {  // a resonance the simulation lacks
-        e.cause = CauseKind::kMissingResonance, e.param = "wn_rad_s", e.value = logu(3, 40);
+        e.cause = CauseKind::kMissingResonance, e.param = Param::kWnRadS, e.value = logu(3, 40);
         e.tol_rel = 0.1;
         ep->tf.poles.push_back(Root::Pair(e.value, logu(0.1, 0.3)));
         break;
       }
       case 8: {  // the path's sign
-        e.cause = CauseKind::kSignError, e.param = "sign", e.value = -1, e.tol_abs = 1e-9;
+        e.cause = CauseKind::kSignError, e.param = Param::kSign, e.value = -1, e.tol_abs = 1e-9;
         ep->tf.gain = -ep->tf.gain;
         break;
       }
@@ -177,14 +179,14 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
           c.simulation.path(out, in)->tf.poles.push_back(pair);
           pr = &ep->tf.poles.back();
         }
-        e.cause = CauseKind::kDampingError, e.param = "to_zeta",
+        e.cause = CauseKind::kDampingError, e.param = Param::kToZeta,
         e.value = pr->zeta * logu(0.15, 0.4);
         e.tol_rel = 0.15;
         pr->zeta = e.value;
         break;
       }
       case 11: {  // a path the simulation lacks: the engine responds there, the simulation not
-        e.cause = CauseKind::kMissingPath, e.param = "gain", e.value = ep->tf.gain;
+        e.cause = CauseKind::kMissingPath, e.param = Param::kGain, e.value = ep->tf.gain;
         e.tol_rel = 0.1;
         auto& sp = c.simulation.paths;
         sp.erase(
@@ -195,7 +197,7 @@ RandomCase random_case(uint64_t seed, int index, int n_hidden) {
       }
       case 10: {  // a sensor lag: every path into the output, reported once (scope output)
         ModelOutput& eo = c.engine.outputs[c.engine.output_index(out)];
-        e.cause = CauseKind::kMissingLag, e.param = "corner_rad_s", e.value = logu(3, 30);
+        e.cause = CauseKind::kMissingLag, e.param = Param::kCornerRadS, e.value = logu(3, 30);
         e.tol_rel = 0.1;
         if (ni > 1) e.scope = Scope::kOutput, e.input = "";  // one path alone: that path's
         if (!eo.sensor) eo.sensor = Tf{};
@@ -265,9 +267,10 @@ bool set_hidden_parameter(Model& engine, const HiddenEffect& e, double value) {
 }
 
 std::optional<std::array<double, 2>> two_sigma_interval(const Finding& f,
-                                                        const std::string& param) {
-  const auto v = f.parameters.find(param);
-  const auto iv = f.intervals.find(param);
+                                                        std::optional<Param> param) {
+  if (!param) return std::nullopt;
+  const auto v = f.parameters.find(*param);
+  const auto iv = f.intervals.find(*param);
   if (v == f.parameters.end() || iv == f.intervals.end() || !std::isfinite(iv->second[0]) ||
       !std::isfinite(iv->second[1]))
     return std::nullopt;
@@ -288,7 +291,7 @@ Score score(const RandomCase& c, const std::vector<Finding>& findings) {
       std::ostringstream d;
       d << to_string(f.cause) << " [" << to_string(f.scope) << " " << f.input << " " << f.output
         << "]";
-      for (const auto& [k, v] : f.parameters) d << " " << k << "=" << v;
+      for (const auto& [k, v] : f.parameters) d << " " << to_string(k) << "=" << v;
       s.false_findings.push_back(d.str());
     }
   }
@@ -309,7 +312,7 @@ Score score(const RandomCase& c, const std::vector<Finding>& findings) {
       ++s.in_two_sigma;
     } else {
       std::ostringstream d;
-      d << h.describe() << ": found " << match->parameters.at(h.param) << ", 2-sigma " << lo
+      d << h.describe() << ": found " << match->parameters.at(*h.param) << ", 2-sigma " << lo
         << " .. " << hi;
       s.outside_two_sigma.push_back(d.str());
     }

@@ -23,13 +23,13 @@ struct HiddenEffect {
   CauseKind cause;
   Scope scope;
   std::string input, output;
-  std::string param;
+  std::optional<Param> param;  // nullopt: a cause without one (a sign error, a whole path)
   double value = 0;
   double tol_abs = 0, tol_rel = 0;
   /// Text parameters the finding must carry with these values (a state model's entry: its
   /// `matrix` and `state`), and parameters it must carry exactly (the entry's `row` and `col`).
   std::map<std::string, std::string> text;
-  std::map<std::string, double> exact;
+  std::map<Param, double> exact;
   std::string describe() const;
   /// Whether a finding names this effect at its place within tolerance.
   bool matches(const Finding& f) const;
@@ -62,6 +62,7 @@ struct Score {
 Score score(const RandomCase& c, const std::vector<Finding>& findings);
 /// f's 2-sigma interval on `param`, from its reported 1-sigma one [lo, hi] around its value v:
 /// [v - 2 (v - lo), v + 2 (hi - v)]; nullopt when f has no value or no two-sided interval there.
-std::optional<std::array<double, 2>> two_sigma_interval(const Finding& f, const std::string& param);
+std::optional<std::array<double, 2>> two_sigma_interval(const Finding& f,
+                                                        std::optional<Param> param);
 
 }  // namespace fralab::testing

@@ -30,8 +30,8 @@ bool stable(const Eigen::MatrixXd& A) {
 }
 
 // A hidden effect at input (at_input) or output `name`, its parameter to be found within 2 %.
-HiddenEffect channel_effect(CauseKind cause, bool at_input, const std::string& name,
-                            const char* param, double value) {
+HiddenEffect channel_effect(CauseKind cause, bool at_input, const std::string& name, Param param,
+                            double value) {
   HiddenEffect e;
   e.cause = cause;
   e.scope = at_input ? Scope::kInput : Scope::kOutput;
@@ -167,13 +167,13 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     HiddenEffect e;
     e.cause = CauseKind::kStateParameter;
     e.scope = Scope::kPlant;
-    e.param = "to";
+    e.param = Param::kTo;
     e.value = M(i, j);
     e.tol_rel = 0.02;
     e.text["matrix"] = std::string(1, matrix);
     e.text["state"] = ss.states[size_t(matrix == 'C' ? j : i)];
-    e.exact["row"] = i + 1;
-    e.exact["col"] = j + 1;
+    e.exact[Param::kRow] = i + 1;
+    e.exact[Param::kCol] = j + 1;
     c.hidden.push_back(e);
     ++h;
   }
@@ -192,7 +192,7 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
       HiddenEffect e;
       e.cause = CauseKind::kStateParameter;
       e.scope = Scope::kPlant;
-      e.param = "to";
+      e.param = Param::kTo;
       e.value = to;
       e.tol_rel = 0.02;
       e.text["parameter"] = ss.parameters[k].name;
@@ -213,7 +213,7 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
       truth = with_lag(truth, before, k, corner);
       c.hidden.push_back(channel_effect(CauseKind::kMissingLag, before,
                                         before ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)],
-                                        "corner_rad_s", corner));
+                                        Param::kCornerRadS, corner));
     }
   }
   // A delay the simulation lacks, in about one case in five: at an input or an output, its phase
@@ -228,7 +228,7 @@ RandomCase random_state_case(uint64_t seed, int index, int n_hidden) {
     d[size_t(k)] = delay;
     c.hidden.push_back(channel_effect(CauseKind::kTimeDelay, at_input,
                                       at_input ? ss.inputs[size_t(k)] : ss.outputs[size_t(k)],
-                                      "delay_s", delay));
+                                      Param::kDelayS, delay));
   }
   try {
     c.engine = parse_model(document(truth, "engine " + std::to_string(index)), c.name + "/engine");
@@ -275,7 +275,7 @@ bool state_effect_resolved(const RandomCase& c, const HiddenEffect& e, double re
         undone = with_parameter(truth, k, sim.parameters[k].value);
   } else {
     const char matrix = e.text.at("matrix")[0];
-    const int i = int(e.exact.at("row")) - 1, j = int(e.exact.at("col")) - 1;
+    const int i = int(e.exact.at(Param::kRow)) - 1, j = int(e.exact.at(Param::kCol)) - 1;
     Eigen::MatrixXd& m = matrix == 'A' ? undone.A : matrix == 'B' ? undone.B : undone.C;
     m(i, j) = (matrix == 'A' ? sim.A : matrix == 'B' ? sim.B : sim.C)(i, j);
   }

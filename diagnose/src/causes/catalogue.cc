@@ -75,9 +75,8 @@ void LinearCause::apply(Model& m, const Finding& f) const {
   }
 }
 
-bool params_within(const Cause& a, const Cause& b, const std::vector<std::string>& keys,
-                   double tol_rel) {
-  for (const std::string& k : keys) {
+bool params_within(const Cause& a, const Cause& b, const std::vector<Param>& keys, double tol_rel) {
+  for (const Param k : keys) {
     const auto ia = a.params.find(k), ib = b.params.find(k);
     if (ia == a.params.end()) continue;
     if (ib == b.params.end()) return false;

@@ -22,12 +22,11 @@
 
 namespace fralab::diag {
 
-/// A finding's primary parameter (docs/formats.md §6 key; "" when the cause has no continuous
-/// parameter, as a sign error or a whole missing path) and its value in the simulation: nullopt
-/// when the simulation lacks what the finding adds, so that "the simulation's value" is the
-/// finding's absence.
+/// A finding's primary parameter (nullopt when the cause has no continuous parameter, as a sign
+/// error or a whole missing path) and its value in the simulation: nullopt when the simulation
+/// lacks what the finding adds, so that "the simulation's value" is the finding's absence.
 struct PrimaryParameter {
-  std::string key;
+  std::optional<Param> key;
   std::optional<double> simulated;
 };
 
@@ -42,7 +41,7 @@ struct IntervalDomain {
 /// 1-sigma interval is reported; `fitted`: the data resolve it, so the joint refinement and the
 /// decision of a finding's place count it as free. A scale: its interval stays positive.
 struct SecondaryParameter {
-  std::string key;
+  Param key;
   bool fitted = false;
 };
 
@@ -96,7 +95,6 @@ const std::vector<const CauseUnit*>& cause_units();
 const CauseUnit* cause_unit(CauseKind kind);
 
 /// |v - u| <= tol_rel |v| for every key of `a` in `keys` (both must carry it).
-bool params_within(const Cause& a, const Cause& b, const std::vector<std::string>& keys,
-                   double tol_rel);
+bool params_within(const Cause& a, const Cause& b, const std::vector<Param>& keys, double tol_rel);
 
 }  // namespace fralab::diag

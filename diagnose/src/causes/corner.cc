@@ -13,7 +13,7 @@ Cause fit_corner(CauseKind kind, bool lead, const PairFit& p, const DiagnoseOpti
   };
   const double la = minimise_1d([&](double x) { return chi2(p, F(x)); },
                                 std::log(p.w.front() / widen), std::log(p.w.back() * widen), kGrid);
-  Cause c{kind, {{"corner_rad_s", std::exp(la)}}, F(la), 0, 1, ""};
+  Cause c{kind, {{Param::kCornerRadS, std::exp(la)}}, F(la), 0, 1, ""};
   c.chi2 = chi2(p, c.F);
   return c;
 }

@@ -21,10 +21,10 @@ class CornerCause : public LinearCause {
     out->push_back(fit_corner(kind(), lead(), p, opt));
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const final {
-    return params_within(a, b, {"corner_rad_s"}, opt.consistent_rel);
+    return params_within(a, b, {Param::kCornerRadS}, opt.consistent_rel);
   }
   PrimaryParameter primary_parameter(const Finding&) const final {
-    return {"corner_rad_s", std::nullopt};
+    return {Param::kCornerRadS, std::nullopt};
   }
   IntervalDomain interval_domain() const final { return {true, 1e-6}; }  // a corner stays > 0
 

@@ -39,7 +39,7 @@ class DampingError final : public LinearCause {
   const char* name() const override { return "damping_error"; }
   // to_zeta, in the simulation the pole pair's own damping from_zeta.
   PrimaryParameter primary_parameter(const Finding& f) const override {
-    return {"to_zeta", f.parameters.at("from_zeta")};
+    return {Param::kToZeta, f.parameters.at(Param::kFromZeta)};
   }
   void fit(const Model& m, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
@@ -52,18 +52,21 @@ class DampingError final : public LinearCause {
       };
       const double lz = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(0.002),
                                     std::log(2.0), kGrid);
-      Cause c{kind(), {{"wn_rad_s", r.wn}, {"from_zeta", r.zeta}, {"to_zeta", std::exp(lz)}},
-              F(lz),  0,
-              1,      ""};
+      Cause c{kind(),
+              {{Param::kWnRadS, r.wn}, {Param::kFromZeta, r.zeta}, {Param::kToZeta, std::exp(lz)}},
+              F(lz),
+              0,
+              1,
+              ""};
       c.chi2 = chi2(p, c.F);
       out->push_back(std::move(c));
     }
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    return params_within(a, b, {"wn_rad_s", "to_zeta"}, opt.consistent_rel);
+    return params_within(a, b, {Param::kWnRadS, Param::kToZeta}, opt.consistent_rel);
   }
   bool acts_on(const Tf& t, const Finding& f) const override {
-    const double wn = f.parameters.at("wn_rad_s");
+    const double wn = f.parameters.at(Param::kWnRadS);
     for (const Root& r : t.poles)
       if (r.pair && std::abs(r.wn - wn) <= kSamePair * wn) return true;
     return false;
@@ -71,7 +74,7 @@ class DampingError final : public LinearCause {
   // The held pair takes to_zeta; a transfer function without it takes the factor D_sim / D as a
   // zero pair and a pole pair.
   void extend(Tf& t, const Finding& f) const override {
-    const double wn = f.parameters.at("wn_rad_s"), to_zeta = f.parameters.at("to_zeta");
+    const double wn = f.parameters.at(Param::kWnRadS), to_zeta = f.parameters.at(Param::kToZeta);
     const bool shape_kept =
         f.text_parameters.count("form") && f.text_parameters.at("form") == "residue";
     for (Root& r : t.poles)
@@ -85,7 +88,7 @@ class DampingError final : public LinearCause {
         r.zeta = to_zeta;
         return;
       }
-    const auto from_zeta = f.parameters.find("from_zeta");
+    const auto from_zeta = f.parameters.find(Param::kFromZeta);
     if (from_zeta == f.parameters.end())
       throw InputError("damping_error at " + fmt(wn) +
                        " rad/s: no pole pair there, and no from_zeta to add its factor with");
@@ -93,9 +96,9 @@ class DampingError final : public LinearCause {
     t.poles.push_back(Root::Pair(wn, to_zeta));
   }
   std::string explain(const Finding& f) const override {
-    return "the simulated pair at " + fmt(f.parameters.at("wn_rad_s")) + " rad/s is damped " +
-           fmt(f.parameters.at("to_zeta")) + " in the data, not " +
-           fmt(f.parameters.at("from_zeta"));
+    return "the simulated pair at " + fmt(f.parameters.at(Param::kWnRadS)) + " rad/s is damped " +
+           fmt(f.parameters.at(Param::kToZeta)) + " in the data, not " +
+           fmt(f.parameters.at(Param::kFromZeta));
   }
 };
 

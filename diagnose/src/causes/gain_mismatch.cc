@@ -12,7 +12,9 @@ class GainMismatch final : public LinearCause {
   CauseKind kind() const override { return CauseKind::kGainMismatch; }
   const char* name() const override { return "gain_mismatch"; }
   // gain_db, 0 dB in the simulation; its interval's bracket starts at least 1e-3 dB wide.
-  PrimaryParameter primary_parameter(const Finding&) const override { return {"gain_db", 0.0}; }
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {Param::kGainDb, 0.0};
+  }
   IntervalDomain interval_domain() const override { return {false, 1e-3}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
@@ -25,19 +27,21 @@ class GainMismatch final : public LinearCause {
     }
     const double k = num / den;
     if (!(k > 0)) return;
-    Cause c{kind(), {{"gain_db", 20 * std::log10(k)}}, std::vector<C>(p.w.size(), C(k, 0)), 0, 1,
-            ""};
+    Cause c{
+        kind(), {{Param::kGainDb, 20 * std::log10(k)}}, std::vector<C>(p.w.size(), C(k, 0)), 0, 1,
+        ""};
     c.chi2 = chi2(p, c.F);
     out->push_back(std::move(c));
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    return std::abs(a.params.at("gain_db") - b.params.at("gain_db")) <= opt.consistent_gain_db;
+    return std::abs(a.params.at(Param::kGainDb) - b.params.at(Param::kGainDb)) <=
+           opt.consistent_gain_db;
   }
   void extend(Tf& t, const Finding& f) const override {
-    t.gain *= std::pow(10.0, f.parameters.at("gain_db") / 20);
+    t.gain *= std::pow(10.0, f.parameters.at(Param::kGainDb) / 20);
   }
   std::string explain(const Finding& f) const override {
-    return "flat gain offset of " + fmt(f.parameters.at("gain_db")) + " dB, no phase";
+    return "flat gain offset of " + fmt(f.parameters.at(Param::kGainDb)) + " dB, no phase";
   }
 };
 

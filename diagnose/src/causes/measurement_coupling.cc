@@ -67,7 +67,7 @@ std::optional<Finding> fit_measurement_coupling(const Model& sim, const ModelInp
   f.scope = Scope::kInput;
   f.input = in.name;
   f.text_parameters = {{"channel", in.name}, {"coupled_to", best_o}};
-  f.parameters = {{"gain", best_g}};
+  f.parameters = {{Param::kGain, best_g}};
   f.explanation = "the " + in.name + " channel records " + in.name + " + " + fmt(best_g) + " * " +
                   best_o + ": its actuator response carries the " + best_o +
                   " response (1 + g H) and every " + in.name + " path divides by it; chi2 " +
@@ -92,10 +92,10 @@ class MeasurementCoupling final : public CauseUnit {
  public:
   CauseKind kind() const override { return CauseKind::kMeasurementCoupling; }
   const char* name() const override { return "measurement_coupling"; }
-  PrimaryParameter primary_parameter(const Finding&) const override { return {"gain", 0.0}; }
+  PrimaryParameter primary_parameter(const Finding&) const override { return {Param::kGain, 0.0}; }
   void apply(Model& m, const Finding& f) const override {
     m.inputs[m.input_index(f.input)].measurement_coupling.push_back(
-        {f.text_parameters.at("coupled_to"), f.parameters.at("gain")});
+        {f.text_parameters.at("coupled_to"), f.parameters.at(Param::kGain)});
   }
   std::string explain(const Finding& f) const override { return f.explanation; }
 };

@@ -10,10 +10,10 @@ class MissingLead final : public CornerCause {
   CauseKind kind() const override { return CauseKind::kMissingLead; }
   const char* name() const override { return "missing_lead"; }
   void extend(Tf& t, const Finding& f) const override {
-    t.zeros.push_back(Root::Real(-f.parameters.at("corner_rad_s")));
+    t.zeros.push_back(Root::Real(-f.parameters.at(Param::kCornerRadS)));
   }
   std::string explain(const Finding& f) const override {
-    return "a +20 dB/decade corner at " + fmt(f.parameters.at("corner_rad_s")) +
+    return "a +20 dB/decade corner at " + fmt(f.parameters.at(Param::kCornerRadS)) +
            " rad/s with its +90 deg phase";
   }
 

@@ -65,10 +65,10 @@ std::optional<Finding> fit_missing_path(const Model& sim, const PairFit& p,
   f.scope = Scope::kPath;
   f.input = p.input;
   f.output = p.output;
-  f.parameters = {{"gain", r.tf.gain},
-                  {"delay_s", r.tf.delay_s},
-                  {"poles", double(r.tf.poles.size())},
-                  {"zeros", double(r.tf.zeros.size())}};
+  f.parameters = {{Param::kGain, r.tf.gain},
+                  {Param::kDelayS, r.tf.delay_s},
+                  {Param::kPoles, double(r.tf.poles.size())},
+                  {Param::kZeros, double(r.tf.zeros.size())}};
   f.tf = r.tf;
   f.pairs = {p.pair};
   f.explanation = "a response beyond the noise where the simulation has no path (chi2 " + fmt(c0) +
@@ -86,11 +86,13 @@ class MissingPath final : public CauseUnit {
  public:
   CauseKind kind() const override { return CauseKind::kMissingPath; }
   const char* name() const override { return "missing_path"; }
-  PrimaryParameter primary_parameter(const Finding&) const override { return {"", std::nullopt}; }
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {std::nullopt, std::nullopt};
+  }
   void apply(Model& m, const Finding& f) const override {
     if (m.path(f.output, f.input) || !f.tf) return;
     Tf t = *f.tf;
-    t.gain = f.parameters.at("gain");
+    t.gain = f.parameters.at(Param::kGain);
     m.paths.push_back({f.output, f.input, t, Json::object()});
   }
   std::string explain(const Finding& f) const override { return f.explanation; }

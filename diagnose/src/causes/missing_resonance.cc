@@ -19,7 +19,7 @@ class MissingResonance final : public LinearCause {
   // wn_rad_s: the simulation lacks the resonance (its value there is its absence); a frequency
   // stays positive.
   PrimaryParameter primary_parameter(const Finding&) const override {
-    return {"wn_rad_s", std::nullopt};
+    return {Param::kWnRadS, std::nullopt};
   }
   IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
@@ -47,24 +47,24 @@ class MissingResonance final : public LinearCause {
         bz = detail::brent_minimum([&](double z) { return chi2(p, F(blw, z)); },
                                    std::max(0.002, bz * 0.5), std::min(1.0, bz * 2), 24);
       }
-      Cause c{kind(),     {{"wn_rad_s", std::exp(blw)}, {"zeta", bz}},
+      Cause c{kind(),     {{Param::kWnRadS, std::exp(blw)}, {Param::kZeta, bz}},
               F(blw, bz), 0,
               2,          notch ? "notch" : "peak"};
-      if (notch) c.params["notch"] = 1;
+      if (notch) c.params[Param::kNotch] = 1;
       c.chi2 = chi2(p, c.F);
       out->push_back(std::move(c));
     }
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    return a.detail == b.detail && params_within(a, b, {"wn_rad_s"}, opt.consistent_rel);
+    return a.detail == b.detail && params_within(a, b, {Param::kWnRadS}, opt.consistent_rel);
   }
   void extend(Tf& t, const Finding& f) const override {
-    const Root r = Root::Pair(f.parameters.at("wn_rad_s"), f.parameters.at("zeta"));
+    const Root r = Root::Pair(f.parameters.at(Param::kWnRadS), f.parameters.at(Param::kZeta));
     (f.text_parameters.count("shape") ? t.zeros : t.poles).push_back(r);
   }
   std::string explain(const Finding& f) const override {
-    return "a resonance at " + fmt(f.parameters.at("wn_rad_s")) + " rad/s, damping " +
-           fmt(f.parameters.at("zeta"));
+    return "a resonance at " + fmt(f.parameters.at(Param::kWnRadS)) + " rad/s, damping " +
+           fmt(f.parameters.at(Param::kZeta));
   }
 };
 

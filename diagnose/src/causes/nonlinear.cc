@@ -89,7 +89,7 @@ Cause fit_nonlinearity(const PairFit& p, const std::vector<size_t>& low, const s
     const double a = p.amp[low[0]];
     double width = minimise_1d([&](double x) { return low_chi2(F(x)); }, 1e-4 * a, 1.9 * a, 200);
     double c = low_chi2(F(width));
-    if (c < best.chi2) best = Cause{kind, {{"width", width}}, F(width), c, 1, ""};
+    if (c < best.chi2) best = Cause{kind, {{Param::kWidth, width}}, F(width), c, 1, ""};
   }
   *c0 = low_chi2(std::vector<C>(N, 1.0));
   return best;
@@ -103,18 +103,19 @@ std::string explain_nonlinearity(const PairFit& p, const Cause& nl, const std::v
   if (fits_by_multisine(p)) {
     ex << "distortion on the non-excited lines (median " << fmt(100 * mean_h3, 2)
        << " % of the line); the best linear approximation of a " << to_string(nl.cause)
-       << " of width " << fmt(nl.params.at("width"), 3) << " under the multisine (" << p.w.size()
-       << " lines at " << fmt(p.ms->amplitude[0], 3) << " each) passes the lowest line with gain "
-       << fmt(std::abs(n0), 3) << " and lag " << fmt(-std::arg(n0) * 180 / kPi, 3)
-       << " deg, the highest with gain " << fmt(std::abs(nl.F.back()), 3) << " and lag "
-       << fmt(-std::arg(nl.F.back()) * 180 / kPi, 3) << " deg";
+       << " of width " << fmt(nl.params.at(Param::kWidth), 3) << " under the multisine ("
+       << p.w.size() << " lines at " << fmt(p.ms->amplitude[0], 3)
+       << " each) passes the lowest line with gain " << fmt(std::abs(n0), 3) << " and lag "
+       << fmt(-std::arg(n0) * 180 / kPi, 3) << " deg, the highest with gain "
+       << fmt(std::abs(nl.F.back()), 3) << " and lag " << fmt(-std::arg(nl.F.back()) * 180 / kPi, 3)
+       << " deg";
     return ex.str();
   }
   ex << "odd harmonics in the position (3rd at " << fmt(100 * mean_h3, 2)
      << " % of the fundamental); below " << fmt(low_fraction * corner_rad_s / (2 * kPi), 2)
      << " Hz the actuator lags " << fmt(-std::arg(n0) * 180 / kPi, 3) << " deg with gain "
      << fmt(std::abs(n0), 3) << " at +-" << fmt(p.amp[low[0]], 3) << " (describing function of a "
-     << to_string(nl.cause) << " of width " << fmt(nl.params.at("width"), 3) << ")";
+     << to_string(nl.cause) << " of width " << fmt(nl.params.at(Param::kWidth), 3) << ")";
   return ex.str();
 }
 
@@ -129,14 +130,14 @@ class Nonlinearity final : public CauseUnit {
   CauseKind kind() const override { return kind_; }
   const char* name() const override { return name_; }
   PrimaryParameter primary_parameter(const Finding&) const override {
-    return {"width", std::nullopt};
+    return {Param::kWidth, std::nullopt};
   }
   IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   void apply(Model& m, const Finding& f) const override {
     m.inputs[m.input_index(f.input)].nonlinearity.push_back({kind_ == CauseKind::kHysteresis
                                                                  ? NonlinearityKind::kHysteresis
                                                                  : NonlinearityKind::kDeadband,
-                                                             f.parameters.at("width")});
+                                                             f.parameters.at(Param::kWidth)});
   }
   std::string explain(const Finding& f) const override { return f.explanation; }
 

@@ -40,7 +40,7 @@ constexpr double kSameRoot = 1e-3;
 // A pair's damping was fitted (the data resolve it) when it differs from the simulation's; beyond
 // rounding, as the mean of several paths' equal values may carry.
 bool damping_fitted(const Finding& f) {
-  const auto from = f.parameters.find("from_zeta"), to = f.parameters.find("to_zeta");
+  const auto from = f.parameters.find(Param::kFromZeta), to = f.parameters.find(Param::kToZeta);
   return from != f.parameters.end() && to != f.parameters.end() &&
          std::abs(from->second - to->second) > 1e-9 * from->second;
 }
@@ -51,17 +51,17 @@ class PoleShift final : public LinearCause {
   const char* name() const override { return "pole_shift"; }
   // to_rad_s, in the simulation the pole's own frequency from_rad_s; a frequency stays positive.
   PrimaryParameter primary_parameter(const Finding& f) const override {
-    return {"to_rad_s", f.parameters.at("from_rad_s")};
+    return {Param::kToRadS, f.parameters.at(Param::kFromRadS)};
   }
   IntervalDomain interval_domain() const override { return {true, 1e-6}; }
   // A pair's damping: its interval is reported either way; it is free only when fitted.
   std::vector<SecondaryParameter> secondary_parameters(const Finding& f) const override {
-    if (!f.parameters.count("to_zeta")) return {};
-    return {{"to_zeta", damping_fitted(f)}};
+    if (!f.parameters.count(Param::kToZeta)) return {};
+    return {{Param::kToZeta, damping_fitted(f)}};
   }
   void settle(Finding& f) const override {
-    if (const auto z = f.parameters.find("to_zeta"); z != f.parameters.end())
-      f.parameters["zeta"] = z->second;
+    if (const auto z = f.parameters.find(Param::kToZeta); z != f.parameters.end())
+      f.parameters[Param::kZeta] = z->second;
   }
   void fit(const Model& m, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
@@ -82,11 +82,12 @@ class PoleShift final : public LinearCause {
       const double lto = minimise_1d([&](double x) { return chi2(p, F(x, r.zeta)); },
                                      std::log(from / opt.pole_shift_range),
                                      std::log(from * opt.pole_shift_range), kGrid);
-      Cause c{kind(), {{"from_rad_s", from}, {"to_rad_s", std::exp(lto)}}, F(lto, r.zeta), 0, 1,
-              ""};
+      Cause c{
+          kind(), {{Param::kFromRadS, from}, {Param::kToRadS, std::exp(lto)}}, F(lto, r.zeta), 0, 1,
+          ""};
       c.chi2 = chi2(p, c.F);
       if (r.pair) {
-        c.params["zeta"] = c.params["from_zeta"] = c.params["to_zeta"] = r.zeta;
+        c.params[Param::kZeta] = c.params[Param::kFromZeta] = c.params[Param::kToZeta] = r.zeta;
         // The pair as a whole: its damping over the whole range at the frequency found, then the
         // two alternately, each near its last value, until both settle.
         double l2 = lto, lz = std::log(r.zeta);
@@ -104,8 +105,8 @@ class PoleShift final : public LinearCause {
         const std::vector<C> F2 = F(l2, std::exp(lz));
         const double c2 = chi2(p, F2);
         if (c.chi2 - c2 > std::log(2.0 * double(p.w.size()))) {
-          c.params["to_rad_s"] = std::exp(l2);
-          c.params["zeta"] = c.params["to_zeta"] = std::exp(lz);
+          c.params[Param::kToRadS] = std::exp(l2);
+          c.params[Param::kZeta] = c.params[Param::kToZeta] = std::exp(lz);
           c.F = F2;
           c.chi2 = c2;
           c.k = 2;
@@ -115,10 +116,10 @@ class PoleShift final : public LinearCause {
     }
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    return params_within(a, b, {"from_rad_s", "to_rad_s"}, opt.consistent_rel);
+    return params_within(a, b, {Param::kFromRadS, Param::kToRadS}, opt.consistent_rel);
   }
   bool acts_on(const Tf& t, const Finding& f) const override {
-    const double from = f.parameters.at("from_rad_s");
+    const double from = f.parameters.at(Param::kFromRadS);
     for (const Root& r : t.poles)
       if (std::abs((r.pair ? r.wn : -r.real) - from) <= kSameRoot * from) return true;
     return false;
@@ -126,8 +127,9 @@ class PoleShift final : public LinearCause {
   // The held root moves (a pair takes to_zeta when fitted); a transfer function without it takes
   // the factor itself, D_from / D_to, as a zero at the old root and a pole at the new.
   void extend(Tf& t, const Finding& f) const override {
-    const double from = f.parameters.at("from_rad_s"), to = f.parameters.at("to_rad_s");
-    const auto from_zeta = f.parameters.find("from_zeta"), to_zeta = f.parameters.find("to_zeta");
+    const double from = f.parameters.at(Param::kFromRadS), to = f.parameters.at(Param::kToRadS);
+    const auto from_zeta = f.parameters.find(Param::kFromZeta),
+               to_zeta = f.parameters.find(Param::kToZeta);
     const bool pair = from_zeta != f.parameters.end();  // a pair when the finding says so
     // A structure's mode moved with its residue kept (modes stage): the path's zeros move too.
     if (pair && to_zeta != f.parameters.end() && f.text_parameters.count("form") &&
@@ -160,12 +162,14 @@ class PoleShift final : public LinearCause {
     }
   }
   std::string explain(const Finding& f) const override {
-    std::string ex = "the simulated pole at " + fmt(f.parameters.at("from_rad_s")) +
-                     " rad/s sits at " + fmt(f.parameters.at("to_rad_s")) + " rad/s in the data";
-    if (!f.parameters.count("to_zeta")) return ex;
-    const double from_zeta = f.parameters.at("from_zeta"), to_zeta = f.parameters.at("to_zeta");
+    std::string ex = "the simulated pole at " + fmt(f.parameters.at(Param::kFromRadS)) +
+                     " rad/s sits at " + fmt(f.parameters.at(Param::kToRadS)) +
+                     " rad/s in the data";
+    if (!f.parameters.count(Param::kToZeta)) return ex;
+    const double from_zeta = f.parameters.at(Param::kFromZeta),
+                 to_zeta = f.parameters.at(Param::kToZeta);
     std::string band;
-    if (const auto it = f.intervals.find("to_zeta"); it != f.intervals.end())
+    if (const auto it = f.intervals.find(Param::kToZeta); it != f.intervals.end())
       band = " (1-sigma " + (std::isfinite(it->second[0]) ? fmt(it->second[0]) : "-") + " to " +
              (std::isfinite(it->second[1]) ? fmt(it->second[1]) : "-") + ")";
     if (damping_fitted(f))

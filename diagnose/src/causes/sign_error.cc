@@ -11,10 +11,12 @@ class SignError final : public LinearCause {
   CauseKind kind() const override { return CauseKind::kSignError; }
   const char* name() const override { return "sign_error"; }
   // No continuous parameter: no interval, and resolved against its absence.
-  PrimaryParameter primary_parameter(const Finding&) const override { return {"", std::nullopt}; }
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {std::nullopt, std::nullopt};
+  }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions&,
            std::vector<Cause>* out) const override {
-    Cause c{kind(), {{"sign", -1.0}}, std::vector<C>(p.w.size(), C(-1, 0)), 0, 1, ""};
+    Cause c{kind(), {{Param::kSign, -1.0}}, std::vector<C>(p.w.size(), C(-1, 0)), 0, 1, ""};
     c.chi2 = chi2(p, c.F);
     out->push_back(std::move(c));
   }

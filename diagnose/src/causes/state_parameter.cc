@@ -10,7 +10,8 @@
 namespace fralab::diag {
 namespace {
 
-constexpr double kSameRoot = 1e-9;  // a path's root is the state model's: within this (relative)
+constexpr double kSameStateRoot =
+    1e-9;  // a path's root is the state model's: within this (relative)
 
 StateEntry entry_of(const StateSpace& ss, const Finding& f) {
   if (const auto it = f.text_parameters.find("parameter"); it != f.text_parameters.end()) {
@@ -18,8 +19,8 @@ StateEntry entry_of(const StateSpace& ss, const Finding& f) {
       if (ss.parameters[k].name == it->second) return {'P', int(k), 0};
     throw InputError("state_parameter: the simulation has no parameter \"" + it->second + "\"");
   }
-  return {f.text_parameters.at("matrix")[0], int(f.parameters.at("row")) - 1,
-          int(f.parameters.at("col")) - 1};
+  return {f.text_parameters.at("matrix")[0], int(f.parameters.at(Param::kRow)) - 1,
+          int(f.parameters.at(Param::kCol)) - 1};
 }
 
 // The entries of A, B and C that e sets ((matrix, row, col)).
@@ -37,7 +38,7 @@ std::vector<std::tuple<char, int, int>> set_by(const StateSpace& ss, const State
 void replace(Tf& t, const Tf& from, const Tf& to) {
   auto take = [&](std::vector<Root>& side, std::vector<Root>& other, const Root& r) {
     for (auto it = side.begin(); it != side.end(); ++it)
-      if (it->same_as(r, kSameRoot)) {
+      if (it->same_as(r, kSameStateRoot)) {
         side.erase(it);
         return;
       }
@@ -55,19 +56,19 @@ class StateParameter final : public CauseUnit {
   CauseKind kind() const override { return CauseKind::kStateParameter; }
   const char* name() const override { return "state_parameter"; }
   PrimaryParameter primary_parameter(const Finding& f) const override {
-    return {"to", f.parameters.at("from")};
+    return {Param::kTo, f.parameters.at(Param::kFrom)};
   }
   IntervalDomain interval_domain() const override { return {false, 1e-9}; }
   void settle(Finding& f) const override {
-    if (f.parameters.count("time_constant_from_s"))
-      f.parameters["time_constant_to_s"] = -1 / f.parameters.at("to");
+    if (f.parameters.count(Param::kTimeConstantFromS))
+      f.parameters[Param::kTimeConstantToS] = -1 / f.parameters.at(Param::kTo);
   }
   // Every path of the model: its state model's path before and after the entry's move replaced.
   void apply(Model& m, const Finding& f) const override {
     if (!m.state_space) throw InputError("state_parameter: the simulation is not a state model");
     const StateSpace& ss = *m.state_space;
     const StateEntry e = entry_of(ss, f);
-    const StateSpace moved = with_entry(ss, e, f.parameters.at("to"));
+    const StateSpace moved = with_entry(ss, e, f.parameters.at(Param::kTo));
     const auto before = state_paths(ss), after = state_paths(moved);
     if (!before || !after) return;  // not a stable state model at that value: left unchanged
     for (size_t i = 0; i < ss.outputs.size(); ++i)
@@ -87,19 +88,20 @@ class StateParameter final : public CauseUnit {
   }
   std::string explain(const Finding& f) const override {
     const auto& tp = f.text_parameters;
-    const std::string move = fmt(f.parameters.at("from")) + " -> " + fmt(f.parameters.at("to"));
+    const std::string move =
+        fmt(f.parameters.at(Param::kFrom)) + " -> " + fmt(f.parameters.at(Param::kTo));
     if (tp.count("parameter"))
       return "the parameter " + tp.at("parameter") + " " + move +
              (tp.count("units") ? " " + tp.at("units") : std::string()) + " (in the states " +
              tp.at("state") +
              "): one parameter of the state model, fitted over every path it reaches";
-    const std::string entry = tp.at("matrix") + "(" + fmt(f.parameters.at("row")) + ", " +
-                              fmt(f.parameters.at("col")) + ")";
+    const std::string entry = tp.at("matrix") + "(" + fmt(f.parameters.at(Param::kRow)) + ", " +
+                              fmt(f.parameters.at(Param::kCol)) + ")";
     std::string what;
-    if (tp.at("matrix") == "A" && f.parameters.count("time_constant_from_s"))
+    if (tp.at("matrix") == "A" && f.parameters.count(Param::kTimeConstantFromS))
       what = "the state " + tp.at("state") + "'s own rate " + entry + " " + move +
-             " 1/s (time constant " + fmt(f.parameters.at("time_constant_from_s")) + " -> " +
-             fmt(f.parameters.at("time_constant_to_s")) + " s)";
+             " 1/s (time constant " + fmt(f.parameters.at(Param::kTimeConstantFromS)) + " -> " +
+             fmt(f.parameters.at(Param::kTimeConstantToS)) + " s)";
     else if (tp.at("matrix") == "A")
       what = "the coupling " + entry + " into the state " + tp.at("state") + " " + move;
     else if (tp.at("matrix") == "B")
@@ -197,7 +199,7 @@ Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, doubl
   f.pairs = pairs;
   if (e.named()) {
     const NamedParameter& np = ss.parameters[size_t(e.row)];
-    f.parameters = {{"from", np.value}, {"to", to}};
+    f.parameters = {{Param::kFrom, np.value}, {Param::kTo, to}};
     f.text_parameters["parameter"] = np.name;
     if (!np.units.empty()) f.text_parameters["units"] = np.units;
     std::vector<std::string> states;
@@ -211,13 +213,16 @@ Finding state_parameter_finding(const StateSpace& ss, const StateEntry& e, doubl
     f.text_parameters["state"] = joined;
     return f;
   }
-  f.parameters = {{"from", entry_value(ss, e)}, {"to", to}, {"row", e.row + 1}, {"col", e.col + 1}};
+  f.parameters = {{Param::kFrom, entry_value(ss, e)},
+                  {Param::kTo, to},
+                  {Param::kRow, e.row + 1},
+                  {Param::kCol, e.col + 1}};
   f.text_parameters["matrix"] = std::string(1, e.matrix);
   if (e.matrix == 'A') {
     f.text_parameters["state"] = ss.states[size_t(e.row)];
     if (e.row == e.col) {
-      f.parameters["time_constant_from_s"] = -1 / entry_value(ss, e);
-      f.parameters["time_constant_to_s"] = -1 / to;
+      f.parameters[Param::kTimeConstantFromS] = -1 / entry_value(ss, e);
+      f.parameters[Param::kTimeConstantToS] = -1 / to;
     }
   } else if (e.matrix == 'B') {
     f.text_parameters["state"] = ss.states[size_t(e.row)];

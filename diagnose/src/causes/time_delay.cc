@@ -16,7 +16,9 @@ class TimeDelay final : public LinearCause {
   const char* name() const override { return "time_delay"; }
   // delay_s, 0 in the simulation (an added delay); its interval's bracket starts at least 10 us
   // wide.
-  PrimaryParameter primary_parameter(const Finding&) const override { return {"delay_s", 0.0}; }
+  PrimaryParameter primary_parameter(const Finding&) const override {
+    return {Param::kDelayS, 0.0};
+  }
   IntervalDomain interval_domain() const override { return {false, 1e-5}; }
   void fit(const Model&, const PairFit& p, const DiagnoseOptions& opt,
            std::vector<Cause>* out) const override {
@@ -24,19 +26,19 @@ class TimeDelay final : public LinearCause {
     const double tau =
         minimise_1d([&](double t) { return chi2(p, F(t)); }, opt.delay_min_s, opt.delay_max_s,
                     int(std::ceil((opt.delay_max_s - opt.delay_min_s) / kGridStepS)));
-    Cause c{kind(), {{"delay_s", tau}}, F(tau), 0, 1, ""};
+    Cause c{kind(), {{Param::kDelayS, tau}}, F(tau), 0, 1, ""};
     c.chi2 = chi2(p, c.F);
     out->push_back(std::move(c));
   }
   bool consistent(const Cause& a, const Cause& b, const DiagnoseOptions& opt) const override {
-    const double v = a.params.at("delay_s"), u = b.params.at("delay_s");
+    const double v = a.params.at(Param::kDelayS), u = b.params.at(Param::kDelayS);
     return std::abs(v - u) <= std::max(opt.consistent_delay_s, opt.consistent_rel * std::abs(v));
   }
   void extend(Tf& t, const Finding& f) const override {
-    t.delay_s = std::max(0.0, t.delay_s + f.parameters.at("delay_s"));
+    t.delay_s = std::max(0.0, t.delay_s + f.parameters.at(Param::kDelayS));
   }
   std::string explain(const Finding& f) const override {
-    return "phase residual linear in w (" + fmt(-f.parameters.at("delay_s") * 1e3) +
+    return "phase residual linear in w (" + fmt(-f.parameters.at(Param::kDelayS) * 1e3) +
            " ms slope), gain residual flat";
   }
 };

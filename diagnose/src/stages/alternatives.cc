@@ -42,7 +42,7 @@ struct Around {
     const std::vector<Finding> all = with(extra);
     return chi2_of(r, extended_by(r, all, all.size()), pairs);
   }
-  Finding at_scope(CauseKind cause, const std::string& key, double v) const {
+  Finding at_scope(CauseKind cause, Param key, double v) const {
     Finding a;
     a.cause = cause;
     a.scope = f.scope;
@@ -52,7 +52,7 @@ struct Around {
     a.parameters[key] = v;
     return a;
   }
-  Finding delay(double t) const { return at_scope(CauseKind::kTimeDelay, "delay_s", t); }
+  Finding delay(double t) const { return at_scope(CauseKind::kTimeDelay, Param::kDelayS, t); }
   // The other findings whose pairs all lie among f's (indices into `others`).
   std::vector<size_t> inside() const {
     std::vector<size_t> out;
@@ -64,7 +64,7 @@ struct Around {
         out.push_back(x);
     return out;
   }
-  Finding lag(double lc) const { return at_scope(CauseKind::kMissingLag, "corner_rad_s", lc); }
+  Finding lag(double lc) const { return at_scope(CauseKind::kMissingLag, Param::kCornerRadS, lc); }
   // The delay on top of `under` that fits best: a grid over [0, delay_max_s], then Brent's method.
   double best_delay(const std::vector<Finding>& under) const {
     const int grid = int(std::ceil(r.opt.delay_max_s / kDelayStepS));
@@ -109,9 +109,9 @@ bool resonance_alternative(DiagnosisRun& r, size_t i) {
     // A delay stays >= 0 and a lag's corner inside what its search saw.
     bool ok = true;
     for (const Finding& e : alt.extra) {
-      if (e.cause == CauseKind::kTimeDelay) ok &= e.parameters.at("delay_s") >= 0;
+      if (e.cause == CauseKind::kTimeDelay) ok &= e.parameters.at(Param::kDelayS) >= 0;
       if (e.cause == CauseKind::kMissingLag) {
-        const double c = e.parameters.at("corner_rad_s");
+        const double c = e.parameters.at(Param::kCornerRadS);
         ok &= c >= a.w_lo / 10 && c <= a.w_hi * 30;
       }
     }
@@ -136,15 +136,15 @@ bool resonance_alternative(DiagnosisRun& r, size_t i) {
 // each: the data cannot tell the two apart). False when the lag stays.
 bool lag_above_band(DiagnosisRun& r, size_t i) {
   const Around a(r, i);
-  if (!(a.f.parameters.at("corner_rad_s") > a.w_hi)) return false;
+  if (!(a.f.parameters.at(Param::kCornerRadS) > a.w_hi)) return false;
   const Finding d = a.delay(a.best_delay({}));
-  if (!(d.parameters.at("delay_s") > 0)) return false;
+  if (!(d.parameters.at(Param::kDelayS) > 0)) return false;
   // Sized together with the findings on the lag's pairs alone, as a resonance's alternatives.
   std::vector<Finding> all = a.with({d});
   std::vector<size_t> group = a.inside();
   group.push_back(all.size() - 1);
   if (group.size() > 1) refine(r, all, group, a.pairs, 1);
-  if (!(all.back().parameters.at("delay_s") > 0)) return false;
+  if (!(all.back().parameters.at(Param::kDelayS) > 0)) return false;
   if (!(chi2_of(r, extended_by(r, all, all.size()), a.pairs) <= a.chi2_with({a.f}) + a.pen))
     return false;
   r.findings = std::move(all);

@@ -26,7 +26,7 @@ constexpr size_t kMaxCarriers = 12;  // 2^12 choices at most
 
 struct Additive {
   CauseKind cause;
-  const char* key;
+  Param key;
 };
 
 struct Choice {
@@ -207,8 +207,8 @@ class Decomposition {
 
 bool decompose(DiagnosisRun& r) {
   bool changed = false;
-  for (const Additive& ad : {Additive{CauseKind::kGainMismatch, "gain_db"},
-                             Additive{CauseKind::kTimeDelay, "delay_s"}}) {
+  for (const Additive& ad : {Additive{CauseKind::kGainMismatch, Param::kGainDb},
+                             Additive{CauseKind::kTimeDelay, Param::kDelayS}}) {
     Decomposition d(r, ad);
     std::vector<Finding>& fs = r.findings;
     const std::vector<size_t> mine = d.findings_of_cause(fs);

@@ -31,9 +31,9 @@ std::vector<C> product_of(const std::vector<Cause>& cs, size_t n, bool without_g
 // A pole_shift of a pair fits its damping too, so a pair claimed by one of pole_shift and
 // damping_error is not offered to the other on the same measured pair.
 double claimed_pair(const Cause& c) {
-  if (c.cause == CauseKind::kPoleShift && c.params.count("from_zeta"))
-    return c.params.at("from_rad_s");
-  if (c.cause == CauseKind::kDampingError) return c.params.at("wn_rad_s");
+  if (c.cause == CauseKind::kPoleShift && c.params.count(Param::kFromZeta))
+    return c.params.at(Param::kFromRadS);
+  if (c.cause == CauseKind::kDampingError) return c.params.at(Param::kWnRadS);
   return 0;
 }
 
@@ -184,18 +184,18 @@ bool PairCauseFit::multisine_element() {
   for (int pass = 0; pass < 3 * kNlRounds; ++pass) {
     if (pass > 0) {
       seed = best.L;
-      add_predicted_scatter(best.nl.cause, best.nl.params["width"], seed, sig0);
+      add_predicted_scatter(best.nl.cause, best.nl.params[Param::kWidth], seed, sig0);
     }
     p_.factor = base_;
     linear_causes();
     c_lin = chi2(p_, ones_);  // the linear causes alone
-    const double before = pass > 0 ? best.nl.params["width"] : 0.0;
+    const double before = pass > 0 ? best.nl.params[Param::kWidth] : 0.0;
     best = width_profile(pass, best.nl.cause, before, seed);
-    if (pass > 0 && std::abs(best.nl.params["width"] / before - 1) < 5e-3) break;
+    if (pass > 0 && std::abs(best.nl.params[Param::kWidth] / before - 1) < 5e-3) break;
   }
   if (c_lin - best.chi2 > r_.opt.min_improvement * c_lin) {
     // Refitted at the width found: p.factor as this fit left it.
-    best = element_at(best.nl.cause, best.nl.params["width"], seed);
+    best = element_at(best.nl.cause, best.nl.params[Param::kWidth], seed);
     record(best.nl,
            explain_nonlinearity(p_, best.nl, {0}, nl_median, corner_, r_.opt.low_corner_fraction),
            best.lin);
@@ -210,7 +210,7 @@ bool PairCauseFit::multisine_element() {
 // refitted on top; chi2 with both.
 ElementAtWidth PairCauseFit::element_at(CauseKind kind, double width, const std::vector<C>& seed) {
   ElementAtWidth f;
-  f.nl = Cause{kind, {{"width", width}}, nonlinear_factor(p_, kind, width, seed), 0, 1, ""};
+  f.nl = Cause{kind, {{Param::kWidth, width}}, nonlinear_factor(p_, kind, width, seed), 0, 1, ""};
   f.lin = linear_causes_on(f.nl.F);
   f.L = product_of(f.lin, n_, false);
   f.chi2 = f.nl.chi2 = chi2(p_, ones_);
@@ -282,7 +282,7 @@ std::vector<Cause> PairCauseFit::alternate(Cause& nl) {
     double c0_again = 0;
     Cause again = fit_nonlinearity(p_, low_, base_, product_of(lin, n_, true), &c0_again);
     if (!std::isfinite(again.chi2) || again.cause != nl.cause) break;
-    settled = std::abs(again.params["width"] / nl.params["width"] - 1) < 1e-3;
+    settled = std::abs(again.params[Param::kWidth] / nl.params[Param::kWidth] - 1) < 1e-3;
     nl = again;
   }
   return lin;

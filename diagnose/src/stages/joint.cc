@@ -49,7 +49,7 @@ std::vector<std::vector<size_t>> groups_of(const std::vector<Finding>& fs) {
 // logarithm when `log`.
 struct FreeParameter {
   size_t finding;
-  std::string key;
+  Param key;
   bool log;
 };
 
@@ -60,10 +60,10 @@ std::vector<FreeParameter> free_parameters(const std::vector<Finding>& fs,
   std::vector<FreeParameter> params;
   for (size_t i : group) {
     const CauseUnit& unit = *cause_unit(fs[i].cause);
-    const std::string key = unit.primary_parameter(fs[i]).key;
-    if (key.empty() || !fs[i].parameters.count(key)) continue;
-    const bool positive = unit.interval_domain().positive && fs[i].parameters.at(key) > 0;
-    params.push_back({i, key, positive});
+    const std::optional<Param> key = unit.primary_parameter(fs[i]).key;
+    if (!key || !fs[i].parameters.count(*key)) continue;
+    const bool positive = unit.interval_domain().positive && fs[i].parameters.at(*key) > 0;
+    params.push_back({i, *key, positive});
     for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
       if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
         params.push_back({i, sp.key, true});

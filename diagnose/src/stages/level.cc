@@ -81,7 +81,7 @@ LevelPoints level_points(const DiagnosisRun& r, const Finding& f, const OtherMea
 // One parameter a finding is compared by: its key, whether it is fitted in its logarithm (as
 // refine() takes it), its fitted value and 1-sigma.
 struct Compared {
-  std::string key;
+  Param key = Param::kToRadS;
   bool log = false;
   double v_fit = 0, s_fit = NAN;
 };
@@ -199,13 +199,13 @@ class LevelComparison {
   static std::vector<Compared> compared_parameters(const Finding& f) {
     std::vector<Compared> out;
     const CauseUnit& unit = *cause_unit(f.cause);
-    const std::string key = unit.primary_parameter(f).key;
-    if (key.empty() || !f.intervals.count(key) || !f.parameters.count(key)) return out;
-    auto compared = [&](const std::string& k, bool log) {
+    const std::optional<Param> key = unit.primary_parameter(f).key;
+    if (!key || !f.intervals.count(*key) || !f.parameters.count(*key)) return out;
+    auto compared = [&](Param k, bool log) {
       const double v = f.parameters.at(k);
       return Compared{k, log, v, half_width(f.intervals.at(k), v)};
     };
-    out.push_back(compared(key, unit.interval_domain().positive && f.parameters.at(key) > 0));
+    out.push_back(compared(*key, unit.interval_domain().positive && f.parameters.at(*key) > 0));
     for (const SecondaryParameter& sp : unit.secondary_parameters(f))
       if (sp.fitted && f.intervals.count(sp.key) && f.parameters.count(sp.key) &&
           f.parameters.at(sp.key) > 0)

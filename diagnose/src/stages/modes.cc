@@ -401,15 +401,16 @@ Finding finding_of(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
   f.output = m.output;
   if (damping_only(r, mv, m, fit)) {
     f.cause = CauseKind::kDampingError;
-    f.parameters = {{"wn_rad_s", m.root.wn}, {"from_zeta", m.root.zeta}, {"to_zeta", fit.zeta}};
+    f.parameters = {
+        {Param::kWnRadS, m.root.wn}, {Param::kFromZeta, m.root.zeta}, {Param::kToZeta, fit.zeta}};
     if (fit.residues_kept) f.text_parameters["form"] = "residue";
   } else {
     f.cause = CauseKind::kPoleShift;
-    f.parameters = {{"from_rad_s", m.root.wn},
-                    {"to_rad_s", fit.wn},
-                    {"from_zeta", m.root.zeta},
-                    {"to_zeta", fit.zeta},
-                    {"zeta", fit.zeta}};
+    f.parameters = {{Param::kFromRadS, m.root.wn},
+                    {Param::kToRadS, fit.wn},
+                    {Param::kFromZeta, m.root.zeta},
+                    {Param::kToZeta, fit.zeta},
+                    {Param::kZeta, fit.zeta}};
     if (fit.residues_kept) f.text_parameters["form"] = "residue";
   }
   for (size_t k : m.pairs) f.pairs.push_back(r.pairs[k].pair);

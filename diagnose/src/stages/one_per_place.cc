@@ -28,7 +28,7 @@ bool one_per_place(std::vector<Finding>& fs) {
   for (size_t a = 0; a < fs.size(); ++a) {
     const CauseKind c = fs[a].cause;
     if (c != CauseKind::kTimeDelay && c != CauseKind::kGainMismatch) continue;
-    const char* key = c == CauseKind::kTimeDelay ? "delay_s" : "gain_db";
+    const Param key = c == CauseKind::kTimeDelay ? Param::kDelayS : Param::kGainDb;
     for (size_t b = a + 1; b < fs.size(); ++b) {
       const Finding& g = fs[b];
       if (g.cause != c || g.scope != fs[a].scope || g.input != fs[a].input ||
@@ -59,11 +59,11 @@ bool moved_roots_folded(DiagnosisRun& r) {
   bool folded = false;
   for (size_t a = 0; a < fs.size(); ++a) {
     const Finding& f = fs[a];
-    const char* key = moved_root_key(f.cause);
+    const std::optional<Param> key = moved_root_key(f.cause);
     if ((f.cause != CauseKind::kPoleShift && f.cause != CauseKind::kDampingError) || !key ||
-        !f.parameters.count(key))
+        !f.parameters.count(*key))
       continue;
-    const double from = f.parameters.at(key);
+    const double from = f.parameters.at(*key);
     for (size_t b = 0; b < fs.size(); ++b) {
       Finding& g = fs[b];
       const bool shift = f.cause == CauseKind::kPoleShift;
@@ -73,22 +73,22 @@ bool moved_roots_folded(DiagnosisRun& r) {
       if (b == a || g.tf || !g.text_parameters.empty() || !(resonance || lag || moved) ||
           !same_place(f, g))
         continue;
-      const char* root_key = resonance ? "wn_rad_s" : lag ? "corner_rad_s" : "to_rad_s";
+      const Param root_key = resonance ? Param::kWnRadS : lag ? Param::kCornerRadS : Param::kToRadS;
       if (!g.parameters.count(root_key)) continue;
       const double root = g.parameters.at(root_key);
       if (!(std::abs(from - root) <= kSameRoot * root)) continue;
       if (lag) {
-        g.parameters[root_key] = f.parameters.at("to_rad_s");
+        g.parameters[root_key] = f.parameters.at(Param::kToRadS);
       } else if (moved) {  // the root g moved, moved on: g to where f took it
-        g.parameters[root_key] = f.parameters.at("to_rad_s");
-        for (const char* k : {"to_zeta", "zeta"})
+        g.parameters[root_key] = f.parameters.at(Param::kToRadS);
+        for (const Param k : {Param::kToZeta, Param::kZeta})
           if (f.parameters.count(k) && g.parameters.count(k)) g.parameters[k] = f.parameters.at(k);
       } else {
-        const double wn = f.cause == CauseKind::kPoleShift ? f.parameters.at("to_rad_s")
+        const double wn = f.cause == CauseKind::kPoleShift ? f.parameters.at(Param::kToRadS)
                                                            : g.parameters.at(root_key);
-        const double zeta =
-            f.parameters.count("to_zeta") ? f.parameters.at("to_zeta") : g.parameters.at("zeta");
-        g.parameters = {{"wn_rad_s", wn}, {"zeta", zeta}};
+        const double zeta = f.parameters.count(Param::kToZeta) ? f.parameters.at(Param::kToZeta)
+                                                               : g.parameters.at(Param::kZeta);
+        g.parameters = {{Param::kWnRadS, wn}, {Param::kZeta, zeta}};
         double top = 0;
         for (const PairFit* p : fitted_pairs(r, g.pairs))
           for (double w : p->w) top = std::max(top, w);
@@ -96,7 +96,7 @@ bool moved_roots_folded(DiagnosisRun& r) {
         const double fast = zeta >= 1 ? wn * (zeta + std::sqrt(zeta * zeta - 1)) : 0;
         if (fast > kFarBeyondBand * top) {
           g.cause = CauseKind::kMissingLag;
-          g.parameters = {{"corner_rad_s", wn * wn / fast}};
+          g.parameters = {{Param::kCornerRadS, wn * wn / fast}};
         }
       }
       fs.erase(fs.begin() + std::ptrdiff_t(a));

@@ -31,14 +31,14 @@ bool undoes(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
   const bool corners = (f.cause == CauseKind::kMissingLead && g.cause == CauseKind::kMissingLag) ||
                        (f.cause == CauseKind::kMissingLag && g.cause == CauseKind::kMissingLead);
   if (corners) {
-    const double a = f.parameters.at("corner_rad_s"), b = g.parameters.at("corner_rad_s");
+    const double a = f.parameters.at(Param::kCornerRadS), b = g.parameters.at(Param::kCornerRadS);
     return std::abs(a - b) <= opt.consistent_rel * b;
   }
   if (f.cause == CauseKind::kGainMismatch && g.cause == CauseKind::kGainMismatch)
-    return std::abs(f.parameters.at("gain_db") + g.parameters.at("gain_db")) <=
+    return std::abs(f.parameters.at(Param::kGainDb) + g.parameters.at(Param::kGainDb)) <=
            opt.consistent_gain_db;
   if (f.cause == CauseKind::kTimeDelay && g.cause == CauseKind::kTimeDelay) {
-    const double a = f.parameters.at("delay_s"), b = g.parameters.at("delay_s");
+    const double a = f.parameters.at(Param::kDelayS), b = g.parameters.at(Param::kDelayS);
     return std::abs(a + b) <= std::max(opt.consistent_delay_s, opt.consistent_rel * std::abs(b));
   }
   return false;
@@ -51,18 +51,18 @@ bool undoes(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
 // but a delay or a gain, which compose with g's (a path's own beside its output's).
 bool repeats(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
   auto root = [](const Finding& x, bool placed) -> double {
-    const char* key = nullptr;
+    Param key;
     switch (x.cause) {
       case CauseKind::kPoleShift:
-        key = placed ? "to_rad_s" : "from_rad_s";
+        key = placed ? Param::kToRadS : Param::kFromRadS;
         break;
       case CauseKind::kDampingError:
       case CauseKind::kMissingResonance:
-        key = "wn_rad_s";
+        key = Param::kWnRadS;
         break;
       case CauseKind::kMissingLag:
       case CauseKind::kMissingLead:
-        key = "corner_rad_s";
+        key = Param::kCornerRadS;
         break;
       default:
         return 0.0;
@@ -83,9 +83,9 @@ bool repeats(const Finding& f, const Finding& g, const DiagnoseOptions& opt) {
 Finding in_simulation_terms(const DiagnosisRun& r, Finding f) {
   constexpr double kSameRoot = 1e-3;
   f.explanation.clear();
-  const char* key = moved_root_key(f.cause);
-  if (!key || !f.parameters.count(key)) return f;
-  double& v = f.parameters.at(key);
+  const std::optional<Param> key = moved_root_key(f.cause);
+  if (!key || !f.parameters.count(*key)) return f;
+  double& v = f.parameters.at(*key);
   std::vector<const Tf*> tfs;
   if (const ModelPath* p = r.sim.path(f.output, f.input)) tfs.push_back(&p->tf);
   if (const int o = r.sim.output_index(f.output); o >= 0 && r.sim.outputs[size_t(o)].sensor)

@@ -68,7 +68,8 @@ static void drop_cancelling(DiagnosisRun& r) {
       if (lag.cause != CauseKind::kMissingLag || lead.cause != CauseKind::kMissingLead ||
           lag.scope != lead.scope || lag.input != lead.input || lag.output != lead.output)
         continue;
-      const double a = lag.parameters.at("corner_rad_s"), b = lead.parameters.at("corner_rad_s");
+      const double a = lag.parameters.at(Param::kCornerRadS),
+                   b = lead.parameters.at(Param::kCornerRadS);
       if (std::abs(a - b) > r.opt.consistent_rel * a) continue;
       const std::vector<const PairFit*> mine = fitted_pairs(r, lag.pairs);
       std::vector<Finding> without;
@@ -109,19 +110,20 @@ void resolve(DiagnosisRun& r) {
     double c_sim = 0;
     if (sim_value) {
       std::vector<Finding> moved = findings;
-      moved[i].parameters[key] = *sim_value;
+      moved[i].parameters[*key] = *sim_value;
       c_sim = chi2_of_model(extended_by(r, moved, findings.size()));
     } else {
       c_sim = chi2_of_model(extended_by(r, findings, i));  // the simulation lacks it: without it
     }
     // An interval the joint stage gave (the state model's entries, fitted as a set) stands.
-    if (!key.empty() && !f.intervals.count(key)) {
+    if (key && !f.intervals.count(*key)) {
       auto chi2_at = [&](double v) {
         std::vector<Finding> moved = findings;
-        moved[i].parameters[key] = v;
+        moved[i].parameters[*key] = v;
         return chi2_of_model(extended_by(r, moved, findings.size())) - (c_min + s);
       };
-      f.intervals[key] = parameter_interval(chi2_at, f.parameters.at(key), unit.interval_domain());
+      f.intervals[*key] =
+          parameter_interval(chi2_at, f.parameters.at(*key), unit.interval_domain());
     }
     // The other parameters the cause reports an interval for (a moved pair's damping), each moved
     // alone the same way; scales, so positive.
@@ -143,19 +145,19 @@ void resolve(DiagnosisRun& r) {
     // A moved pair whose frequency the data do not resolve but whose damping they do is the
     // pair's damping_error (a joint refit can take a damping change's small frequency move back
     // to the simulated one): judged again as that.
-    if (f.cause == CauseKind::kPoleShift && f.parameters.count("from_zeta") &&
-        f.parameters.count("to_zeta")) {
+    if (f.cause == CauseKind::kPoleShift && f.parameters.count(Param::kFromZeta) &&
+        f.parameters.count(Param::kToZeta)) {
       Finding d = f;
       d.cause = CauseKind::kDampingError;
-      d.parameters = {{"wn_rad_s", f.parameters.at("from_rad_s")},
-                      {"from_zeta", f.parameters.at("from_zeta")},
-                      {"to_zeta", f.parameters.at("to_zeta")}};
+      d.parameters = {{Param::kWnRadS, f.parameters.at(Param::kFromRadS)},
+                      {Param::kFromZeta, f.parameters.at(Param::kFromZeta)},
+                      {Param::kToZeta, f.parameters.at(Param::kToZeta)}};
       d.intervals.clear();
       d.explanation.clear();  // said again as a damping_error by summarise
       std::vector<Finding> as_damping = findings;
       as_damping[i] = d;
       const double c_d = chi2_of_model(extended_by(r, as_damping, as_damping.size()));
-      as_damping[i].parameters["to_zeta"] = f.parameters.at("from_zeta");
+      as_damping[i].parameters[Param::kToZeta] = f.parameters.at(Param::kFromZeta);
       const double c_none = chi2_of_model(extended_by(r, as_damping, as_damping.size()));
       if (c_d - c_min <= apart && c_none - c_d > apart) {
         f = std::move(d);
@@ -165,7 +167,8 @@ void resolve(DiagnosisRun& r) {
     }
     std::string why = "not resolved by the data: chi2 over its pairs is " + fmt(c_min) +
                       " with it and " + fmt(c_sim) + " at the simulation's " +
-                      (sim_value ? key + " = " + fmt(*sim_value) : std::string("(without it)")) +
+                      (sim_value ? std::string(to_string(*key)) + " = " + fmt(*sim_value)
+                                 : std::string("(without it)")) +
                       ", less than " + fmt(apart) + " apart";
     r.d.dropped.push_back({f, why});
   }

@@ -26,13 +26,13 @@ namespace {
 // pair.
 bool moved_as_mode(const DiagnosisRun& r, const PairCause& pc) {
   const Cause& c = pc.c;
-  const char* key = moved_root_key(c.cause);
-  if (!key || !c.params.count(key)) return false;
-  const double wn = c.params.at(key);
+  const std::optional<Param> key = moved_root_key(c.cause);
+  if (!key || !c.params.count(*key)) return false;
+  const double wn = c.params.at(*key);
   const std::string& pair = r.pairs[pc.pair].pair;
   for (const Finding& f : r.mode_findings) {
-    const double fw = f.parameters.count("from_rad_s") ? f.parameters.at("from_rad_s")
-                                                       : f.parameters.at("wn_rad_s");
+    const double fw = f.parameters.count(Param::kFromRadS) ? f.parameters.at(Param::kFromRadS)
+                                                           : f.parameters.at(Param::kWnRadS);
     if (std::abs(fw - wn) <= 1e-3 * fw &&
         std::find(f.pairs.begin(), f.pairs.end(), pair) != f.pairs.end())
       return true;
@@ -54,7 +54,7 @@ Finding make_finding(const DiagnosisRun& r, const Cause& c, Scope scope, const s
     for (size_t m : members) s += r.raw[m].c.params.at(key);
     f.parameters[key] = s / members.size();
   }
-  f.parameters.erase("notch");
+  f.parameters.erase(Param::kNotch);
   if (c.detail == "notch") f.text_parameters["shape"] = "notch";
   for (size_t m : members) f.pairs.push_back(r.pairs[r.raw[m].pair].pair);
   return f;

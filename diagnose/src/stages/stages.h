@@ -88,11 +88,11 @@ bool quiet_over(const DiagnosisRun& r, const std::vector<Finding>& before,
                 const std::vector<Finding>& after, const std::vector<std::string>& which);
 
 /// The parameter naming the simulated root a cause moves or re-damps (rad/s): a pole shift's
-/// from_rad_s, a damping error's wn_rad_s; nullptr for the other causes.
-inline const char* moved_root_key(CauseKind cause) {
-  return cause == CauseKind::kPoleShift      ? "from_rad_s"
-         : cause == CauseKind::kDampingError ? "wn_rad_s"
-                                             : nullptr;
+/// from_rad_s, a damping error's wn_rad_s; nullopt for the other causes.
+inline std::optional<Param> moved_root_key(CauseKind cause) {
+  if (cause == CauseKind::kPoleShift) return Param::kFromRadS;
+  if (cause == CauseKind::kDampingError) return Param::kWnRadS;
+  return std::nullopt;
 }
 
 /// chi2 of model m over the points of `pairs`: the sum of |G_meas - G_m|^2 / sigma_eff^2, each
@@ -158,7 +158,7 @@ bool of_the_state_model(const Finding& f);
 /// intervals, the others free: sqrt(diag((J^T J)^-1) max(1, chi2 per point)), J the weighted
 /// residuals' Jacobian there; for a parameter fitted in its logarithm (a positive scale) the
 /// sigma of its logarithm.
-using ParameterSigmas = std::map<std::pair<size_t, std::string>, double>;
+using ParameterSigmas = std::map<std::pair<size_t, Param>, double>;
 void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
             const std::vector<const PairFit*>& pairs, size_t min_params,
             ParameterSigmas* sigmas = nullptr);

@@ -400,10 +400,10 @@ std::vector<Finding> findings_of(const StateSpace& sim, const EntrySet& s,
     // What it adds to the state model, named (and, fitted over every pair of the channel, not
     // regrouped): the lag's state, or the delay as its InputDelay or OutputDelay.
     if (e.lag()) {
-      f.parameters["corner_rad_s"] = 1 / s.v[j];
+      f.parameters[Param::kCornerRadS] = 1 / s.v[j];
       f.text_parameters["state"] = with_entry(sim, e, s.v[j]).states.back();
     } else {
-      f.parameters["delay_s"] = s.v[j];
+      f.parameters[Param::kDelayS] = s.v[j];
       f.text_parameters["delay"] =
           (e.at_input() ? "InputDelay " : "OutputDelay ") + (e.at_input() ? f.input : f.output);
     }

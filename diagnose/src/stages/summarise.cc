@@ -18,10 +18,10 @@ namespace {
 // in it (those with a participation of 5 % or more), "" otherwise.
 std::string state_mode(const Model& sim, const Finding& f) {
   if (!sim.state_space) return "";
-  const char* key = moved_root_key(f.cause);
-  if (!key || !f.parameters.count(key)) return "";
-  const double wn = f.parameters.at(key);
-  const auto z = f.parameters.find("from_zeta");
+  const std::optional<Param> key = moved_root_key(f.cause);
+  if (!key || !f.parameters.count(*key)) return "";
+  const double wn = f.parameters.at(*key);
+  const auto z = f.parameters.find(Param::kFromZeta);
   const C s = z == f.parameters.end() || z->second >= 1
                   ? C(-wn, 0)
                   : wn * C(-z->second, std::sqrt(1 - z->second * z->second));
@@ -55,7 +55,7 @@ std::string explain(const Finding& f) {
                                                    : std::string(k ? " on the validation data"
                                                                    : " on the data fitted"));
       };
-      std::string s = l.parameter + " " + at(0);
+      std::string s = to_string(l.parameter) + (" " + at(0));
       for (size_t k = 1; k < l.values.size(); ++k) s += ", " + at(k);
       if (std::isfinite(l.slope_sigma))
         s += " (slope " + fmt(l.slope) + " +- " + fmt(l.slope_sigma) + " per unit of level, " +

@@ -87,6 +87,7 @@
 
 #include "fralab/core/frd.h"
 #include "fralab/core/measurement_chain.h"
+#include "fralab/diagnose/parameter.h"
 #include "fralab/plant/model.h"
 #include "fralab/plant/nonlinearity.h"
 
@@ -192,7 +193,7 @@ struct MeasuredPair {
 /// line misfits beyond the sigmas), NaN for two levels. apart: the values lie apart beyond
 /// kApart (3) sigmas combined.
 struct LevelDependence {
-  std::string parameter;
+  Param parameter = Param::kToRadS;
   std::vector<double> levels, values;
   std::vector<std::array<double, 2>> intervals;
   double slope = 0;
@@ -204,16 +205,16 @@ struct Finding {
   CauseKind cause = CauseKind::kGainMismatch;
   Scope scope = Scope::kPath;
   std::string output, input;  // "" = null
-  std::map<std::string, double> parameters;
+  Parameters parameters;
   std::map<std::string, std::string> text_parameters;  // measurement_coupling's channel names
   std::string explanation;
   double error_before = 0, error_after = 0;
   std::vector<std::string> pairs;  // the measured pairs it explains
   /// The primary parameter's 1-sigma interval from the data (see "resolved" in the file
   /// comment): {lo, hi}, +-inf where chi2 never rises enough within the search range.
-  std::map<std::string, std::array<double, 2>> intervals;
+  std::map<Param, std::array<double, 2>> intervals;
   /// missing_path: the path fitted (the extended model's new path; its gain follows
-  /// parameters["gain"]).
+  /// parameters[Param::kGain]).
   std::optional<Tf> tf;
   /// Set when the primary parameter, or a fitted secondary one (a moved mode's damping), depends
   /// on the level (see LevelDependence): `level` is the primary's, `level_secondary` the fitted
