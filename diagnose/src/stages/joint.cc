@@ -4,16 +4,18 @@
 // finding in place: chi2 = sum over the group's pairs and points of
 // |G_meas - G_model|^2 / sigma_eff^2 (the fitting measurement), minimised by Levenberg-Marquardt
 // on forward-difference derivatives (a parameter whose cause's domain is positive in its
-// logarithm). Fitted one after the other, each cause is sized on what the others left: a pole
-// moved by 10 % and a gain 0.5 dB higher on one path came back as 16 % and 0.25 dB
-// (diagnose_test, TwoOverlappingEffectsOnOnePathAreSizedJointly). A finding alone on its pairs is
-// left as fitted (the joint problem is then its own). A refinement that does not lower chi2 leaves
-// the group as it was. The state model's entries, fitted as one set over every pair (stage 3a),
-// take their intervals here, each the marginal 1-sigma of the group's linearised covariance with
-// every other parameter free: moved alone (stage 6), entries the data leave nearly interchangeable
-// (one input, one state's row) would get intervals far narrower than the data allow.
+// logarithm), each frequency and delay kept within the range its cause is searched in (bounds_of).
+// Fitted one after the other, each cause is sized on what the others left: a pole moved by 10 % and
+// a gain 0.5 dB higher on one path came back as 16 % and 0.25 dB (diagnose_test,
+// TwoOverlappingEffectsOnOnePathAreSizedJointly). A finding alone on its pairs is left as fitted
+// (the joint problem is then its own). A refinement that does not lower chi2 leaves the group as it
+// was. The state model's entries, fitted as one set over every pair (stage 3a), take their
+// intervals here, each the marginal 1-sigma of the group's linearised covariance with every other
+// parameter free: moved alone (stage 6), entries the data leave nearly interchangeable (one input,
+// one state's row) would get intervals far narrower than the data allow.
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -46,27 +48,61 @@ std::vector<std::vector<size_t>> groups_of(const std::vector<Finding>& fs) {
 }
 
 // A free parameter of the joint fit: finding fs[finding]'s parameter `key`, fitted in its
-// logarithm when `log`.
+// logarithm when `log`, kept within [lo, hi] (in the fitted variable, so logarithms when `log`).
 struct FreeParameter {
   size_t finding;
   Param key;
   bool log;
+  double lo = -INFINITY, hi = INFINITY;
 };
 
+// Where f's parameter `key` may go, in its own units: a frequency (a corner, a resonance, a
+// moved pole) within the band of f's pairs widened by opt.corner_decades_beyond on each side, as
+// the corner causes search (a root far beyond every measured point acts as a gain there, and
+// Levenberg-Marquardt would follow it out without end); a moved pole also within
+// opt.pole_shift_range of its simulated place; a delay within [delay_min_s, delay_max_s]. The
+// value f holds is always inside: a bound never moves a finding.
+std::array<double, 2> bounds_of(const DiagnosisRun& r, const Finding& f, Param key, double v) {
+  std::array<double, 2> b{-INFINITY, INFINITY};
+  if (key == Param::kCornerRadS || key == Param::kWnRadS || key == Param::kToRadS) {
+    double wlo = INFINITY, whi = 0;
+    for (const PairFit* p : fitted_pairs(r, f.pairs))
+      for (double w : p->w) wlo = std::min(wlo, w), whi = std::max(whi, w);
+    if (!(whi > 0)) return b;
+    const double widen = std::pow(10.0, r.opt.corner_decades_beyond);
+    b = {wlo / widen, whi * widen};
+    if (key == Param::kToRadS && f.parameters.count(Param::kFromRadS)) {
+      const double from = std::abs(f.parameters.at(Param::kFromRadS));
+      b = {std::max(b[0], from / r.opt.pole_shift_range),
+           std::min(b[1], from * r.opt.pole_shift_range)};
+    }
+  } else if (key == Param::kDelayS) {
+    b = {r.opt.delay_min_s, r.opt.delay_max_s};
+  }
+  return {std::min(b[0], v), std::max(b[1], v)};
+}
+
 // The free parameters of fs[group]: each finding's primary one and those of its others the data
-// resolve (a moved pair's damping), scales all.
-std::vector<FreeParameter> free_parameters(const std::vector<Finding>& fs,
+// resolve (a moved pair's damping), scales all; each with its bounds (bounds_of).
+std::vector<FreeParameter> free_parameters(const DiagnosisRun& r, const std::vector<Finding>& fs,
                                            const std::vector<size_t>& group) {
   std::vector<FreeParameter> params;
+  auto add = [&](size_t i, Param key, bool log) {
+    const double v = fs[i].parameters.at(key);
+    const auto [lo, hi] = bounds_of(r, fs[i], key, v);
+    FreeParameter p{i, key, log};
+    p.lo = log ? (lo > 0 ? std::log(lo) : -INFINITY) : lo;
+    p.hi = log ? std::log(hi) : hi;
+    params.push_back(p);
+  };
   for (size_t i : group) {
     const CauseUnit& unit = *cause_unit(fs[i].cause);
     const std::optional<Param> key = unit.primary_parameter(fs[i]).key;
     if (!key || !fs[i].parameters.count(*key)) continue;
-    const bool positive = unit.interval_domain().positive && fs[i].parameters.at(*key) > 0;
-    params.push_back({i, *key, positive});
+    add(i, *key, unit.interval_domain().positive && fs[i].parameters.at(*key) > 0);
     for (const SecondaryParameter& sp : unit.secondary_parameters(fs[i]))
       if (sp.fitted && fs[i].parameters.count(sp.key) && fs[i].parameters.at(sp.key) > 0)
-        params.push_back({i, sp.key, true});
+        add(i, sp.key, true);
   }
   return params;
 }
@@ -81,6 +117,13 @@ class JointResiduals {
       : r_(r), fs_(fs), params_(params), pairs_(pairs) {}
 
   int size() const { return int(params_.size()); }
+
+  // x with each parameter moved back inside its bounds.
+  Eigen::VectorXd clamped(Eigen::VectorXd x) const {
+    for (int k = 0; k < size(); ++k)
+      x(k) = std::clamp(x(k), params_[size_t(k)].lo, params_[size_t(k)].hi);
+    return x;
+  }
 
   // x as fs holds it.
   Eigen::VectorXd x_of(const std::vector<Finding>& fs) const {
@@ -155,8 +198,9 @@ double levenberg_marquardt(const JointResiduals& p, Eigen::VectorXd& x, Eigen::V
       Ad.diagonal() += lambda * A.diagonal().cwiseMax(1e-12);
       const Eigen::VectorXd dx = Ad.ldlt().solve(-g);
       Eigen::VectorXd rn;
-      if (dx.allFinite() && p.residuals(x + dx, &rn) && rn.squaredNorm() < chi2) {
-        x += dx, res = rn;
+      const Eigen::VectorXd xn = dx.allFinite() ? p.clamped(x + dx) : x;
+      if (dx.allFinite() && p.residuals(xn, &rn) && rn.squaredNorm() < chi2) {
+        x = xn, res = rn;
         const double before = chi2;
         chi2 = rn.squaredNorm();
         lambda = std::max(lambda / 10, 1e-12);
@@ -175,7 +219,7 @@ double levenberg_marquardt(const JointResiduals& p, Eigen::VectorXd& x, Eigen::V
 
 void refine(DiagnosisRun& r, std::vector<Finding>& fs, const std::vector<size_t>& group,
             const std::vector<const PairFit*>& pairs, size_t min_params, ParameterSigmas* sigmas) {
-  const std::vector<FreeParameter> params = free_parameters(fs, group);
+  const std::vector<FreeParameter> params = free_parameters(r, fs, group);
   if (params.empty() || params.size() < min_params) return;
   const JointResiduals p(r, fs, params, pairs);
   Eigen::VectorXd x = p.x_of(fs);
