@@ -48,6 +48,85 @@ std::pair<double, double> secant(const Json& law, double x0, double x1) {
   return {s, std::abs(d) * bs};
 }
 
+// A case's operating points and hidden laws: points x in [60, 100] (3-5 of them), per hidden
+// effect with a parameter an exponent p (value (x / kCentre)^p), per path a gain exponent q.
+struct Laws {
+  std::vector<double> xs;
+  std::vector<HiddenEffect> laws;
+  std::vector<double> p, q;
+};
+
+Laws draw_laws(const RandomCase& c, uint64_t seed, int i) {
+  Laws L;
+  std::mt19937_64 g(seed * 6700417u + uint64_t(i));
+  std::uniform_real_distribution<double> u(0, 1);
+  const int n_points = 3 + int(g() % 3);
+  for (int k = 0; k < n_points; ++k) L.xs.push_back(60 + 40.0 * k / (n_points - 1));
+  for (const HiddenEffect& e : c.hidden) {
+    Model probe = c.engine;
+    if (!set_hidden_parameter(probe, e, e.value)) continue;  // no parameter to schedule
+    L.laws.push_back(e);
+    L.p.push_back((u(g) < 0.5 ? -1 : 1) * (0.5 + u(g)));
+  }
+  for (size_t k = 0; k < c.simulation.paths.size(); ++k) L.q.push_back(u(g) - 0.5);
+  return L;
+}
+
+// The engine and the simulation at each point, DIR/engines/xNN.json and DIR/simulations/xNN.json.
+void write_points(const RandomCase& c, const Laws& L, const std::string& dir) {
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir + "/engines");
+  std::filesystem::create_directories(dir + "/simulations");
+  for (double x : L.xs) {
+    Model eng = c.engine, sim = c.simulation;
+    for (size_t k = 0; k < L.laws.size(); ++k)
+      set_hidden_parameter(eng, L.laws[k], L.laws[k].value * std::pow(x / kCentre, L.p[k]));
+    for (Model* m : {&eng, &sim}) {
+      m->speed_pct = x;
+      for (ModelPath& path : m->paths)
+        for (size_t k = 0; k < c.simulation.paths.size(); ++k)
+          if (c.simulation.paths[k].input == path.input &&
+              c.simulation.paths[k].output == path.output)
+            path.tf.gain *= std::pow(x / kCentre, L.q[k]);
+    }
+    const std::string name = "x" + std::to_string(int(std::lround(x))) + ".json";
+    save_model(dir + "/engines/" + name, eng);
+    save_model(dir + "/simulations/" + name, sim);
+  }
+}
+
+// The hidden laws envelope.json recovers (its finding's secant over the points within 2 sigma or
+// 2 %), each said on a line.
+int recovered_laws(const Json& env, const Laws& L) {
+  int recovered = 0;
+  for (size_t k = 0; k < L.laws.size(); ++k) {
+    const HiddenEffect& e = L.laws[k];
+    const double x0 = L.xs.front(), x1 = L.xs.back();
+    const double truth =
+        e.value * (std::pow(x1 / kCentre, L.p[k]) - std::pow(x0 / kCentre, L.p[k])) / (x1 - x0);
+    std::string got = "not found";
+    bool ok = false;
+    for (const Json& f : env.at("findings")) {
+      if (f.at("cause") != to_string(e.cause) || f.at("scope") != to_string(e.scope) ||
+          f.at("input").get<std::string>() != e.input ||
+          f.at("output").get<std::string>() != e.output || !e.param ||
+          f.at("parameter") != to_string(*e.param))
+        continue;
+      const auto [s, sigma] = secant(f.at("law"), x0, x1);
+      const double tol = 2 * std::max(sigma, 0.02 * std::abs(truth));
+      ok = sigma >= 0 && std::abs(s - truth) <= tol;
+      got = std::string(f.at("law").at("form")) + " law, slope " + std::to_string(s) + " +- " +
+            std::to_string(sigma) + " at " + std::to_string(f.at("values").size()) + " points";
+      break;
+    }
+    recovered += ok;
+    std::printf("    %s: %s, slope %g (exponent %.2f); %s: %s\n", e.describe().c_str(),
+                e.param ? to_string(*e.param) : "", truth, L.p[k], got.c_str(),
+                ok ? "recovered" : "MISSED");
+  }
+  return recovered;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,49 +150,18 @@ int main(int argc, char** argv) {
   int hidden = 0, recovered = 0, failed = 0;
   for (int i = first; i < first + cases; ++i) {
     const RandomCase c = random_case(seed, i, 1 + i % 2);
-    std::mt19937_64 g(seed * 6700417u + uint64_t(i));
-    std::uniform_real_distribution<double> u(0, 1);
-    const int n_points = 3 + int(g() % 3);
-    std::vector<double> xs;
-    for (int k = 0; k < n_points; ++k) xs.push_back(60 + 40.0 * k / (n_points - 1));
-    // The laws: per hidden effect an exponent, per path a gain exponent.
-    std::vector<HiddenEffect> laws;
-    std::vector<double> p;
-    for (const HiddenEffect& e : c.hidden) {
-      Model probe = c.engine;
-      if (!set_hidden_parameter(probe, e, e.value)) continue;  // no parameter to schedule
-      laws.push_back(e);
-      p.push_back((u(g) < 0.5 ? -1 : 1) * (0.5 + u(g)));
-    }
-    std::vector<double> q;
-    for (size_t k = 0; k < c.simulation.paths.size(); ++k) q.push_back(u(g) - 0.5);
+    const Laws L = draw_laws(c, seed, i);
+    const std::vector<double>& xs = L.xs;
+    const int n_points = int(xs.size());
     const std::string dir = out + "/" + c.name;
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir + "/engines");
-    std::filesystem::create_directories(dir + "/simulations");
-    for (double x : xs) {
-      Model eng = c.engine, sim = c.simulation;
-      for (size_t k = 0; k < laws.size(); ++k)
-        set_hidden_parameter(eng, laws[k], laws[k].value * std::pow(x / kCentre, p[k]));
-      for (Model* m : {&eng, &sim}) {
-        m->speed_pct = x;
-        for (ModelPath& path : m->paths)
-          for (size_t k = 0; k < c.simulation.paths.size(); ++k)
-            if (c.simulation.paths[k].input == path.input &&
-                c.simulation.paths[k].output == path.output)
-              path.tf.gain *= std::pow(x / kCentre, q[k]);
-      }
-      const std::string name = "x" + std::to_string(int(std::lround(x))) + ".json";
-      save_model(dir + "/engines/" + name, eng);
-      save_model(dir + "/simulations/" + name, sim);
-    }
+    write_points(c, L, dir);
     const std::string cmd = bin + " envelope --engine " + dir + "/engines --simulation " + dir +
                             "/simulations --out " + dir + "/envelope --no-plots --band " + band +
                             " --points-per-decade " + std::to_string(ppd) + " --excitation " +
                             excitation + " --seed 5 > " + dir + "/log.txt 2>&1";
     const int st = std::system(cmd.c_str());
     const int status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    hidden += int(laws.size());
+    hidden += int(L.laws.size());
     if (status != 0) {
       ++failed;
       std::printf("%s: fralab envelope failed (status %d; see %s/log.txt)\n", c.name.c_str(),
@@ -123,31 +171,7 @@ int main(int argc, char** argv) {
     const Json env = json_load_file(dir + "/envelope/envelope.json");
     std::printf("%s: %zu inputs x %zu outputs, %d points\n", c.name.c_str(),
                 c.simulation.inputs.size(), c.simulation.outputs.size(), n_points);
-    for (size_t k = 0; k < laws.size(); ++k) {
-      const HiddenEffect& e = laws[k];
-      const double x0 = xs.front(), x1 = xs.back();
-      const double truth =
-          e.value * (std::pow(x1 / kCentre, p[k]) - std::pow(x0 / kCentre, p[k])) / (x1 - x0);
-      std::string got = "not found";
-      bool ok = false;
-      for (const Json& f : env.at("findings")) {
-        if (f.at("cause") != to_string(e.cause) || f.at("scope") != to_string(e.scope) ||
-            f.at("input").get<std::string>() != e.input ||
-            f.at("output").get<std::string>() != e.output || !e.param ||
-            f.at("parameter") != to_string(*e.param))
-          continue;
-        const auto [s, sigma] = secant(f.at("law"), x0, x1);
-        const double tol = 2 * std::max(sigma, 0.02 * std::abs(truth));
-        ok = sigma >= 0 && std::abs(s - truth) <= tol;
-        got = std::string(f.at("law").at("form")) + " law, slope " + std::to_string(s) + " +- " +
-              std::to_string(sigma) + " at " + std::to_string(f.at("values").size()) + " points";
-        break;
-      }
-      recovered += ok;
-      std::printf("    %s: %s, slope %g (exponent %.2f); %s: %s\n", e.describe().c_str(),
-                  e.param ? to_string(*e.param) : "", truth, p[k], got.c_str(),
-                  ok ? "recovered" : "MISSED");
-    }
+    recovered += recovered_laws(env, L);
     std::fflush(stdout);
   }
   const double fraction = hidden ? double(recovered) / hidden : 1.0;

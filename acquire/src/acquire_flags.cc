@@ -175,7 +175,8 @@ AcquireField zoom_field() {
   return f;
 }
 
-std::vector<AcquireField> make_acquire_fields() {
+// What is excited and how: the inputs, the band, the excitation and its design, the density.
+std::vector<AcquireField> excitation_fields() {
   const bool kShow = true, kHide = false;
   return {
       value_field(
@@ -207,6 +208,14 @@ std::vector<AcquireField> make_acquire_fields() {
       value_field(
           "--points-per-decade", "/points_per_decade", "", kShow, Written::kAlways,
           [](auto& o) -> auto& { return o.points_per_decade; }),
+  };
+}
+
+// How hard and how long: the amplitude, the cycles and settling, the sample rate, the speed and
+// blocks.
+std::vector<AcquireField> level_and_timing_fields() {
+  const bool kShow = true, kHide = false;
+  return {
       value_field(
           "--amplitude-pct", "/amplitude_pct",
           "% of full scale (default: the input's test_amplitude_pct, else 2)", kHide,
@@ -242,6 +251,13 @@ std::vector<AcquireField> make_acquire_fields() {
           "--settle-time-constant-s", "/slowest_time_constant_s",
           "settling time constant, s (default: the model's slowest)", kHide, Written::kAlways,
           [](auto& o) -> auto& { return o.slowest_time_constant_s; }),
+  };
+}
+
+// The plant on its own clock, the adaptive stepped sine, and the multisine zoom.
+std::vector<AcquireField> free_running_and_adaptive_fields() {
+  const bool kShow = true, kHide = false;
+  return {
       switch_field(
           "--free-running", "/free_running",
           "the plant runs on its own clock at --speed (not in lockstep); commands are "
@@ -275,6 +291,15 @@ std::vector<AcquireField> make_acquire_fields() {
           "zoomed mode's resolution (1: it does not)",
           kShow, Written::kIfZoom, [](auto& o) -> auto& { return o.zoom_period_factor; }),
   };
+}
+
+// Every flag, in the order of --help and acquire.json.
+std::vector<AcquireField> make_acquire_fields() {
+  std::vector<AcquireField> all;
+  for (auto&& part :
+       {excitation_fields(), level_and_timing_fields(), free_running_and_adaptive_fields()})
+    all.insert(all.end(), part.begin(), part.end());
+  return all;
 }
 
 }  // namespace

@@ -165,11 +165,10 @@ std::string csv_quote(const std::string& s) {
 
 }  // namespace
 
-ExportSummary export_results_mat(const std::string& measure_dir, const std::string& out_file) {
-  const Results r = load_results(measure_dir);
-  std::vector<std::pair<std::string, MatValue>> vars;
-  vars.emplace_back("inputs", MatValue::str_list(r.inputs));
-  vars.emplace_back("outputs", MatValue::str_list(r.outputs));
+namespace {
+
+// The .mat's units: the frequency, phase and delay columns', then each channel's.
+MatValue mat_units(const Results& r) {
   MatValue units = MatValue::structure();
   units.add("w", MatValue::str("rad/s"));
   units.add("f_hz", MatValue::str("Hz"));
@@ -178,58 +177,80 @@ ExportSummary export_results_mat(const std::string& measure_dir, const std::stri
   for (const auto& [ch, u] : r.units)
     if (is_mat_name(ch) && ch != "w" && ch != "f_hz" && ch != "phase_deg" && ch != "delay_s")
       units.add(ch, MatValue::str(u));
-  vars.emplace_back("units", units);
+  return units;
+}
+
+// A curve as a .mat struct: its pair and channels, its points as columns (an unknown sigma or
+// coherence NaN), its units.
+MatValue mat_frd(const Results& r, const Frd& f) {
+  MatValue s = MatValue::structure();
+  std::vector<double> w, fhz, mag, ph, sig, coh, valid;
+  std::vector<std::complex<double>> h;
+  for (const auto& p : f.points) {
+    w.push_back(p.w);
+    fhz.push_back(p.w / (2 * std::numbers::pi));
+    mag.push_back(p.mag);
+    ph.push_back(p.phase_deg);
+    h.push_back(p.value());
+    sig.push_back(p.sigma >= 0 ? p.sigma : kNaN);
+    coh.push_back(p.coherence >= 0 ? p.coherence : kNaN);
+    valid.push_back(p.valid ? 1.0 : 0.0);
+  }
+  s.add("pair", MatValue::str(f.pair));
+  const auto [e1, e2] = split_pair(f.pair);
+  s.add("input", MatValue::str(e1));
+  s.add("output", MatValue::str(e2));
+  s.add("w", MatValue::column(w));
+  s.add("f_hz", MatValue::column(fhz));
+  s.add("mag", MatValue::column(mag));
+  s.add("phase_deg", MatValue::column(ph));
+  s.add("H", MatValue::complex_column(h));
+  s.add("sigma", MatValue::column(sig));
+  s.add("coherence", MatValue::column(coh));
+  s.add("valid", MatValue::column(valid));
+  s.add("units", MatValue::str(ratio_units(r, f.pair)));
+  return s;
+}
+
+// A fitted transfer function as a .mat struct: its text, gain, delay, polynomials, roots, fit
+// error, status and units.
+MatValue mat_tf(const Results& r, const Results::Path& p) {
+  MatValue s = MatValue::structure();
+  s.add("pair", MatValue::str(p.pair));
+  s.add("input", MatValue::str(p.input));
+  s.add("output", MatValue::str(p.output));
+  s.add("text", MatValue::str(tf_to_text(p.tf)));
+  s.add("gain", MatValue::scalar(p.tf.gain));
+  s.add("delay_s", MatValue::scalar(p.tf.delay_s));
+  const auto num = p.tf.numerator_coefficients(), den = p.tf.denominator_coefficients();
+  s.add("num", MatValue::matrix(1, num.size(), num));
+  s.add("den", MatValue::matrix(1, den.size(), den));
+  s.add("zeros", MatValue::complex_column(locations(p.tf.zeros)));
+  s.add("poles", MatValue::complex_column(locations(p.tf.poles)));
+  s.add("fit_error", MatValue::scalar(p.fit_error));
+  s.add("status", MatValue::str(p.status));
+  s.add("units", MatValue::str(ratio_units(r, p.pair)));
+  return s;
+}
+
+}  // namespace
+
+ExportSummary export_results_mat(const std::string& measure_dir, const std::string& out_file) {
+  const Results r = load_results(measure_dir);
+  std::vector<std::pair<std::string, MatValue>> vars;
+  vars.emplace_back("inputs", MatValue::str_list(r.inputs));
+  vars.emplace_back("outputs", MatValue::str_list(r.outputs));
+  vars.emplace_back("units", mat_units(r));
   ExportSummary sum;
   MatValue frd = MatValue::structure();
   for (const Frd& f : r.frd) {
-    MatValue s = MatValue::structure();
-    std::vector<double> w, fhz, mag, ph, sig, coh, valid;
-    std::vector<std::complex<double>> h;
-    for (const auto& p : f.points) {
-      w.push_back(p.w);
-      fhz.push_back(p.w / (2 * std::numbers::pi));
-      mag.push_back(p.mag);
-      ph.push_back(p.phase_deg);
-      h.push_back(p.value());
-      sig.push_back(p.sigma >= 0 ? p.sigma : kNaN);
-      coh.push_back(p.coherence >= 0 ? p.coherence : kNaN);
-      valid.push_back(p.valid ? 1.0 : 0.0);
-    }
-    s.add("pair", MatValue::str(f.pair));
-    const auto [e1, e2] = split_pair(f.pair);
-    s.add("input", MatValue::str(e1));
-    s.add("output", MatValue::str(e2));
-    s.add("w", MatValue::column(w));
-    s.add("f_hz", MatValue::column(fhz));
-    s.add("mag", MatValue::column(mag));
-    s.add("phase_deg", MatValue::column(ph));
-    s.add("H", MatValue::complex_column(h));
-    s.add("sigma", MatValue::column(sig));
-    s.add("coherence", MatValue::column(coh));
-    s.add("valid", MatValue::column(valid));
-    s.add("units", MatValue::str(ratio_units(r, f.pair)));
-    frd.add(mat_field(f.pair), s);
+    frd.add(mat_field(f.pair), mat_frd(r, f));
     ++sum.frd;
   }
   vars.emplace_back("frd", frd);
   MatValue tf = MatValue::structure();
   for (const auto& p : r.tf) {
-    MatValue s = MatValue::structure();
-    s.add("pair", MatValue::str(p.pair));
-    s.add("input", MatValue::str(p.input));
-    s.add("output", MatValue::str(p.output));
-    s.add("text", MatValue::str(tf_to_text(p.tf)));
-    s.add("gain", MatValue::scalar(p.tf.gain));
-    s.add("delay_s", MatValue::scalar(p.tf.delay_s));
-    const auto num = p.tf.numerator_coefficients(), den = p.tf.denominator_coefficients();
-    s.add("num", MatValue::matrix(1, num.size(), num));
-    s.add("den", MatValue::matrix(1, den.size(), den));
-    s.add("zeros", MatValue::complex_column(locations(p.tf.zeros)));
-    s.add("poles", MatValue::complex_column(locations(p.tf.poles)));
-    s.add("fit_error", MatValue::scalar(p.fit_error));
-    s.add("status", MatValue::str(p.status));
-    s.add("units", MatValue::str(ratio_units(r, p.pair)));
-    tf.add(mat_field(p.pair), s);
+    tf.add(mat_field(p.pair), mat_tf(r, p));
     ++sum.tf;
   }
   vars.emplace_back("tf", tf);

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "fralab/core/error.h"
 #include "fralab/core/numerics.h"
@@ -17,8 +18,80 @@ void NoiseFitOptions::validate() const {
                      std::to_string(evidence));
 }
 
+namespace {
+
 // The fraction of a point's degrees of freedom a fit must leave it for its residual to count.
 constexpr double kMinDof = 0.2;
+
+// The usable points' squared residuals r and variance factors (ur relative to mref, the
+// geometric mean of the squared magnitudes; ua absolute).
+struct UsablePoints {
+  std::vector<double> r, ur, ua;
+  double mref = 0;  // 0: no magnitude to scale by
+};
+
+// The usable points: finite, with at least kMinDof of their degrees of freedom left by the fit.
+// The variance factors are a linearisation at a least-squares optimum; an over-fit by SK is near
+// one, not at it, and where it absorbed a point almost whole (dof ~ 0) the residual it left is
+// its distance from that optimum, not noise: an over-fit of 29 parameters to the 34 points of
+// the J85 lab's A8:P3 (sigma stripped) left 0.2-8 % of the variance to its 10 points above
+// 100 rad/s, and their residuals, 10-80x what that predicts, set b 50x too high.
+UsablePoints usable_points(const std::vector<double>& e2, const std::vector<double>& mag2,
+                           const ResidualVariance& rv) {
+  UsablePoints u;
+  double lm = 0;
+  int nm = 0;
+  for (const double m : mag2)
+    if (m > 0 && std::isfinite(m)) lm += std::log(m), ++nm;
+  if (nm == 0) return u;
+  u.mref = std::exp(lm / nm);
+  for (size_t i = 0; i < e2.size(); ++i) {
+    if (!(std::isfinite(e2[i]) && mag2[i] > 0 && std::isfinite(mag2[i]) && rv.rel[i] >= 0 &&
+          rv.abs[i] >= 0 && std::isfinite(rv.rel[i]) && std::isfinite(rv.abs[i])))
+      continue;
+    if (!(rv.dof[i] >= kMinDof) || (rv.rel[i] < 1e-9 * mag2[i] && rv.abs[i] < 1e-9)) continue;
+    u.r.push_back(e2[i]);
+    u.ur.push_back(rv.rel[i] / u.mref);
+    u.ua.push_back(rv.abs[i]);
+  }
+  return u;
+}
+
+// The shape (c, s) with the least profile(c, s) over the mixed ones, starting from the relative
+// (1, 0) at l_best: tan(phi) = 10^x two decades beyond the range of ur_i / ua_i (either part
+// is then negligible at every point), and the ends (phi = 0, pi/2) themselves. l_best becomes
+// the least.
+std::pair<double, double> best_shape(const UsablePoints& u,
+                                     const std::function<double(double, double)>& profile,
+                                     double& l_best) {
+  double qmin = INFINITY, qmax = 0;
+  for (size_t i = 0; i < u.r.size(); ++i) {
+    if (!(u.ur[i] > 0 && u.ua[i] > 0)) continue;
+    qmin = std::min(qmin, u.ur[i] / u.ua[i]), qmax = std::max(qmax, u.ur[i] / u.ua[i]);
+  }
+  double c = 1, s = 0;
+  if (qmax > 0) {
+    const double x_lo = std::log10(qmin) - 2, x_hi = std::log10(qmax) + 2;
+    auto at_x = [&](double x) {
+      const double t = std::pow(10.0, x);
+      return profile(1 / std::hypot(1.0, t), t / std::hypot(1.0, t));
+    };
+    constexpr double kStep = 0.25;  // decades
+    double bx = x_lo, bl = INFINITY;
+    for (double x = x_lo; x <= x_hi + 1e-9; x += kStep) {
+      const double l = at_x(x);
+      if (l < bl) bl = l, bx = x;
+    }
+    const double x_best = detail::brent_minimum(at_x, bx - kStep, bx + kStep, 30);
+    const double t = std::pow(10.0, x_best);
+    if (const double l = at_x(x_best); l < l_best)
+      l_best = l, c = 1 / std::hypot(1.0, t), s = t / std::hypot(1.0, t);
+  }
+  if (const double l = profile(0, 1); l < l_best) l_best = l, c = 0, s = 1;
+  return {c, s};
+}
+
+}  // namespace
 
 NoiseFit fit_noise_model(const std::vector<double>& e2, const std::vector<double>& mag2,
                          const ResidualVariance& rv, const NoiseFitOptions& o) {
@@ -27,37 +100,19 @@ NoiseFit fit_noise_model(const std::vector<double>& e2, const std::vector<double
   if (e2.size() != mag2.size() || e2.size() != rv.rel.size() || e2.size() != rv.abs.size() ||
       e2.size() != rv.dof.size())
     throw InputError("noise model: residuals, magnitudes and variance factors differ in length");
-  double lm = 0;
-  int nm = 0;
-  for (const double m : mag2)
-    if (m > 0 && std::isfinite(m)) lm += std::log(m), ++nm;
-  if (nm == 0) return f;
-  const double mref = std::exp(lm / nm);
-  // The usable points: finite, with at least kMinDof of their degrees of freedom left by the fit.
-  // The variance factors are a linearisation at a least-squares optimum; an over-fit by SK is near
-  // one, not at it, and where it absorbed a point almost whole (dof ~ 0) the residual it left is
-  // its distance from that optimum, not noise: an over-fit of 29 parameters to the 34 points of
-  // the J85 lab's A8:P3 (sigma stripped) left 0.2-8 % of the variance to its 10 points above
-  // 100 rad/s, and their residuals, 10-80x what that predicts, set b 50x too high.
-  std::vector<double> r, ur, ua;
-  for (size_t i = 0; i < e2.size(); ++i) {
-    if (!(std::isfinite(e2[i]) && mag2[i] > 0 && std::isfinite(mag2[i]) && rv.rel[i] >= 0 &&
-          rv.abs[i] >= 0 && std::isfinite(rv.rel[i]) && std::isfinite(rv.abs[i])))
-      continue;
-    if (!(rv.dof[i] >= kMinDof) || (rv.rel[i] < 1e-9 * mag2[i] && rv.abs[i] < 1e-9)) continue;
-    r.push_back(e2[i]);
-    ur.push_back(rv.rel[i] / mref);
-    ua.push_back(rv.abs[i]);
-  }
+  const UsablePoints u = usable_points(e2, mag2, rv);
+  if (u.mref == 0) return f;
+  const std::vector<double>&r = u.r, &ur = u.ur, &ua = u.ua;
+  const double mref = u.mref;
   const double n = double(r.size());
   if (r.size() < 2) return f;
   // L profiled over the scale, for the shape (c, s): vhat_i = scale (c ur_i + s ua_i).
   auto profile = [&](double c, double s, double* scale) -> double {
     double num = 0, logs = 0;
     for (size_t i = 0; i < r.size(); ++i) {
-      const double u = std::max(c * ur[i] + s * ua[i], 1e-300);
-      num += r[i] / u;
-      logs += std::log(u);
+      const double v = std::max(c * ur[i] + s * ua[i], 1e-300);
+      num += r[i] / v;
+      logs += std::log(v);
     }
     const double sc = num / n;
     if (scale) *scale = sc;
@@ -71,32 +126,9 @@ NoiseFit fit_noise_model(const std::vector<double>& e2, const std::vector<double
   };
   f.l_relative = profile(1, 0, nullptr);
   f.relative = model_of(1, 0);
-  // The shape by tan(phi) = 10^x: two decades beyond the range of ur_i / ua_i either part is
-  // negligible at every point, and the ends (phi = 0, pi/2) are evaluated themselves.
-  double qmin = INFINITY, qmax = 0;
-  for (size_t i = 0; i < r.size(); ++i) {
-    if (!(ur[i] > 0 && ua[i] > 0)) continue;
-    qmin = std::min(qmin, ur[i] / ua[i]), qmax = std::max(qmax, ur[i] / ua[i]);
-  }
-  double c = 1, s = 0, l_best = f.l_relative;
-  if (qmax > 0) {
-    const double x_lo = std::log10(qmin) - 2, x_hi = std::log10(qmax) + 2;
-    auto at_x = [&](double x) {
-      const double t = std::pow(10.0, x);
-      return profile(1 / std::hypot(1.0, t), t / std::hypot(1.0, t), nullptr);
-    };
-    constexpr double kStep = 0.25;  // decades
-    double bx = x_lo, bl = INFINITY;
-    for (double x = x_lo; x <= x_hi + 1e-9; x += kStep) {
-      const double l = at_x(x);
-      if (l < bl) bl = l, bx = x;
-    }
-    const double x_best = detail::brent_minimum(at_x, bx - kStep, bx + kStep, 30);
-    const double t = std::pow(10.0, x_best);
-    if (const double l = at_x(x_best); l < l_best)
-      l_best = l, c = 1 / std::hypot(1.0, t), s = t / std::hypot(1.0, t);
-  }
-  if (const double l = profile(0, 1, nullptr); l < l_best) l_best = l, c = 0, s = 1;
+  double l_best = f.l_relative;
+  const auto [c, s] = best_shape(
+      u, [&](double cc, double ss) { return profile(cc, ss, nullptr); }, l_best);
   f.l_mixed = l_best;
   f.mixed = model_of(c, s);
   f.absolute_part = f.l_relative - f.l_mixed >= o.evidence && f.mixed.abs > 0;

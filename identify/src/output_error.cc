@@ -245,9 +245,34 @@ Lmpar lmpar(const MatR& A, const VecR& g, const VecR& diag, double delta, double
   return out;
 }
 
-LmStop lm_minimize(const OeFunctor& f, VecR& x, int max_fev, bool chi2_units) {
-  constexpr double kXtol = 1e-12, kFtol = 1e-14, kFactor = 100;
+// MINPACK's trust-region update after a step of ratio = actual / predicted reduction: shrink the
+// region (and raise par) when the step did poorly (ratio <= 0.25; fnorm1 the residual's norm after
+// it, fnorm before), widen it (and halve par) when it did well.
+void update_trust_region(double ratio, double actred, double dirder, double fnorm1, double fnorm,
+                         double pnorm, double& delta, double& par) {
+  if (ratio <= 0.25) {
+    double temp = actred >= 0 ? 0.5 : 0.5 * dirder / (dirder + 0.5 * actred);
+    if (!(0.1 * fnorm1 < fnorm) || temp < 0.1) temp = 0.1;
+    delta = temp * std::min(delta, pnorm / 0.1);
+    par /= temp;
+  } else if (par == 0 || ratio >= 0.75) {
+    delta = pnorm / 0.5;
+    par *= 0.5;
+  }
+}
+
+// MINPACK's tests: the relative reduction (actual and predicted) or the region's size below the
+// tolerances, or below what double precision resolves.
+bool lm_converged(double actred, double prered, double ratio, double delta, double xnorm) {
+  constexpr double kXtol = 1e-12, kFtol = 1e-14;
   constexpr double kEps = std::numeric_limits<double>::epsilon();
+  return (std::abs(actred) <= kFtol && prered <= kFtol && 0.5 * ratio <= 1) ||
+         delta <= kXtol * xnorm ||
+         (std::abs(actred) <= kEps && prered <= kEps && 0.5 * ratio <= 1) || delta <= kEps * xnorm;
+}
+
+LmStop lm_minimize(const OeFunctor& f, VecR& x, int max_fev, bool chi2_units) {
+  constexpr double kFactor = 100;
   const int nv = f.values(), np = f.inputs();
   VecR r(nv), rn(nv);
   MatR J(nv, np);
@@ -291,15 +316,7 @@ LmStop lm_minimize(const OeFunctor& f, VecR& x, int max_fev, bool chi2_units) {
       const double prered = temp1 * temp1 + temp2 * temp2 / 0.5;
       const double dirder = -(temp1 * temp1 + temp2 * temp2);
       const double ratio = prered != 0 ? actred / prered : 0;
-      if (ratio <= 0.25) {
-        double temp = actred >= 0 ? 0.5 : 0.5 * dirder / (dirder + 0.5 * actred);
-        if (!(0.1 * fnorm1 < fnorm) || temp < 0.1) temp = 0.1;
-        delta = temp * std::min(delta, pnorm / 0.1);
-        par /= temp;
-      } else if (par == 0 || ratio >= 0.75) {
-        delta = pnorm / 0.5;
-        par *= 0.5;
-      }
+      update_trust_region(ratio, actred, dirder, fnorm1, fnorm, pnorm, delta, par);
       const bool accepted = ratio >= 1e-4;
       if (accepted) {
         x = xn;
@@ -307,10 +324,7 @@ LmStop lm_minimize(const OeFunctor& f, VecR& x, int max_fev, bool chi2_units) {
         xnorm = diag.cwiseProduct(x).norm();
         fnorm = fnorm1;
       }
-      if ((std::abs(actred) <= kFtol && prered <= kFtol && 0.5 * ratio <= 1) ||
-          delta <= kXtol * xnorm ||
-          (std::abs(actred) <= kEps && prered <= kEps && 0.5 * ratio <= 1) ||
-          delta <= kEps * xnorm) {
+      if (lm_converged(actred, prered, ratio, delta, xnorm)) {
         done = true;
         break;
       }

@@ -126,6 +126,26 @@ std::vector<Root> to_roots(const std::vector<C>& lam, double scale) {
 
 constexpr int kSkStall = 3;
 
+// One SK iteration's columns in basis b, stacked [Re; Im]: Q1 = sqrt(2) AN, AN the numerator's
+// (the Arnoldi vectors -q_k, k = 0..m), and AD the denominator's (g_i q_k, k = 0..n).
+void sk_columns(const Basis& b, const std::vector<C>& g, int n, int m, MatR* Q1, MatR* AD) {
+  const int M = int(g.size());
+  Q1->resize(2 * M, m + 1);
+  AD->resize(2 * M, n + 1);
+  for (int i = 0; i < M; ++i) {
+    for (int k = 0; k <= m; ++k) {
+      C q = -std::sqrt(2.0) * b.Qw(i, k);
+      (*Q1)(i, k) = q.real();
+      (*Q1)(M + i, k) = q.imag();
+    }
+    for (int k = 0; k <= n; ++k) {
+      C q = g[i] * b.Qw(i, k);
+      (*AD)(i, k) = q.real();
+      (*AD)(M + i, k) = q.imag();
+    }
+  }
+}
+
 }  // namespace
 
 // SK iteration at orders (n, m) on data g (delay already removed), scaled frequency. The first
@@ -154,20 +174,8 @@ Sk sk_fit(const Data& d, const std::vector<C>& g, int n, int m, double ws, const
     std::vector<double> sw(M);
     for (int i = 0; i < M; ++i) sw[i] = std::sqrt(phi[i]);
     Basis b = arnoldi(y, sw, order);
-    // Q1 = sqrt(2) AN, AN: the numerator's columns, the Arnoldi vectors -q_k stacked [Re; Im].
-    MatR Q1(2 * M, m + 1), AD(2 * M, n + 1);
-    for (int i = 0; i < M; ++i) {
-      for (int k = 0; k <= m; ++k) {
-        C q = -std::sqrt(2.0) * b.Qw(i, k);
-        Q1(i, k) = q.real();
-        Q1(M + i, k) = q.imag();
-      }
-      for (int k = 0; k <= n; ++k) {
-        C q = g[i] * b.Qw(i, k);
-        AD(i, k) = q.real();
-        AD(M + i, k) = q.imag();
-      }
-    }
+    MatR Q1, AD;
+    sk_columns(b, g, n, m, &Q1, &AD);
     // AN's columns are the Arnoldi vectors stacked [Re; Im]: orthogonal with norm 1/sqrt(2) in the
     // real inner product (the basis' inner product is 2 Re sum conj(u) v). So Q1 = sqrt(2) AN spans
     // N's range exactly, and N is eliminated without a factorisation.

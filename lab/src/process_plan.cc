@@ -18,6 +18,64 @@ std::string host_of(const MeasureOptions& o, const std::string& kind) {
   return it == o.hosts.end() ? std::string() : it->second;
 }
 
+// fralab-plant's command line: the engine, the seed and sample rate, free running on its own
+// clock or stepped by the acquisition, and on a resumed run the tape's blocks replayed.
+std::vector<std::string> plant_args(const MeasureOptions& o, const AcquireOptions& ao,
+                                    const std::string& run_id, const std::string& url,
+                                    const ResumePoint& from, const ModuleResolver& program) {
+  const MeasureDir dir(o.out);
+  std::vector<std::string> plant = {program("fralab-plant"),
+                                    "--model",
+                                    dir.engine(),
+                                    "--lcm-url",
+                                    url,
+                                    "--seed",
+                                    std::to_string(o.seed),
+                                    "--run-id",
+                                    run_id,
+                                    "--sample-rate",
+                                    lossless(ao.sample_rate_hz)};
+  if (o.no_noise) plant.push_back("--no-noise");
+  if (ao.free_running)  // on its own clock, a tape block per command block's length
+    plant.insert(plant.end(),
+                 {"--free-running", "--speed", lossless(ao.speed), "--tick",
+                  std::to_string(ao.block), "--jitter-ms", lossless(o.plant_jitter_ms)});
+  if (o.resume)  // the blocks on the tape replayed, to stand where the run stood
+    plant.insert(plant.end(),
+                 {"--replay", dir.tape(), "--replay-blocks", std::to_string(from.first_block)});
+  return plant;
+}
+
+// fralab-acquire's command line: the engine, the consumers it waits for, where a resumed run
+// starts, its summary file, and the campaign's flags (acquire_flags).
+std::vector<std::string> acquire_args(const MeasureOptions& o, const AcquireOptions& ao,
+                                      const std::string& run_id, const std::string& url,
+                                      const ResumePoint& from,
+                                      const std::vector<std::string>& consumers,
+                                      const ModuleResolver& program) {
+  const MeasureDir dir(o.out);
+  std::vector<std::string> acq = {program("fralab-acquire"),
+                                  "--engine",
+                                  dir.engine(),
+                                  "--lcm-url",
+                                  url,
+                                  "--run-id",
+                                  run_id,
+                                  "--consumers",
+                                  join_list(consumers, ","),
+                                  "--stall-timeout",
+                                  lossless(o.stall_timeout_s),
+                                  "--first-block",
+                                  std::to_string(from.first_block),
+                                  "--first-status",
+                                  std::to_string(from.first_status),
+                                  "--summary",
+                                  dir.acquire_summary(),
+                                  "--emulator-chain"};
+  for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
+  return acq;
+}
+
 }  // namespace
 
 AnalyserGrouping AnalyserGrouping::parse(const std::string& word) {
@@ -88,7 +146,6 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
   ProcessPlan plan;
   if (from.complete) return plan;  // the tape holds everything: nothing to start
   const MeasureDir dir(o.out);
-  const std::string tape = dir.tape(), engine_file = dir.engine();
   const std::vector<int> excite = select_inputs(model, o.acquire.inputs);
   std::vector<std::string> input_names, outs;
   for (int i : excite) input_names.push_back(model.inputs[i].name);
@@ -99,32 +156,14 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
   auto start = [&](ProcessSpec spec) { plan.processes.push_back(std::move(spec)); };
 
   std::vector<std::string> rec = {
-      program("fralab-record"), "--lcm-url", url, "--run-id", run_id, "--out", tape};
+      program("fralab-record"), "--lcm-url", url, "--run-id", run_id, "--out", dir.tape()};
   if (o.resume)  // the tape is continued where it is whole
     rec.insert(rec.end(), {"--append", "--first-block", std::to_string(from.first_block),
                            "--first-status", std::to_string(from.first_status)});
   start({"recorder", rec, dir.log("recorder"), host_of(o, "recorder")});
 
-  std::vector<std::string> plant = {program("fralab-plant"),
-                                    "--model",
-                                    engine_file,
-                                    "--lcm-url",
-                                    url,
-                                    "--seed",
-                                    std::to_string(o.seed),
-                                    "--run-id",
-                                    run_id,
-                                    "--sample-rate",
-                                    lossless(ao.sample_rate_hz)};
-  if (o.no_noise) plant.push_back("--no-noise");
-  if (ao.free_running)  // on its own clock, a tape block per command block's length
-    plant.insert(plant.end(),
-                 {"--free-running", "--speed", lossless(ao.speed), "--tick",
-                  std::to_string(ao.block), "--jitter-ms", lossless(o.plant_jitter_ms)});
-  if (o.resume)  // the blocks on the tape replayed, to stand where the run stood
-    plant.insert(plant.end(),
-                 {"--replay", tape, "--replay-blocks", std::to_string(from.first_block)});
-  start({"plant", plant, dir.log("plant"), host_of(o, "plant")});
+  start({"plant", plant_args(o, ao, run_id, url, from, program), dir.log("plant"),
+         host_of(o, "plant")});
 
   plan.consumers = {"plant", "recorder"};
   plan.awaited = {"plant"};
@@ -150,26 +189,8 @@ ProcessPlan plan_processes(const Model& model, const MeasureOptions& o, const st
              /*essential=*/false});
   }
 
-  std::vector<std::string> acq = {program("fralab-acquire"),
-                                  "--engine",
-                                  engine_file,
-                                  "--lcm-url",
-                                  url,
-                                  "--run-id",
-                                  run_id,
-                                  "--consumers",
-                                  join_list(plan.consumers, ","),
-                                  "--stall-timeout",
-                                  lossless(o.stall_timeout_s),
-                                  "--first-block",
-                                  std::to_string(from.first_block),
-                                  "--first-status",
-                                  std::to_string(from.first_status),
-                                  "--summary",
-                                  dir.acquire_summary(),
-                                  "--emulator-chain"};
-  for (const std::string& f : acquire_flags(ao)) acq.push_back(f);
-  start({"acquire", acq, dir.log("acquire"), host_of(o, "acquire")});
+  start({"acquire", acquire_args(o, ao, run_id, url, from, plan.consumers, program),
+         dir.log("acquire"), host_of(o, "acquire")});
   plan.awaited.push_back("acquire");
   return plan;
 }

@@ -28,6 +28,60 @@ C phi2(C x) {
   return (std::exp(x) - 1.0 - x) / (x * x);
 }
 
+// a(s) b(s), both in ascending powers.
+std::vector<double> poly_mul(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r(a.size() + b.size() - 1, 0.0);
+  for (size_t i = 0; i < a.size(); ++i)
+    for (size_t j = 0; j < b.size(); ++j) r[i + j] += a[i] * b[j];
+  return r;
+}
+
+// A root's unity-DC-gain factor in ascending powers: 1 + 2 zeta s / wn + s^2 / wn^2, or 1 - s / r.
+std::vector<double> unity_dc_factor(const Root& r) {
+  if (r.pair) return std::vector<double>{1.0, 2.0 * r.zeta / r.wn, 1.0 / (r.wn * r.wn)};
+  return std::vector<double>{1.0, -1.0 / r.real};
+}
+
+// A cascade's sections N_k(s) / D_k(s), unity DC gain each, ascending powers: real poles grouped
+// in twos, pairs alone; zero pairs first, then real zeros, fill the sections' numerator capacity
+// in order. InputError when a zero finds no room.
+struct CascadeSections {
+  std::vector<std::vector<double>> dens, nums;
+};
+
+CascadeSections cascade_sections(const Tf& tf) {
+  CascadeSections sec;
+  std::vector<std::vector<double>>& dens = sec.dens;
+  std::vector<const Root*> reals;
+  for (const Root& p : tf.poles) {
+    if (p.pair)
+      dens.push_back(unity_dc_factor(p));
+    else
+      reals.push_back(&p);
+  }
+  for (size_t i = 0; i + 1 < reals.size(); i += 2)
+    dens.push_back(poly_mul(unity_dc_factor(*reals[i]), unity_dc_factor(*reals[i + 1])));
+  if (reals.size() % 2) dens.push_back(unity_dc_factor(*reals.back()));
+  sec.nums.assign(dens.size(), std::vector<double>{1.0});
+  std::vector<int> cap(dens.size());
+  for (size_t k = 0; k < dens.size(); ++k) cap[k] = static_cast<int>(dens[k].size()) - 1;
+  std::vector<const Root*> zp, zr;
+  for (const Root& z : tf.zeros) (z.pair ? zp : zr).push_back(&z);
+  auto place = [&](const Root* z, int degree) {
+    for (size_t k = 0; k < dens.size(); ++k) {
+      if (cap[k] >= degree) {
+        sec.nums[k] = poly_mul(sec.nums[k], unity_dc_factor(*z));
+        cap[k] -= degree;
+        return;
+      }
+    }
+    throw InputError("cascade realisation: cannot place zero " + z->str());
+  };
+  for (const Root* z : zp) place(z, 2);
+  for (const Root* z : zr) place(z, 1);
+  return sec;
+}
+
 }  // namespace
 
 std::complex<double> foh_sampled_response(const Tf& tf, double w, double fs) {
@@ -158,60 +212,8 @@ FohLti::ModalDisc FohLti::modal_disc(double h) const {
 }
 
 void FohLti::build_cascade(const Tf& tf) {
-  // Sections: real poles grouped in twos, pairs alone; zero pairs first, then real zeros, fill the
-  // sections' numerator capacity. Each section N_k(s)/D_k(s) in controllable canonical form, in
-  // monic-denominator coefficients, connected in series; the DC gain sits on the first section.
-  struct Poly {
-    std::vector<double> c;
-  };  // ascending powers
-  auto mul = [](const std::vector<double>& a, const std::vector<double>& b) {
-    std::vector<double> r(a.size() + b.size() - 1, 0.0);
-    for (size_t i = 0; i < a.size(); ++i)
-      for (size_t j = 0; j < b.size(); ++j) r[i + j] += a[i] * b[j];
-    return r;
-  };
-  auto poly_of = [](const Root& r) {  // unity-DC-gain factor in ascending powers
-    if (r.pair) return std::vector<double>{1.0, 2.0 * r.zeta / r.wn, 1.0 / (r.wn * r.wn)};
-    return std::vector<double>{1.0, -1.0 / r.real};
-  };
-  std::vector<std::vector<double>> dens;
-  std::vector<const Root*> reals;
-  for (const Root& p : tf.poles) {
-    if (p.pair)
-      dens.push_back(poly_of(p));
-    else
-      reals.push_back(&p);
-  }
-  for (size_t i = 0; i + 1 < reals.size(); i += 2)
-    dens.push_back(mul(poly_of(*reals[i]), poly_of(*reals[i + 1])));
-  if (reals.size() % 2) dens.push_back(poly_of(*reals.back()));
-  std::vector<std::vector<double>> nums(dens.size(), std::vector<double>{1.0});
-  std::vector<int> cap(dens.size());
-  for (size_t k = 0; k < dens.size(); ++k) cap[k] = static_cast<int>(dens[k].size()) - 1;
-  std::vector<const Root*> zp, zr;
-  for (const Root& z : tf.zeros) (z.pair ? zp : zr).push_back(&z);
-  for (const Root* z : zp) {
-    for (size_t k = 0; k < dens.size(); ++k) {
-      if (cap[k] >= 2) {
-        nums[k] = mul(nums[k], poly_of(*z));
-        cap[k] -= 2;
-        z = nullptr;
-        break;
-      }
-    }
-    if (z) throw InputError("cascade realisation: cannot place zero " + z->str());
-  }
-  for (const Root* z : zr) {
-    for (size_t k = 0; k < dens.size(); ++k) {
-      if (cap[k] >= 1) {
-        nums[k] = mul(nums[k], poly_of(*z));
-        cap[k] -= 1;
-        z = nullptr;
-        break;
-      }
-    }
-    if (z) throw InputError("cascade realisation: cannot place zero " + z->str());
-  }
+  const CascadeSections sec = cascade_sections(tf);
+  const std::vector<std::vector<double>>&dens = sec.dens, &nums = sec.nums;
   const int n = order_;
   a_ = Eigen::MatrixXd::Zero(n, n);
   b_ = Eigen::VectorXd::Zero(n);
