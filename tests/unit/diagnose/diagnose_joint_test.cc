@@ -6,7 +6,7 @@
 #include <cmath>
 #include <complex>
 
-#include "../../diagnose/src/stages/stages.h"
+#include "../../../diagnose/src/stages/stages.h"
 #include "fralab/diagnose/diagnose.h"
 
 using namespace fralab;
