@@ -2,8 +2,8 @@
 // measure/run/diagnose, which pass them on), the flags that reproduce them exactly (numbers written
 // losslessly) for a child process, and their JSON form (docs/formats.md §27). All three are driven
 // by one table, acquire_fields(): a field of AcquireOptions is a row of it, so it cannot be bound
-// to a flag and then dropped between processes (tests/unit/acquire/acquire_flags_test.cc holds every row
-// to the round trip, and the table to the struct's member count).
+// to a flag and then dropped between processes (tests/unit/acquire/acquire_flags_test.cc holds
+// every row to the round trip, and the table to the struct's member count).
 #pragma once
 
 #include <CLI/CLI.hpp>
