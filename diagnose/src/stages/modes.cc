@@ -15,7 +15,8 @@
 // gain, fitted by the later stages, is not taken up by a mode, and a wrong neighbour's peak does
 // not flatten the mode being fitted. Greedy, while a move lowers chi2 by more than k ln 2N in units
 // of its pairs' misfit level s = max(1, chi2 / N) and lowers their error; then each mode fitted
-// again with the others in place, and the least useful dropped while it does not earn its place. A
+// again with the others in place, the forms compared whole (every move with its shape kept, kept
+// when chi2 is lower), and the least useful dropped while it does not earn its place. A
 // frequency move below kBandShare of the half-power band is a damping_error.
 #include <algorithm>
 #include <cmath>
@@ -313,9 +314,10 @@ MovedMode settle(const std::function<double(double, double)>& total, const ModeR
 
 // The same move with each path's mode shape kept, from the factor's optimum (frequency and damping
 // alternately, as the factor's): it replaces `factor` when it has the lower chi2 (a structure's
-// mode moves with its shape, and its antiresonances with it).
+// mode moves with its shape, and its antiresonances with it), or always when `shape_only`.
 MovedMode with_residues_kept(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
-                             const ModeRange& g, const MovedMode& factor, size_t n) {
+                             const ModeRange& g, const MovedMode& factor, size_t n,
+                             bool shape_only) {
   auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
   if (m.residue.empty()) return factor;
   auto total = [&](double lwn, double lz) { return chi2_moved(r, mv, m, to(lwn, lz), true); };
@@ -324,13 +326,13 @@ MovedMode with_residues_kept(const DiagnosisRun& r, const Moves& mv, const Share
   lwn = brent_in([&](double x) { return total(x, lz); }, g.clamp(lwn - step), g.clamp(lwn + step));
   MovedMode best{std::exp(lwn), m.root.zeta, total(lwn, lz), 1, {}, true};
   best = settle(total, g, lwn, std::log(factor.zeta), best, n, true);
-  if (!(best.chi2 < factor.chi2)) return factor;
+  if (!shape_only && !(best.chi2 < factor.chi2)) return factor;
   best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), true);
   return best;
 }
 
-MovedMode fit_mode(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
-                   const ModeRange& g) {
+MovedMode fit_mode(const DiagnosisRun& r, const Moves& mv, const SharedMode& m, const ModeRange& g,
+                   bool shape_only) {
   const Root& from = m.root;
   auto to = [](double lwn, double lz) { return Root::Pair(std::exp(lwn), std::exp(lz)); };
   auto total = [&](double lwn, double lz) { return chi2_moved(r, mv, m, to(lwn, lz), false); };
@@ -344,7 +346,7 @@ MovedMode fit_mode(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
   const size_t n = points_over(r, m);
   best = settle(total, g, lwn, lz, best, n, false);
   best.F = move_factors(r, m, Root::Pair(best.wn, best.zeta), false);
-  return with_residues_kept(r, mv, m, g, best, n);
+  return with_residues_kept(r, mv, m, g, best, n, shape_only);
 }
 
 // The error metric over the mode's pairs, their current factors with the move F (empty: none).
@@ -417,6 +419,26 @@ Finding finding_of(const DiagnosisRun& r, const Moves& mv, const SharedMode& m,
   return f;
 }
 
+// chi2 over the pairs of the modes `ms` (each once), their factors as they now are.
+double chi2_over(const DiagnosisRun& r, const Moves& mv, const std::vector<SharedMode>& ms) {
+  std::vector<size_t> pairs;
+  for (const SharedMode& m : ms)
+    for (size_t k : m.pairs)
+      if (std::find(pairs.begin(), pairs.end(), k) == pairs.end()) pairs.push_back(k);
+  double c = 0;
+  for (size_t k : pairs) {
+    const PairFit& p = r.pairs[k];
+    c += pair_log_chi2(p, [&](size_t q) { return p.sim[q] * mv.now(k, q); });
+  }
+  return c;
+}
+
+// Every pair's factor as the moves mv have it.
+void restore_factors(DiagnosisRun& r, const Moves& mv) {
+  for (size_t k = 0; k < r.pairs.size(); ++k)
+    for (size_t q = 0; q < r.pairs[k].factor.size(); ++q) r.pairs[k].factor[q] = mv.now(k, q);
+}
+
 // The moves the stage takes, applied to the pairs' factors.
 struct Pass {
   std::vector<SharedMode> taken;
@@ -431,7 +453,10 @@ Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
   std::vector<SharedMode> taken;
   std::vector<MovedMode> fits;
   Moves mv(r);
-  auto fit = [&](const SharedMode& m) { return fit_mode(r, mv, m, range_of(all, now, m.id)); };
+  bool shape_only = false;  // every move with its mode shape kept (the forms compared below)
+  auto fit = [&](const SharedMode& m) {
+    return fit_mode(r, mv, m, range_of(all, now, m.id), shape_only);
+  };
   auto take = [&](const SharedMode& m, const MovedMode& f, bool inverse) {
     apply_factor(r, mv, m, f, inverse);
     now[m.id] = inverse ? m.root : Root::Pair(f.wn, f.zeta);
@@ -478,6 +503,27 @@ Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
   // other share their band, and the first one taken held part of the next), kBackfitRounds times.
   for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round)
     for (size_t j = 0; j < taken.size(); ++j) refit(j);
+  // The forms compared whole: a mode fitted alone beside a neighbour sized wrong may take the
+  // factor form, which then holds the neighbour where it is (modes moved with their shapes add;
+  // a factor multiplies the neighbour's term too). Every move refitted with its shape kept, the
+  // same rounds; kept when chi2 over the moved modes' pairs is lower than the mixed forms'.
+  const bool mixed =
+      std::any_of(fits.begin(), fits.end(), [](const MovedMode& f) { return !f.residues_kept; }) &&
+      std::any_of(taken.begin(), taken.end(),
+                  [](const SharedMode& m) { return !m.residue.empty(); });
+  if (taken.size() > 1 && mixed) {
+    const Moves mv0 = mv;
+    const std::vector<MovedMode> fits0 = fits;
+    const std::vector<Root> now0 = now;
+    const double c_mixed = chi2_over(r, mv, taken);
+    shape_only = true;
+    for (int round = 0; round < kBackfitRounds; ++round)
+      for (size_t j = 0; j < taken.size(); ++j) refit(j);
+    if (!(chi2_over(r, mv, taken) < c_mixed)) {
+      mv = mv0, fits = fits0, now = now0, shape_only = false;
+      restore_factors(r, mv);
+    }
+  }
   // Each must still earn its place with the others in place, as it did when taken: the least
   // useful is dropped while its removal raises chi2 by no more than its penalty in units of the
   // misfit level (a small move that made up for a neighbour taken before it was refitted), and
