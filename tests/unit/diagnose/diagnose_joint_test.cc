@@ -8,6 +8,7 @@
 
 #include "../../../diagnose/src/stages/stages.h"
 #include "fralab/diagnose/diagnose.h"
+#include "test_util.h"
 
 using namespace fralab;
 using namespace fralab::diag;
@@ -21,22 +22,10 @@ constexpr double kTopRadS = 200;     // the band's top
 
 // One input u, one output y = 2 / (s/3 + 1).
 Model simulation() {
-  Model m;
-  m.name = "joint_test";
-  ModelInput in;
-  in.name = "u";
-  in.units = "1";
-  in.full_scale = 1.0;
-  m.inputs.push_back(in);
-  ModelOutput o;
-  o.name = "y";
-  o.units = "1";
-  m.outputs.push_back(o);
   Tf t;
   t.gain = 2.0;
   t.poles = {Root::Real(-3)};
-  m.paths = {{"y", "u", t, Json::object()}};
-  return m;
+  return fralab::testing::siso_model(t);
 }
 
 // u:y of the simulation kGainDb higher, exact, 0.05-200 rad/s at 10 per decade.
