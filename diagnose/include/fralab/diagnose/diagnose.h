@@ -1,79 +1,34 @@
-// Diagnosis (docs/formats.md §6, docs/method/diagnosis.md): where a simulation is wrong, why, and
-// what the extended model gains.
+// Diagnosis (docs/formats.md §6, the method in docs/method/diagnosis.md): where a simulation is
+// wrong, why, and what the extended model gains.
 //
-// Points with sigma > 0.3 |G| (an actuator inside its own backlash, a response in the noise) are
-// left out of fitting and of the error metric. For every measured pair the residual is R(w) =
-// G_meas(jw) / G_sim(jw) (ratio in dB and phase in degrees), with the measurement's uncertainty
-// sigma_R = sigma_eff / |G_sim|, where sigma_eff^2 = sigma^2 + (floor |G_meas|)^2 (floor: the
-// analyser/plant accuracy, 2e-3, plus aliasing_floor (w h)^2 for a chain sampled at 1/h). A pair is
-// beyond its uncertainty when chi2 = sum |G_meas - G_sim|^2 / sigma_eff^2 exceeds N + 4 sqrt(N) (N
-// points; each complex point contributes 1 on average when the model is right).
+// For every measured pair, the residual R(w) = G_meas(jw) / G_sim(jw) with the uncertainty
+// sigma_R = sigma_eff / |G_sim|, sigma_eff^2 = sigma^2 + ((sigma_floor + aliasing_floor (w h)^2)
+// |G_meas|)^2 for a chain sampled at 1/h; points with sigma > max_rel_sigma |G| are left out. A
+// pair is beyond its uncertainty when chi2 = sum |G_meas - G_sim|^2 / sigma_eff^2 > N + 4 sqrt(N).
+// Error metric (summary.metric): rms over points of |ln(G_model / G_meas)|, nepers and radians.
 //
-// Catalogue (each a factor F(s; theta) multiplying the simulated response, fitted by weighted least
-// squares over the points; s = jw, w rad/s; one unit per cause in diagnose/src/causes/, search
-// ranges in DiagnoseOptions):
+// The catalogue, each a factor F(s; theta) on the simulated response (s = jw, w in rad/s; one unit
+// per cause in diagnose/src/causes/, its search range in DiagnoseOptions; the parameters' keys in
+// parameter.h):
 //   time_delay          F = e^{-s tau}                           delay_s
 //   missing_lag         F = 1 / (1 + s/a)                        corner_rad_s = a
 //   missing_lead        F = 1 + s/a                              corner_rad_s = a
-//   missing_resonance   F = 1 / (s^2/wn^2 + 2 zeta s/wn + 1)     wn_rad_s, zeta (a peak; a notch is
-//                       its inverse, reported with zeta < 0 ... as "notch": true)
-//   pole_shift          F = D_from(s) / D_to(s), one real pole or pair of the simulated chain moved
-//                       (a pair as a whole: its damping fitted with its frequency when the extra
-//                       parameter lowers chi2 by more than ln 2N, else the simulation's, said so)
-//                                                            from_rad_s, to_rad_s; a pair's
-//                       from_zeta, to_zeta (= from_zeta when kept) and zeta (= to_zeta), the
-//                       damping's 1-sigma interval reported; a pair claimed by a pole_shift is
-//                       not also a damping_error on the same measured pair
-//   damping_error       F = D_sim(s) / D(s; wn, to_zeta), a simulated pair's damping wrong
-//                                                            wn_rad_s, from_zeta, to_zeta
+//   missing_resonance   F = 1 / (s^2/wn^2 + 2 zeta s/wn + 1)     wn_rad_s, zeta
+//                       (a notch: the inverse)
+//   pole_shift          F = D_from(s) / D_to(s), a simulated pole or pair moved
+//                                                            from_rad_s, to_rad_s; a pair also
+//                                                            from_zeta, to_zeta, zeta = to_zeta
+//   damping_error       F = D_sim(s) / D(s; wn, to_zeta)         wn_rad_s, from_zeta, to_zeta
 //   sign_error          F = -1                                   sign = -1
 //   gain_mismatch       F = k                                    gain_db = 20 log10 k
-//   hysteresis/deadband the actuator's describing function N(A) at the measured amplitude (odd
-//                       harmonics in the position are the trigger)    width (input units);
-//                       fitted first on the points below 0.3 of the simulated actuator's corner,
-//                       then alternately with the linear causes (a gain offset left out of the
-//                       width's fit) until the width moves by < 0.1 %: the simulation's own slow
-//                       actuator otherwise biases it. An actuator curve measured by a multisine
-//                       (its points carry line_amplitude) is fitted with the element's best
-//                       linear approximation under that multisine instead (plant/nonlinearity.h
-//                       multisine_bla: every line of the curve at its command amplitude through
-//                       the actuator as last estimated; the trigger is the median level on the
-//                       non-excited lines, nl_rel, above min_odd_harmonic). Every line is fitted:
-//                       the width by its profile (hysteresis and deadband over [1e-3 A, 1.9 A],
-//                       then the one found near its width), the linear causes refitted at each
-//                       candidate; passes repeat with the actuator re-estimated from the linear
-//                       causes until the width moves by < 0.5 % (at most 24); from the second
-//                       pass one realisation's predicted scatter (var_nl) joins sigma_eff on that
-//                       curve, and stays for every later chi2. The same width either way
-//   missing_path        a response beyond the noise in a pair X:O the simulation has no path
-//                       for: the path fitted by TFNS (causes/missing_path.h)   gain, delay_s,
-//                       poles, zeros; its error_before is 1 (the simulation has no response)
-//   measurement_coupling  the position channel X records X + g O: u_X:X sees F = 1 + g H_OX, every
-//                       X:O' sees 1 / (1 + g H_OX)          channel, coupled_to, gain
-// Every finding is resolved by the data: its primary parameter (delay_s, corner_rad_s, wn_rad_s,
-// to_rad_s, to_zeta, gain_db, width, gain; a sign error has none) is given a 1-sigma interval,
-// where chi2 over the finding's pairs (every other finding in place, the parameter alone moved)
-// rises by s = max(1, chi2_min / N) above its minimum (Boost.Math's TOMS 748 on the crossing, the
-// bracket widened by doubling from 1e-3 of the value); a finding whose simulation value (0 for a
-// delay, gain or coupling, the simulated pole or damping, or the finding absent for what the
-// simulation lacks) does not raise chi2 by more than s is not resolved and is dropped, said why.
-// Every finding earns its place: with a validation measurement (another seed and amplitude), a
-// finding whose removal from the extended model does not raise its pairs' validation error is
-// dropped (Diagnosis::dropped, with the figures), one at a time, the least useful first, until
-// every remaining finding helps and the extended model beats the simulation on the validation
-// data as a whole. Without one, on the data fitted: a finding removed from the extended model must
-// raise chi2 over its pairs by more than its parameters' BIC penalty (k ln 2N) and must raise its
-// pairs' error; the one whose removal raises the error least is dropped first, one at a time. A
-// finding whose removal lowers the error is never reported. A pair still beyond its uncertainty
-// under the extended model is reported as unexplained (band, residual, the best candidate refused
-// and why), never forced onto a cause. A cause is accepted when it lowers chi2 by more than its
-// parameters' BIC penalty (k ln 2N) and by at least 25 %; a second cause may follow on what
-// remains. Scope: the same cause with consistent parameters (delays within 0.5 ms or 10 %, corners
-// within 10 %, gains within 0.3 dB: DiagnoseOptions) in every measured path into one output is
-// reported once for that output (a sensor), in every path from one input for that input (its
-// actuator or calibration), everywhere for the plant. Error metric (summary.metric): the rms over
-// points of |ln(G_model / G_meas)| (nepers and radians combined), per finding over the paths it
-// covers, in total over every pair.
+//   hysteresis/deadband the actuator's describing function at the measured amplitude, or its best
+//                       linear approximation under a multisine    width (input units)
+//   missing_path        the path fitted where the simulation has none   gain, delay_s, poles, zeros
+//   measurement_coupling  the position channel X records X + g O   channel, coupled_to, gain
+// A finding is kept when its cause lowers chi2 by more than its BIC penalty and min_improvement,
+// its primary parameter is resolved by the data (a 1-sigma interval, the simulation's value
+// outside it), and it earns its place (on the validation data when there is some); scope, the
+// stages and their figures: docs/method/diagnosis.md, "The stages".
 #pragma once
 
 #include <array>

@@ -1,81 +1,22 @@
 // Transfer-function identification from frequency-response data: the TFNS program of the report's
 // Appendix B (Suzuki's method, a Sanathanan-Koerner iteration), made numerically sound, and carried
-// on to an output-error optimum.
+// on to an output-error optimum. The method, each step's thresholds and why:
+// docs/method/identifier.md.
 //
-// Model (docs/formats.md §1): G_a(s) = N(s)/D(s) e^{-s tau}, factored into real roots and pairs.
-//
-// 1. Frequency scaling (TFNS's scale factor): s' = s / ws, ws = sqrt(w_min w_max), centring the
-//    logarithms of the data's frequencies around zero.
-// 2. SK iteration at orders (n, m): minimise E_phi = sum_i phi_i |D(s_i) G_i - N(s_i)|^2 (B-5) with
-//    phi_i = W_i / |D^{(k-1)}(s_i)|^2 (B-8), until the equation error
-//    E_phi' = mean_i |1 - D^{(k)}(s_i) / D^{(k-1)}(s_i)| (B-9, D normalised to D(0) = 1) is <=
-//    c_phi. The polynomials are expanded in a basis orthonormal on the data (Arnoldi on the points
-//    +-j w_i with weights phi_i, so coefficients stay real); N is eliminated by projecting onto
-//    those orthonormal columns and D is the smallest right singular vector of the QR factor of what
-//    remains (||d|| = 1): never normal equations in raw powers of s. The iterate with the lowest
-//    real error is kept; an iteration that has not lowered it for 3 iterations stops (SK is a
-//    fixed point, not a descent: with noise or a wrong delay it can oscillate).
-//    When SK's fit at (n, m) is not adequate, SK is run again with its first weights from vector
-//    fitting's n poles (vector_fitting.h); the better of the two is refined first, the other too
-//    when that one does not become adequate. Below the first adequate order this restart is made
-//    at m = n, and at lower m only when it won at a higher m of that n.
-// 3. Roots: eigenvalues of the basis' confederate matrix; unstable poles are reflected into the
-//    left half plane.
-// 4. Delay (auto): searched when the best delay-free fit is inadequate or has right-half-plane
-//    zeros (with noise, a rational imitating a delay need not show clean mirrored sets); a delayed
-//    model wins only with no more parameters and a lower criterion (5). The search: a grid over
-//    [0, top] scored by SK at (2, 2), the phase step at w_max below 3 rad, then Brent's method
-//    around its best; per order, the delay starts are the best separated points of an SK (n, n)
-//    grid +-10 windows (on multiples of the window) around that best, and around the grid's
-//    runner-up local minimum when it is within 10 % of the best (a high relative degree makes the
-//    (2, 2) grid nearly flat).
-//    Output-error refinement (MINPACK's Levenberg-Marquardt, steps from the normal equations by
-//    Cholesky, a converged optimum polished by one QR-solved Gauss-Newton step) of sum_i W_i |G_i -
-//    G_a(j w_i)|^2 over the factored parameters (real poles -exp(t), pairs wn = exp(a), zeta =
-//    exp(b): stable by construction; real roots of one sign are refined in pairs, zeta >= 1 being
-//    two reals, so they can become a resonance) and, with delay auto, tau jointly. Every candidate
-//    short of hopeless (chi^2/dof < 30) is refined, screened with at most 60 residual evaluations;
-//    candidates compared across orders, and the chosen fit, are refined to convergence. A
-//    refinement also stops when the objective has fallen by less than 0.1 chi^2 units (without
-//    sigma: 1e-4 of itself) over ten steps. A candidate that fits but is refused for a cancelling
-//    dipole (a zero and a pole of one kind within 1e-3) has the couple removed and the rest
-//    refined.
-// 5. Order: starting at (n0, m0), raised until the fit is adequate: with sigma, the reduced
-//    chi^2 = sum |G_i - G_a|^2 / sigma_i^2 / (N - p/2) <= 1 + 3 / sqrt(N) (consistent with the
-//    measured noise); without sigma, the TFNS real error E_N = sum W |G - G_a|^2 / sum W |G|^2 <=
-//    c_n. At each n, numerator orders n down to min_num_order are tried, until one misses clearly
-//    (10x the threshold and 10x the order's best error) while fitting less than 10x worse than the
-//    previous order's candidates it contains (n - 1, k <= m): worse, it is a failed fit. Among
-//    adequate candidates the lowest criterion chi^2 + ln(2N) p wins (twice BIC's penalty: an added
-//    root's location is searched), and the order is raised past the first adequate one while the
-//    criterion improves; without sigma (c_n rule) the fewest parameters win. Above order 3,
-//    raising stops when two successive orders improve the error by less than 5 %. With sigma
-//    given, past an adequate fit (n, m), when every start of (n + 1, m) or (n + 1, m + 1) fits
-//    worse than it, that order also starts nested in it: a real pole at -100 w_max, or a real
-//    pole-zero couple at the frequency of its largest weighted residual. The choice is then that
-//    of the criterion over every candidate tried with fewer parameters that passes the test at
-//    4 sigma, chi^2/dof <= 1 + 4 / sqrt(N) (the true orders miss 3 sigma by chance in ~0.5 % of
-//    fits): such a fit is kConverged, its message says it was chosen by the criterion.
-// 6. With sigma and no order adequate (the data scatter more than their sigma says), steps 2-5 run
-//    again with sigma scaled by sqrt of the lowest chi^2/dof any physical candidate reached; the
-//    status stays not adequate (kMaxOrderReached when the search went up to the maximum order,
-//    else kNotAdequate), chi2_per_dof against the sigma given, sigma_scale the scale.
-// 6b. With sigma (given or estimated) and the search run up to max_den_order without an adequate
-//    order, a pole set of up to max_poles poles (pole_set_fit.h) replaces the fit when its
-//    criterion chi^2 + ln(2N) p is lower (the message says so): many light modes, which the order
-//    search's capped sweep cannot hold.
-// 7. Pruning of the chosen fit: each zero with the nearest pole of its kind closer than half the
-//    pole's modulus, and each root whose relative sigma is >= 0.5, is removed in turn and the rest
-//    refined; the best (adequate first, then the criterion of 5) replaces the fit while better,
-//    never below min_num_order / den_order_start nor to more zeros than poles.
-// 8. A real right-half-plane zero above the band (z > w_max) is the lag 1 / (1 + s/z) there to
-//    first order (the same phase, magnitudes (w/z)^2 / 2 apart): it is replaced by that pole and
-//    the rest refined, and kept only when its criterion (5) is lower than the lag's by 1 or more
-//    (a likelihood ratio of e; with a sigma given or estimated). The message says so.
-// Weights W_i: 1 / sigma_i^2 when the data carry sigma (or when the noise is estimated: sigma_i
-// from the estimated level, FitOptions::estimate_noise), else 1 / |G_i|^2 (relative error, uniform
-// on the log-frequency axis: TFNS's delta-w weighting of absolute error is replaced). Units: w
-// rad/s, tau seconds, phases radians inside, degrees in files.
+// Model (docs/formats.md §1): G_a(s) = N(s)/D(s) e^{-s tau}, factored into real roots and pairs,
+// stable poles. Steps: frequencies scaled by ws = sqrt(w_min w_max); SK at orders (n, m) in a basis
+// orthonormal on the data (B-5, B-8, B-9), restarted from vector fitting's poles when not adequate;
+// roots from the basis' confederate matrix; the delay searched when the best delay-free fit is
+// inadequate or has right-half-plane zeros; each candidate refined to the output-error optimum of
+// sum_i W_i |G_i - G_a(j w_i)|^2 (MINPACK's Levenberg-Marquardt); the order raised until adequate,
+// chosen among adequate candidates by chi^2 + ln(2N) p; with sigma and no order adequate, sigma
+// scaled by the best chi^2/dof (the status says so), and a pole set of up to max_poles tried;
+// then pruning of near-cancelling and unresolved roots, and a right-half-plane zero above the band
+// replaced by its lag unless the data prefer it.
+// Adequate: with sigma, chi^2 / (N - p/2) <= 1 + 3 / sqrt(N); without, the TFNS real error
+// sum W |G - G_a|^2 / sum W |G|^2 <= c_n. Weights W_i: 1 / sigma_i^2 when the data carry sigma
+// (or the noise is estimated), else 1 / |G_i|^2. Units: w rad/s, tau seconds, phases radians
+// inside, degrees in files.
 #pragma once
 
 #include <string>
