@@ -439,6 +439,54 @@ void restore_factors(DiagnosisRun& r, const Moves& mv) {
     for (size_t q = 0; q < r.pairs[k].factor.size(); ++q) r.pairs[k].factor[q] = mv.now(k, q);
 }
 
+// The candidate of `left` whose move lowers chi2 most beyond its penalty and lowers its pairs'
+// error (left.size() when none), and its move; a candidate tried that does not is marked unworthy.
+template <class Fit>
+std::pair<size_t, MovedMode> best_candidate(const DiagnosisRun& r, const Moves& mv,
+                                            const std::vector<SharedMode>& left,
+                                            std::vector<bool>& worth, const Fit& fit) {
+  size_t best = left.size();
+  MovedMode best_fit;
+  double best_gain = 0;
+  for (size_t c = 0; c < left.size(); ++c) {
+    if (!worth[c]) continue;
+    const SharedMode& m = left[c];
+    const double c0 = chi2_with(r, mv, m);
+    MovedMode f = fit(m);
+    const double gain = earned(c0, f.chi2, points_over(r, m), f.k);
+    worth[c] =
+        gain > 0 && error_with(r, mv, m, f.F, f.residues_kept) < error_with(r, mv, m, {}, false);
+    if (worth[c] && gain > best_gain) best = c, best_fit = std::move(f), best_gain = gain;
+  }
+  return {best, std::move(best_fit)};
+}
+
+// Some moves took the factor form where a mode shape is known.
+bool forms_mixed(const std::vector<SharedMode>& taken, const std::vector<MovedMode>& fits) {
+  return std::any_of(fits.begin(), fits.end(),
+                     [](const MovedMode& f) { return !f.residues_kept; }) &&
+         std::any_of(taken.begin(), taken.end(),
+                     [](const SharedMode& m) { return !m.residue.empty(); });
+}
+
+// The taken move whose removal raises chi2 over its pairs least beyond its penalty (the others as
+// they now are), and that gain.
+std::pair<size_t, double> least_useful(DiagnosisRun& r, Moves& mv,
+                                       const std::vector<SharedMode>& taken,
+                                       const std::vector<MovedMode>& fits) {
+  size_t worst = taken.size();
+  double worst_gain = 0;
+  for (size_t j = 0; j < taken.size(); ++j) {
+    const double c_with = chi2_with(r, mv, taken[j]);
+    apply_factor(r, mv, taken[j], fits[j], true);
+    const double c0 = chi2_with(r, mv, taken[j]);
+    apply_factor(r, mv, taken[j], fits[j], false);
+    const double gain = earned(c0, c_with, points_over(r, taken[j]), fits[j].k);
+    if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
+  }
+  return {worst, worst_gain};
+}
+
 // The moves the stage takes, applied to the pairs' factors.
 struct Pass {
   std::vector<SharedMode> taken;
@@ -473,19 +521,7 @@ Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
   std::vector<bool> worth(left.size(), true);
   bool full = true;
   while (int(taken.size()) < kMaxModes && !left.empty()) {
-    size_t best = left.size();
-    MovedMode best_fit;
-    double best_gain = 0;
-    for (size_t c = 0; c < left.size(); ++c) {
-      if (!worth[c]) continue;
-      const SharedMode& m = left[c];
-      const double c0 = chi2_with(r, mv, m);
-      MovedMode f = fit(m);
-      const double gain = earned(c0, f.chi2, points_over(r, m), f.k);
-      worth[c] =
-          gain > 0 && error_with(r, mv, m, f.F, f.residues_kept) < error_with(r, mv, m, {}, false);
-      if (worth[c] && gain > best_gain) best = c, best_fit = std::move(f), best_gain = gain;
-    }
+    auto [best, best_fit] = best_candidate(r, mv, left, worth, fit);
     if (best == left.size()) {
       if (full) break;
       full = true;
@@ -507,11 +543,7 @@ Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
   // factor form, which then holds the neighbour where it is (modes moved with their shapes add;
   // a factor multiplies the neighbour's term too). Every move refitted with its shape kept, the
   // same rounds; kept when chi2 over the moved modes' pairs is lower than the mixed forms'.
-  const bool mixed =
-      std::any_of(fits.begin(), fits.end(), [](const MovedMode& f) { return !f.residues_kept; }) &&
-      std::any_of(taken.begin(), taken.end(),
-                  [](const SharedMode& m) { return !m.residue.empty(); });
-  if (taken.size() > 1 && mixed) {
+  if (taken.size() > 1 && forms_mixed(taken, fits)) {
     const Moves mv0 = mv;
     const std::vector<MovedMode> fits0 = fits;
     const std::vector<Root> now0 = now;
@@ -529,17 +561,7 @@ Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
   // misfit level (a small move that made up for a neighbour taken before it was refitted), and
   // the rest fitted again.
   while (!taken.empty()) {
-    size_t worst = taken.size();
-    double worst_gain = 0;
-    for (size_t j = 0; j < taken.size(); ++j) {
-      // chi2 over its pairs with and without it, the others as they now are.
-      const double c_with = chi2_with(r, mv, taken[j]);
-      apply_factor(r, mv, taken[j], fits[j], true);
-      const double c0 = chi2_with(r, mv, taken[j]);
-      apply_factor(r, mv, taken[j], fits[j], false);
-      const double gain = earned(c0, c_with, points_over(r, taken[j]), fits[j].k);
-      if (worst == taken.size() || gain < worst_gain) worst = j, worst_gain = gain;
-    }
+    const auto [worst, worst_gain] = least_useful(r, mv, taken, fits);
     if (worst_gain > 0) break;
     take(taken[worst], fits[worst], true);
     taken.erase(taken.begin() + long(worst));
