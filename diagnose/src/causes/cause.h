@@ -22,6 +22,10 @@
 
 namespace fralab::diag {
 
+/// Where a pole pair's damping is searched, per pair (pole_shift, damping_error) and in the joint
+/// refinement.
+inline constexpr double kDampingSearchMin = 0.002, kDampingSearchMax = 2.0;
+
 /// A finding's primary parameter (nullopt when the cause has no continuous parameter, as a sign
 /// error or a whole missing path) and its value in the simulation: nullopt when the simulation
 /// lacks what the finding adds, so that "the simulation's value" is the finding's absence.

@@ -50,8 +50,9 @@ class DampingError final : public LinearCause {
         q.zeta = std::exp(lz);
         return factor_of(p.w, [&](C s) { return r.factor(s) / q.factor(s); });
       };
-      const double lz = minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(0.002),
-                                    std::log(2.0), kGrid);
+      const double lz =
+          minimise_1d([&](double x) { return chi2(p, F(x)); }, std::log(kDampingSearchMin),
+                      std::log(kDampingSearchMax), kGrid);
       Cause c{kind(),
               {{Param::kWnRadS, r.wn}, {Param::kFromZeta, r.zeta}, {Param::kToZeta, std::exp(lz)}},
               F(lz),

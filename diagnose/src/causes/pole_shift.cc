@@ -31,8 +31,7 @@ std::vector<Root> chain_poles(const Model& m, const PairFit& p) {
   return v;
 }
 
-constexpr double kZetaMin = 0.002, kZetaMax = 2.0;  // the damping's search range
-constexpr int kDampingRounds = 8;                   // frequency / damping alternations at most
+constexpr int kDampingRounds = 8;  // frequency / damping alternations at most
 // A transfer function holds the moved root when one of its roots is this close (relative): the
 // mean of several paths' from_rad_s carries rounding only.
 constexpr double kSameRoot = 1e-3;
@@ -91,15 +90,15 @@ class PoleShift final : public LinearCause {
         // The pair as a whole: its damping over the whole range at the frequency found, then the
         // two alternately, each near its last value, until both settle.
         double l2 = lto, lz = std::log(r.zeta);
-        lz = minimise_1d([&](double x) { return chi2(p, F(l2, std::exp(x))); }, std::log(kZetaMin),
-                         std::log(kZetaMax), 40);
+        lz = minimise_1d([&](double x) { return chi2(p, F(l2, std::exp(x))); },
+                         std::log(kDampingSearchMin), std::log(kDampingSearchMax), 40);
         for (int round = 0; round < kDampingRounds; ++round) {
           const double l2_was = l2, lz_was = lz;
           l2 = detail::brent_minimum([&](double x) { return chi2(p, F(x, std::exp(lz))); },
                                      l2 - 0.1, l2 + 0.1, 24);
           lz = detail::brent_minimum([&](double x) { return chi2(p, F(l2, std::exp(x))); },
-                                     std::max(std::log(kZetaMin), lz - 0.5),
-                                     std::min(std::log(kZetaMax), lz + 0.5), 24);
+                                     std::max(std::log(kDampingSearchMin), lz - 0.5),
+                                     std::min(std::log(kDampingSearchMax), lz + 0.5), 24);
           if (std::abs(l2 - l2_was) < 1e-5 && std::abs(lz - lz_was) < 1e-4) break;
         }
         const std::vector<C> F2 = F(l2, std::exp(lz));

@@ -56,18 +56,14 @@ struct FreeParameter {
   double lo = -INFINITY, hi = INFINITY;
 };
 
-// A damping is refined within [kRefinedZetaMin, kRefinedZetaMax] (a pole shift's and a damping
-// error's search range per pair), down to a tenth of the simulated one (the modes stage's) where
-// that is lower.
-constexpr double kRefinedZetaMin = 0.002, kRefinedZetaMax = 2;
-
 // Where f's parameter `key` may go, in its own units: a frequency (a corner, a resonance, a
 // moved pole) within the band of f's pairs widened by opt.corner_decades_beyond on each side, as
 // the corner causes search (a root far beyond every measured point acts as a gain there, and
 // Levenberg-Marquardt would follow it out without end); a moved pole also within
 // opt.pole_shift_range of its simulated place; a delay within [delay_min_s, delay_max_s]; a
-// damping as above (one refined to 0 is an undamped pair, a model no run can hold). The value f
-// holds is always inside: a bound never moves a finding.
+// damping within [kDampingSearchMin, kDampingSearchMax], down to a tenth of the simulated one (the
+// modes stage's) where that is lower (one refined to 0 is an undamped pair, a model no run can
+// hold). The value f holds is always inside: a bound never moves a finding.
 std::array<double, 2> bounds_of(const DiagnosisRun& r, const Finding& f, Param key, double v) {
   std::array<double, 2> b{-INFINITY, INFINITY};
   if (key == Param::kCornerRadS || key == Param::kWnRadS || key == Param::kToRadS) {
@@ -86,9 +82,9 @@ std::array<double, 2> bounds_of(const DiagnosisRun& r, const Finding& f, Param k
     b = {r.opt.delay_min_s, r.opt.delay_max_s};
   } else if (key == Param::kToZeta || key == Param::kZeta) {
     const auto from = f.parameters.find(Param::kFromZeta);
-    const double lo =
-        from == f.parameters.end() ? kRefinedZetaMin : std::min(kRefinedZetaMin, from->second / 10);
-    b = {lo, kRefinedZetaMax};
+    const double lo = from == f.parameters.end() ? kDampingSearchMin
+                                                 : std::min(kDampingSearchMin, from->second / 10);
+    b = {lo, kDampingSearchMax};
   }
   return {std::min(b[0], v), std::max(b[1], v)};
 }
