@@ -100,15 +100,19 @@ RandomCase random_modal_case(uint64_t seed, int index, int n_hidden) {
         continue;
       const double db = sign() * logu(1.5, 4);
       calibrations.push_back({out, db});
-      c.hidden.push_back(
-          {CauseKind::kGainMismatch, Scope::kOutput, "", out, Param::kGainDb, db, 0.3, 0, {}, {}});
+      HiddenEffect cal;
+      cal.cause = CauseKind::kGainMismatch, cal.scope = Scope::kOutput, cal.output = out;
+      cal.param = Param::kGainDb, cal.value = db, cal.tol_abs = 0.3;
+      c.hidden.push_back(cal);
       continue;
     }
     const int k = int(g() % size_t(nm));
     if (std::find(moved.begin(), moved.end(), k) != moved.end()) continue;
     moved.push_back(k);
-    HiddenEffect he{CauseKind::kPoleShift, Scope::kPlant, "", "", std::nullopt, 0, 0, 0, {}, {}};
-    if (kind != 1) {  // the frequency (and, kind 2, the damping too)
+    HiddenEffect he;
+    he.cause = CauseKind::kPoleShift, he.scope = Scope::kPlant;
+    he.at[Param::kFromRadS] = s.wn[size_t(k)];  // the simulated mode it moves
+    if (kind != 1) {                            // the frequency (and, kind 2, the damping too)
       e.wn[size_t(k)] *= 1 + sign() * logu(0.01, 0.05);
       he.param = Param::kToRadS, he.value = e.wn[size_t(k)], he.tol_rel = 0.003;
     }
@@ -116,7 +120,8 @@ RandomCase random_modal_case(uint64_t seed, int index, int n_hidden) {
       e.zeta[size_t(k)] *= u(g) < 0.3 ? 0.5 : logu(1.5, 3);
       if (kind == 1)
         he.cause = CauseKind::kDampingError, he.param = Param::kToZeta,
-        he.value = e.zeta[size_t(k)], he.tol_rel = 0.15;
+        he.value = e.zeta[size_t(k)], he.tol_rel = 0.15,
+        he.at = {{Param::kWnRadS, s.wn[size_t(k)]}};
     }
     c.hidden.push_back(he);
   }

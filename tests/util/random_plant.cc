@@ -21,6 +21,10 @@ std::string name_of(std::mt19937_64& g, const char* prefix, int i) {
   return std::string(prefix) + syl[g() % 10] + syl[g() % 10] + std::to_string(i);
 }
 
+// An effect's `at` parameters (the simulated root it moves) match a finding's within this,
+// relative.
+constexpr double kAtRel = 1e-3;
+
 }  // namespace
 
 std::string HiddenEffect::describe() const {
@@ -30,6 +34,7 @@ std::string HiddenEffect::describe() const {
     << value;
   for (const auto& [k, v] : text) s << " " << k << "=" << v;
   for (const auto& [k, v] : exact) s << " " << to_string(k) << "=" << v;
+  for (const auto& [k, v] : at) s << " " << to_string(k) << "=" << v;
   return s.str();
 }
 
@@ -46,6 +51,10 @@ bool HiddenEffect::matches(const Finding& f) const {
   for (const auto& [k, v] : exact) {
     const auto x = f.parameters.find(k);
     if (x == f.parameters.end() || x->second != v) return false;
+  }
+  for (const auto& [k, v] : at) {
+    const auto x = f.parameters.find(k);
+    if (x == f.parameters.end() || !(std::abs(x->second / v - 1) <= kAtRel)) return false;
   }
   return std::abs(it->second - value) <= tol;
 }

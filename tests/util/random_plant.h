@@ -30,6 +30,9 @@ struct HiddenEffect {
   /// `matrix` and `state`), and parameters it must carry exactly (the entry's `row` and `col`).
   std::map<std::string, std::string> text;
   std::map<Param, double> exact;
+  /// Parameters that say which of the simulation's roots the effect moves (a pole_shift's
+  /// from_rad_s, a damping_error's wn_rad_s), matched within 0.1 %.
+  std::map<Param, double> at;
   std::string describe() const;
   /// Whether a finding names this effect at its place within tolerance.
   bool matches(const Finding& f) const;

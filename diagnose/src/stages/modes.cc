@@ -16,12 +16,14 @@
 // not flatten the mode being fitted. Greedy, while a move lowers chi2 by more than k ln 2N in units
 // of its pairs' misfit level s = max(1, chi2 / N) and lowers their error; then each mode fitted
 // again with the others in place, the forms compared whole (every move with its shape kept, kept
-// when chi2 is lower), and the least useful dropped while it does not earn its place. A
-// frequency move below kBandShare of the half-power band is a damping_error.
+// when chi2 is lower), neighbours whose bands overlap fitted again in the other order and past
+// each other (ModeSearch::other_orders), and the least useful dropped while it does not earn its
+// place. A frequency move below kBandShare of the half-power band is a damping_error.
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <set>
 
 #include "../causes/mode_residues.h"
 #include "fralab/core/numerics.h"
@@ -155,32 +157,40 @@ struct MovedMode {
 
 // Where a mode's ln wn is searched: within +-kSearchRel of the simulated, and between the
 // neighbours of its pairs as they now are (two modes moved onto one frequency are one mode
-// counted twice, whose split the data cannot tell), its damping within a factor kZetaSpan.
+// counted twice, whose split the data cannot tell), its damping within a factor kZetaSpan. Each
+// neighbour bounds it on the side the simulation has it, or on the other side where the search
+// took the two past each other (`crossed`, lower id first); `ignore` bounds it not at all.
 struct ModeRange {
   double lo = 0, hi = 0, lz_lo = 0, lz_hi = 0;
   double clamp(double x) const { return std::clamp(x, lo, hi); }
   double clamp_z(double x) const { return std::clamp(x, lz_lo, lz_hi); }
 };
 
-ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& now, size_t id) {
+using Crossed = std::set<std::pair<size_t, size_t>>;
+
+ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& now, size_t id,
+                   const Crossed& crossed, std::optional<size_t> ignore) {
   const SharedMode& m = all[id];
   const double lw0 = std::log(m.root.wn);
   ModeRange g{lw0 - kSearchRel, lw0 + kSearchRel, std::log(m.root.zeta / kZetaSpan),
               std::log(m.root.zeta * kZetaSpan)};
+  bool past = false;  // some neighbour bounds it on the other side
   for (const SharedMode& n : all) {
-    if (n.id == id || std::none_of(n.pairs.begin(), n.pairs.end(), [&](size_t k) {
+    if (n.id == id || n.id == ignore || std::none_of(n.pairs.begin(), n.pairs.end(), [&](size_t k) {
           return std::find(m.pairs.begin(), m.pairs.end(), k) != m.pairs.end();
         }))
       continue;
+    const bool swapped = crossed.count({std::min(id, n.id), std::max(id, n.id)}) > 0;
+    past |= swapped;
     const double gap = kApartZetas * std::min(m.root.zeta, now[n.id].zeta);
     const double ln = std::log(now[n.id].wn);
-    if (n.root.wn < m.root.wn)
+    if ((n.root.wn < m.root.wn) != swapped)
       g.lo = std::max(g.lo, ln + gap);
     else
       g.hi = std::min(g.hi, ln - gap);
   }
-  if (!(g.lo < lw0 && lw0 < g.hi)) g.lo = std::min(g.lo, lw0), g.hi = std::max(g.hi, lw0);
-  if (!(g.lo < g.hi)) g.lo = g.hi = lw0;
+  if (!past && !(g.lo < lw0 && lw0 < g.hi)) g.lo = std::min(g.lo, lw0), g.hi = std::max(g.hi, lw0);
+  if (!(g.lo < g.hi)) g.lo = g.hi = past ? g.lo : lw0;
   return g;
 }
 
@@ -494,87 +504,229 @@ struct Pass {
   Moves mv;
 };
 
-Pass moves(DiagnosisRun& r, std::vector<SharedMode> left) {
-  const std::vector<SharedMode> all = left;
-  std::vector<Root> now;  // each candidate's pair as it now is
-  for (const SharedMode& m : all) now.push_back(m.root);
-  std::vector<SharedMode> taken;
-  std::vector<MovedMode> fits;
-  Moves mv(r);
-  bool shape_only = false;  // every move with its mode shape kept (the forms compared below)
-  auto fit = [&](const SharedMode& m) {
-    return fit_mode(r, mv, m, range_of(all, now, m.id), shape_only);
-  };
-  auto take = [&](const SharedMode& m, const MovedMode& f, bool inverse) {
-    apply_factor(r, mv, m, f, inverse);
-    now[m.id] = inverse ? m.root : Root::Pair(f.wn, f.zeta);
-  };
-  auto refit = [&](size_t j) {
-    take(taken[j], fits[j], true);
-    fits[j] = fit(taken[j]);
-    take(taken[j], fits[j], false);
-  };
-  // A candidate whose move did not earn its place in a round is skipped in the next ones (each
-  // round refits every candidate it tries); when none of the others earns its place, every
-  // candidate is tried again once before the stage stops (a neighbour's move can make one worth
-  // it).
-  std::vector<bool> worth(left.size(), true);
-  bool full = true;
-  while (int(taken.size()) < kMaxModes && !left.empty()) {
-    auto [best, best_fit] = best_candidate(r, mv, left, worth, fit);
-    if (best == left.size()) {
-      if (full) break;
-      full = true;
-      worth.assign(left.size(), true);
-      continue;
-    }
-    full = false;
-    take(left[best], best_fit, false);
-    taken.push_back(left[best]);
-    fits.push_back(std::move(best_fit));
-    left.erase(left.begin() + long(best));
-    worth.erase(worth.begin() + long(best));
+// Whether modes a and b share a pair.
+bool share_pairs(const SharedMode& a, const SharedMode& b) {
+  return std::any_of(a.pairs.begin(), a.pairs.end(), [&](size_t k) {
+    return std::find(b.pairs.begin(), b.pairs.end(), k) != b.pairs.end();
+  });
+}
+
+// The search for the moves: greedy, backfitted, the forms compared, neighbours taken in the
+// other order, the least useful dropped (moves()).
+class ModeSearch {
+ public:
+  ModeSearch(DiagnosisRun& r, std::vector<SharedMode> left)
+      : r_(r), all_(left), left_(std::move(left)), mv_(r) {
+    for (const SharedMode& m : all_) now_.push_back(m.root);
   }
-  // Backfitting: each mode fitted again with every other one in place (modes moved towards each
-  // other share their band, and the first one taken held part of the next), kBackfitRounds times.
-  for (int round = 0; round < kBackfitRounds && taken.size() > 1; ++round)
-    for (size_t j = 0; j < taken.size(); ++j) refit(j);
+
+  Pass run() {
+    greedy();
+    // Backfitting: each mode fitted again with every other one in place (modes moved towards
+    // each other share their band, and the first one taken held part of the next).
+    if (taken_.size() > 1) backfit();
+    compare_forms();
+    other_orders();
+    drop_least_useful();
+    return {std::move(taken_), std::move(fits_), std::move(mv_)};
+  }
+
+ private:
+  MovedMode fit(const SharedMode& m) const {
+    return fit_mode(r_, mv_, m, range_of(all_, now_, m.id, crossed_, ignore_), shape_only_);
+  }
+  void take(const SharedMode& m, const MovedMode& f, bool inverse) {
+    apply_factor(r_, mv_, m, f, inverse);
+    now_[m.id] = inverse ? m.root : Root::Pair(f.wn, f.zeta);
+  }
+  void refit(size_t j) {
+    take(taken_[j], fits_[j], true);
+    fits_[j] = fit(taken_[j]);
+    take(taken_[j], fits_[j], false);
+  }
+  // Each taken mode fitted again with the others in place, kBackfitRounds times.
+  void backfit() {
+    for (int round = 0; round < kBackfitRounds; ++round)
+      for (size_t j = 0; j < taken_.size(); ++j) refit(j);
+  }
+
+  // While a candidate's move earns its place, the best is taken. A candidate whose move did not
+  // earn its place in a round is skipped in the next ones (each round refits every candidate it
+  // tries); when none of the others earns its place, every candidate is tried again once before
+  // the search stops (a neighbour's move can make one worth it).
+  void greedy() {
+    std::vector<bool> worth(left_.size(), true);
+    bool full = true;
+    while (int(taken_.size()) < kMaxModes && !left_.empty()) {
+      auto [best, best_fit] =
+          best_candidate(r_, mv_, left_, worth, [&](const SharedMode& m) { return fit(m); });
+      if (best == left_.size()) {
+        if (full) break;
+        full = true;
+        worth.assign(left_.size(), true);
+        continue;
+      }
+      full = false;
+      take(left_[best], best_fit, false);
+      taken_.push_back(left_[best]);
+      fits_.push_back(std::move(best_fit));
+      left_.erase(left_.begin() + long(best));
+      worth.erase(worth.begin() + long(best));
+    }
+  }
+
   // The forms compared whole: a mode fitted alone beside a neighbour sized wrong may take the
   // factor form, which then holds the neighbour where it is (modes moved with their shapes add;
   // a factor multiplies the neighbour's term too). Every move refitted with its shape kept, the
   // same rounds; kept when chi2 over the moved modes' pairs is lower than the mixed forms'.
-  if (taken.size() > 1 && forms_mixed(taken, fits)) {
-    const Moves mv0 = mv;
-    const std::vector<MovedMode> fits0 = fits;
-    const std::vector<Root> now0 = now;
-    const double c_mixed = chi2_over(r, mv, taken);
-    shape_only = true;
-    for (int round = 0; round < kBackfitRounds; ++round)
-      for (size_t j = 0; j < taken.size(); ++j) refit(j);
-    if (!(chi2_over(r, mv, taken) < c_mixed)) {
-      mv = mv0, fits = fits0, now = now0, shape_only = false;
-      restore_factors(r, mv);
-    }
+  void compare_forms() {
+    if (taken_.size() < 2 || !forms_mixed(taken_, fits_)) return;
+    const State was = state();
+    const double c_mixed = chi2_over(r_, mv_, taken_);
+    shape_only_ = true;
+    backfit();
+    if (!(chi2_over(r_, mv_, taken_) < c_mixed)) restore(was);
   }
+
+  // Neighbours in the other order: a taken mode and its neighbour on either side (a candidate
+  // sharing its pairs, none between them, their half-power bands as they now are overlapping:
+  // ln of their frequencies' ratio below the sum of their dampings) are fitted again, the
+  // one fitted second first, then backfitted together. Where two modes moved towards each
+  // other, the first one taken alone covers both peaks and bars the second from its place (each
+  // stays on its side of the other). Then the two past each other, either fitted first (the
+  // other then bounded on the far side of it), as where two modes moved across each other.
+  // Each is kept when chi2 over their pairs is lower by more than the penalty of the parameters
+  // it adds.
+  void other_orders() {
+    for (size_t j = 0; j < taken_.size(); ++j)
+      for (const SharedMode* n : neighbours(taken_[j])) {
+        const auto q = taken_index(n->id);
+        if (q && *q < j) continue;  // tried from the other one
+        const size_t a = taken_[j].id, b = n->id;
+        try_pair(b, a, false);
+        if (crossed_.count({std::min(a, b), std::max(a, b)})) continue;
+        try_pair(a, b, true);
+        try_pair(b, a, true);
+      }
+  }
+
+  // The candidates next to m on either side (sharing its pairs, none between them) whose
+  // half-power band overlaps m's.
+  std::vector<const SharedMode*> neighbours(const SharedMode& m) const {
+    const SharedMode* below = nullptr;
+    const SharedMode* above = nullptr;
+    for (const SharedMode& n : all_) {
+      if (n.id == m.id || !share_pairs(m, n)) continue;
+      if (n.root.wn < m.root.wn && (!below || n.root.wn > below->root.wn)) below = &n;
+      if (n.root.wn > m.root.wn && (!above || n.root.wn < above->root.wn)) above = &n;
+    }
+    std::vector<const SharedMode*> out;
+    const Root& x = now_[m.id];
+    for (const SharedMode* n : {below, above})
+      if (n && std::abs(std::log(x.wn / now_[n->id].wn)) < x.zeta + now_[n->id].zeta)
+        out.push_back(n);
+    return out;
+  }
+
+  // The moves of modes `first` and `second` taken off and fitted again in that order (crossing:
+  // `first` fitted as if `second` were not there, `second` then on its far side), then backfitted
+  // together; kept when chi2 over their pairs earns the parameters added, else undone.
+  void try_pair(size_t first, size_t second, bool crossing) {
+    const State was = state();
+    const std::vector<SharedMode> both = {all_[first], all_[second]};
+    const double c0 = chi2_over(r_, mv_, both);
+    const int k0 = params_of(first) + params_of(second);
+    for (size_t id : {first, second}) untake(id);
+    if (crossing) crossed_.insert({std::min(first, second), std::max(first, second)});
+    for (size_t id : {first, second}) {
+      if (crossing) ignore_ = id == first ? std::optional<size_t>(second) : std::nullopt;
+      MovedMode f = fit(all_[id]);
+      take(all_[id], f, false);
+      taken_.push_back(all_[id]);
+      fits_.push_back(std::move(f));
+    }
+    // Backfitted until chi2 over the two falls by less than a thousandth a round.
+    for (int round = 0; round < kRounds; ++round) {
+      const double c = chi2_over(r_, mv_, both);
+      for (size_t j = taken_.size() - 2; j < taken_.size(); ++j) refit(j);
+      if (round + 1 >= kBackfitRounds && !(chi2_over(r_, mv_, both) < (1 - 1e-3) * c)) break;
+    }
+    const int k1 = params_of(first) + params_of(second);
+    size_t n = 0;
+    for (const SharedMode& m : both) n += points_over(r_, m);
+    if (!(earned(c0, chi2_over(r_, mv_, both), n, std::max(0, k1 - k0)) > 0)) restore(was);
+  }
+
+  std::optional<size_t> taken_index(size_t id) const {
+    for (size_t j = 0; j < taken_.size(); ++j)
+      if (taken_[j].id == id) return j;
+    return std::nullopt;
+  }
+  int params_of(size_t id) const {
+    const auto j = taken_index(id);
+    return j ? fits_[*j].k : 0;
+  }
+  // The mode's move taken off (when taken), the mode back among those left.
+  void untake(size_t id) {
+    if (const auto j = taken_index(id)) {
+      take(taken_[*j], fits_[*j], true);
+      taken_.erase(taken_.begin() + long(*j));
+      fits_.erase(fits_.begin() + long(*j));
+      return;
+    }
+    left_.erase(
+        std::find_if(left_.begin(), left_.end(), [&](const SharedMode& m) { return m.id == id; }));
+  }
+
   // Each must still earn its place with the others in place, as it did when taken: the least
   // useful is dropped while its removal raises chi2 by no more than its penalty in units of the
   // misfit level (a small move that made up for a neighbour taken before it was refitted), and
   // the rest fitted again.
-  while (!taken.empty()) {
-    const auto [worst, worst_gain] = least_useful(r, mv, taken, fits);
-    if (worst_gain > 0) break;
-    take(taken[worst], fits[worst], true);
-    taken.erase(taken.begin() + long(worst));
-    fits.erase(fits.begin() + long(worst));
-    for (size_t j = 0; j < taken.size(); ++j) refit(j);
+  void drop_least_useful() {
+    while (!taken_.empty()) {
+      const auto [worst, worst_gain] = least_useful(r_, mv_, taken_, fits_);
+      if (worst_gain > 0) break;
+      take(taken_[worst], fits_[worst], true);
+      std::erase_if(crossed_, [&](const auto& x) {  // back where the simulation has it
+        return x.first == taken_[worst].id || x.second == taken_[worst].id;
+      });
+      left_.push_back(taken_[worst]);
+      taken_.erase(taken_.begin() + long(worst));
+      fits_.erase(fits_.begin() + long(worst));
+      for (size_t j = 0; j < taken_.size(); ++j) refit(j);
+    }
   }
-  return {std::move(taken), std::move(fits), std::move(mv)};
-}
+
+  struct State {
+    Moves mv;
+    std::vector<MovedMode> fits;
+    std::vector<Root> now;
+    std::vector<SharedMode> taken, left;
+    bool shape_only;
+    Crossed crossed;
+  };
+  State state() const { return {mv_, fits_, now_, taken_, left_, shape_only_, crossed_}; }
+  void restore(const State& s) {
+    mv_ = s.mv, fits_ = s.fits, now_ = s.now, taken_ = s.taken, left_ = s.left;
+    shape_only_ = s.shape_only, crossed_ = s.crossed;
+    restore_factors(r_, mv_);
+  }
+
+  DiagnosisRun& r_;
+  const std::vector<SharedMode> all_;
+  std::vector<SharedMode> left_, taken_;
+  std::vector<MovedMode> fits_;
+  std::vector<Root> now_;  // each candidate's pair as it now is
+  Moves mv_;
+  bool shape_only_ = false;       // every move with its mode shape kept (compare_forms)
+  Crossed crossed_;               // pairs of candidates the search took past each other
+  std::optional<size_t> ignore_;  // a candidate the fit under way does not bound by
+};
 
 }  // namespace
 
 void modes(DiagnosisRun& r) {
-  Pass pass = moves(r, shared_modes(r));
+  Pass pass = ModeSearch(r, shared_modes(r)).run();
   // Each finding judged without its own factor on its pairs (the others in place).
   for (size_t j = 0; j < pass.taken.size(); ++j) {
     apply_factor(r, pass.mv, pass.taken[j], pass.fits[j], true);
