@@ -1,64 +1,22 @@
-// The two-channel servoanalyser for one pair E1:E2, fed with the tape's records in any order.
-//
-// Input: tape blocks (any subset of channels; E1 and E2 must be among them) and excitation status
-// events. Each "integrate" status defines a window [sample, sample + n_samples) of whole reference
-// cycles (a stepped sine: reference from the status's phase and frequency; a sweep: the tape's
-// per-sample ref_phase channel); when both channels cover it, the window gives one point:
-//   ratio R = P2 / P1 (fourier_filter.h), w = 2 pi f, mag = |R|, phase_deg = arg R in degrees;
-//   sigma: the window is cut into K = min(8, n_cycles) blocks after removing each channel's window
-//          mean; with block phasors p1_b, p2_b and residuals e_b = p2_b - R p1_b,
-//          sigma = sqrt(sum |e_b|^2 / (K (K - 1))) / |P1| (the standard deviation of R);
-//   coherence = |sum conj(p1_b) p2_b|^2 / (sum |p1_b|^2 sum |p2_b|^2);
-//   h2_rel, h3_rel: E2's 2nd and 3rd harmonic amplitudes over its fundamental.
-// Multisine windows ("multisine": whole periods of period_samples) give one point per excited line
-// of the pair's input (the input named by E1 or E2; every line for two outputs): each period is
-// transformed (FFTW), R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma from the spread over periods
-// of z_p = X2_p - R X1_p (as over blocks above) pooled over line k and the nearest line no input
-// excites each side (z about its mean there: noise only, three times the degrees of freedom of a
-// few periods), coherence from line k's spread, and nl_rel = the mean level of E2 on those
-// nearest non-excited lines, relative to |X2(k)| (the best linear approximation's
-// nonlinear-distortion sign).
-// Orthogonal multisines (a line listed for several inputs: every excited input on every line, n_u
-// experiments with step = r n_u + e, acquire/campaign.h): each experiment's window is transformed
-// per period as above, together with the commands of the n_u inputs (tape channels u_<input>, the
-// references); once the n_u experiments of realisation r are in, per line k with the input matrix
-// U (U_qe = mean-period spectrum of input q's command in experiment e) and the channels' mean
-// spectra X_e, the responses to each reference are h = X U^{-1} (a row per channel), and
-//   R = h2_q / h1_q (q the pair's input: exactly what a stepped sine of input q alone measures,
-//       P3-coupled fuel measurement and all). For a pair X:O (E1 an input's position), an input
-//       whose position distorts (AnalyzerOptions::distortion_threshold: a backlash at the
-//       multisine's level) enters U by its measured position instead of its command: its
-//       distortion is not a linear function of the references and would otherwise leak into every
-//       other input's estimate; the paths after the position are linear, so its own X:O is then
-//       exact (O's coefficient on X's position);
-//   sigma^2 = sum_e |U^{-1}_eq|^2 [var(mean_p z_ep) + sum_r |h2_r - R h1_r|^2 var(U_re)]
-//       / |h1_q|^2, z_ep = X2_ep - R X1_ep per period (the linearised error of h2_q - R h1_q,
-//       with the channels' covariance), the variance of the period mean pooled over line k and
-//       the nearest non-excited line each side (the same z there: noise only, a periodic
-//       distortion cancels in the spread), three times the degrees of freedom of a few periods;
-//       r over the inputs that enter U by their measured position, var(U_re) that position's
-//       period-mean variance pooled the same way (its sensor noise is in the regressor, an error
-//       in every input's estimate that neither channel of the pair carries: at the J85's 95 %
-//       the A8 position's noise put IGV -> P5, a path the engine does not have, 2-5 sigma from
-//       zero over 0.4-8 Hz);
-//   coherence = |R|^2 / (|R|^2 + n_u M sigma^2) (a single-input measurement's over the same
-//       n_u M periods with that sigma); nl_rel = the mean over experiments of the level of E2 on
-//       the nearest non-excited lines relative to |X2(k)|.
-// Points carry step = r n_u and line_amplitude, the input's command amplitude on the line (the
-// mean over experiments of 2 |U_qe| / P; a zippered or one-input multisine: for pairs u_X:E2).
-// Several random-phase realisations of the same multisine (either design) are combined in frd()
-// into the best linear approximation per line, sigma split into its noise and stochastic
-// nonlinear parts (analyze/bla.h); one realisation's points are returned as they are. The
-// commands and positions are kept from the design's first status on (blocks before it keep E1
-// and E2 only). An experiment that is invalid (gaps, no command or
-// position channel, a status stating another design) makes its realisation's points invalid with
-// its note; a realisation whose experiments never all arrive gives one invalid point at flush().
-// Arithmetic depends only on the samples and the status, never on arrival order or timing, so
-// live, replayed and offline analyses give identical numbers. A window with a missing sample
-// (lost or never-arrived block) yields a point with valid = false and a note naming the gap; so
-// does a window, or the settle before it, with a sample a free-running plant held because its
-// command buffer ran dry (tape channel "underrun" nonzero: plant/command_buffer.h), the
-// acquisition then repeating the step.
+// The two-channel servoanalyser for one pair E1:E2 (E2 relative to E1), fed with the tape's
+// records in any order: tape blocks (any subset of channels, E1 and E2 among them) and excitation
+// status events. Each "integrate" window [sample, sample + n_samples) of whole reference cycles
+// (stepped sine: the status's phase and frequency; sweep: the tape's ref_phase) gives one point:
+//   R = P2 / P1 (fourier_filter.h), w = 2 pi f (rad/s, f in Hz), mag = |R|, phase_deg = arg R
+//   in degrees (positive: E2 leads E1); with K = min(8, n_cycles) blocks' phasors p1_b, p2_b,
+//   sigma = sqrt(sum_b |p2_b - R p1_b|^2 / (K (K - 1))) / |P1| (the standard deviation of R),
+//   coherence = |sum conj(p1_b) p2_b|^2 / (sum |p1_b|^2 sum |p2_b|^2), h2_rel and h3_rel E2's
+//   2nd and 3rd harmonic amplitudes over its fundamental.
+// A multisine window gives one point per excited line k of the pair's input, over its periods
+//   R(k) = mean_p X2_p(k) / mean_p X1_p(k), sigma from the spread of X2_p - R X1_p pooled with the
+//   nearest non-excited lines, nl_rel = E2's level there over |X2(k)|; an orthogonal multisine's
+//   n_u experiments are solved per line, h = X U^{-1} (U the commands' spectra), R = h2_q / h1_q
+//   (q the pair's input), with line_amplitude. frd() combines realisations into the best linear
+// approximation (analyze/bla.h). Numbers depend only on the samples and status events, never on
+// arrival order or timing. A window with a missing sample, or with a sample the plant held in it
+// or in its settle (tape channel "underrun" nonzero), an invalid experiment and a realisation
+// never completed give points with valid = false and a note naming the cause.
+// Method: docs/method/analyser.md ("Conventions", "The Fourier filter", "Periodic multisines").
 #pragma once
 
 #include <complex>
