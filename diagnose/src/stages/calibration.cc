@@ -5,15 +5,19 @@
 // T(i, o), is explained by carriers, a value a_i per chosen input and b_o per chosen output:
 // every choice of carriers among the inputs and outputs that touch a nonzero total (at most
 // kMaxCarriers) is fitted by least squares, T(i, o) ~ sum of the carriers on (i, o), over the pairs
-// a carrier covers; a pair whose residual is beyond the cause's consistency tolerance keeps a path
-// finding of that residual. The choice with the fewest findings (then the smallest residual)
-// replaces the findings when it has fewer than they, and when no pair's chi2 rises by more than
-// one parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0, carriers and
-// residuals alike. A carrier is named by the pairs it covers, as the scope stage names a group.
+// a carrier covers, then again with the pair of the largest residual left out while one is beyond
+// the tolerance (the fit with the fewest findings is the choice's); a pair whose residual is
+// beyond the cause's consistency tolerance keeps a path finding of that residual. The choice with
+// the fewest findings (then the smallest residual) replaces the findings when it has fewer than
+// they, or, for delays that were all paths', as many (the delay a sensor's or an actuator's paths
+// share is preferred to as many path delays), and when no pair's chi2 rises by more than one
+// parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0, carriers and residuals
+// alike. A carrier is named by the pairs it covers, as the scope stage names a group.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <set>
 
@@ -126,27 +130,60 @@ class Decomposition {
   const std::vector<std::string>& pairs() const { return pairs_; }
 
  private:
-  // c's carriers fitted by least squares over the pairs they cover, T(i, o) ~ a_i + b_o, and the
-  // residual of every pair; false where the pairs cannot tell the carriers apart, a carrier
-  // carries nothing, or a delay comes out negative.
+  // c's carriers fitted to the pairs they cover, T(i, o) ~ a_i + b_o: by least squares over
+  // every covered pair, then again with the pair of the largest residual left out (for a delay
+  // the largest positive one: a carrier is the part its paths share) while a residual is beyond
+  // the tolerance and the rest still tell the carriers apart. Least squares spreads one path's
+  // own value over its carrier's other paths; the fit with the fewest findings (then the
+  // smallest sum of squared residuals) is c's. False where no fit tells the carriers apart with
+  // each carrying something and no delay negative.
   bool fit(Choice& c) const {
-    const size_t n = c.inputs.size() + c.outputs.size();
-    std::vector<std::string> covered;
-    for (const std::string& q : pairs_) {
-      const auto& [i, o] = ends_.at(q);
-      if (std::count(c.inputs.begin(), c.inputs.end(), i) ||
-          std::count(c.outputs.begin(), c.outputs.end(), o))
-        covered.push_back(q);
+    std::vector<std::string> rows;
+    for (const std::string& q : pairs_)
+      if (carried_by(c, q)) rows.push_back(q);
+    std::optional<Choice> best;
+    while (true) {
+      Choice t;
+      t.inputs = c.inputs, t.outputs = c.outputs;
+      if (!solve(t, rows)) break;
+      const bool ok = residuals(t);
+      if (ok && (!best || t.count < best->count || (t.count == best->count && t.ss < best->ss)))
+        best = t;
+      auto worst = rows.end();
+      double worst_res = tol_;
+      for (auto it = rows.begin(); it != rows.end(); ++it) {
+        const double res = t.residual.count(*it) ? t.residual.at(*it) : 0.0;
+        const double size = delay_ ? res : std::abs(res);
+        if (size > worst_res) worst = it, worst_res = size;
+      }
+      if (worst == rows.end()) break;
+      rows.erase(worst);
     }
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(Eigen::Index(covered.size()), Eigen::Index(n));
-    Eigen::VectorXd t(Eigen::Index(covered.size()));
-    for (size_t row = 0; row < covered.size(); ++row) {
-      const auto& [i, o] = ends_.at(covered[row]);
+    if (!best) return false;
+    c = std::move(*best);
+    return true;
+  }
+
+  // Whether a carrier of c is on pair q.
+  bool carried_by(const Choice& c, const std::string& q) const {
+    const auto& [i, o] = ends_.at(q);
+    return std::count(c.inputs.begin(), c.inputs.end(), i) ||
+           std::count(c.outputs.begin(), c.outputs.end(), o);
+  }
+
+  // c's carriers by least squares over the pairs `rows`; false where those cannot tell them
+  // apart or a carrier carries nothing (or, a delay, less than nothing).
+  bool solve(Choice& c, const std::vector<std::string>& rows) const {
+    const size_t n = c.inputs.size() + c.outputs.size();
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(Eigen::Index(rows.size()), Eigen::Index(n));
+    Eigen::VectorXd t(Eigen::Index(rows.size()));
+    for (size_t row = 0; row < rows.size(); ++row) {
+      const auto& [i, o] = ends_.at(rows[row]);
       for (size_t k = 0; k < c.inputs.size(); ++k)
         if (c.inputs[k] == i) A(Eigen::Index(row), Eigen::Index(k)) = 1;
       for (size_t k = 0; k < c.outputs.size(); ++k)
         if (c.outputs[k] == o) A(Eigen::Index(row), Eigen::Index(c.inputs.size() + k)) = 1;
-      t(Eigen::Index(row)) = total_.at(covered[row]);
+      t(Eigen::Index(row)) = total_.at(rows[row]);
     }
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
     if (qr.rank() < Eigen::Index(n)) return false;  // carriers the pairs cannot tell apart
@@ -155,7 +192,13 @@ class Decomposition {
       if (!(std::abs(v(k)) > tol_ && (!delay_ || v(k) > 0))) return false;
     c.a.assign(v.data(), v.data() + c.inputs.size());
     c.b.assign(v.data() + c.inputs.size(), v.data() + n);
-    c.count = n;
+    return true;
+  }
+
+  // Every pair's residual under c's carriers, those beyond the tolerance kept as path findings
+  // (c.residual, c.count, c.ss); false where one is a negative delay.
+  bool residuals(Choice& c) const {
+    c.count = c.inputs.size() + c.outputs.size();
     bool ok = true;
     for (const std::string& q : pairs_) {
       const auto& [i, o] = ends_.at(q);
@@ -214,12 +257,27 @@ bool decompose(DiagnosisRun& r) {
     const std::vector<size_t> mine = d.findings_of_cause(fs);
     if (mine.size() < 2) continue;
     const std::optional<Choice> best = d.best_choice(fs, mine);
-    if (!best || best->count >= mine.size()) continue;
+    if (!best || best->count > mine.size()) continue;
+    // As many findings: the delay a place's paths share (a sensor's, an actuator's) is preferred
+    // to as many path delays.
+    const bool on_paths = std::all_of(mine.begin(), mine.end(),
+                                      [&](size_t x) { return fs[x].scope == Scope::kPath; });
+    if (best->count == mine.size() && !(ad.cause == CauseKind::kTimeDelay && on_paths)) continue;
     // The new findings in place of the cause's.
     std::vector<Finding> joined;
     for (size_t x = 0; x < fs.size(); ++x)
       if (std::find(mine.begin(), mine.end(), x) == mine.end()) joined.push_back(fs[x]);
-    for (Finding& f : d.findings_of(*best)) joined.push_back(std::move(f));
+    const std::vector<Finding> chosen = d.findings_of(*best);
+    if (std::all_of(chosen.begin(), chosen.end(),
+                    [](const Finding& f) { return f.scope == Scope::kPath; }) &&
+        on_paths)
+      continue;  // paths again
+    joined.insert(joined.end(), chosen.begin(), chosen.end());
+    // The carriers and residuals sized on the data (the totals' least squares weighs every pair
+    // alike; the pairs' chi2 does not), the other findings in place.
+    std::vector<size_t> group(chosen.size());
+    std::iota(group.begin(), group.end(), joined.size() - chosen.size());
+    refine(r, joined, group, fitted_pairs(r, d.pairs()), 1);
     if (!quiet_over(r, fs, joined, d.pairs())) continue;
     fs = std::move(joined);
     changed = true;

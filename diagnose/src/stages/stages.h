@@ -173,7 +173,8 @@ bool one_per_place(std::vector<Finding>& fs);
 bool moved_roots_folded(DiagnosisRun& r);
 /// 5d. A gain or a delay at an input and another at an output add up on the path between them:
 /// the findings of each additive cause are explained by the fewest inputs' and outputs' values
-/// (and paths' residuals) when that is fewer findings; true when any were (calibration.cc).
+/// (and paths' residuals) when that is fewer findings (as many, for delays that were all paths');
+/// true when any were (calibration.cc).
 bool decompose(DiagnosisRun& r);
 /// 5e. A missing resonance that a delay, a lag, or a lag and a delay together fit over its pairs
 /// with a lower BIC is replaced by that; true when any was (alternatives.cc).
