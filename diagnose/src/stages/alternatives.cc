@@ -157,7 +157,7 @@ bool simpler_alternatives(DiagnosisRun& r) {
   bool changed = false;
   for (size_t i = 0; i < r.findings.size(); ++i) {
     const Finding& f = r.findings[i];
-    if (f.tf || !f.text_parameters.empty() || f.pairs.empty()) continue;
+    if (!f.by_value() || f.pairs.empty()) continue;
     if (points_of(fitted_pairs(r, f.pairs)) == 0) continue;
     const bool replaced =
         (f.cause == CauseKind::kMissingResonance && resonance_alternative(r, i)) ||

@@ -60,9 +60,7 @@ class Decomposition {
     std::vector<size_t> mine;
     for (size_t x = 0; x < fs.size(); ++x) {
       const Finding& f = fs[x];
-      if (f.cause != ad_.cause || f.tf || !f.text_parameters.empty() ||
-          !f.parameters.count(ad_.key))
-        continue;
+      if (f.cause != ad_.cause || !f.by_value() || !f.parameters.count(ad_.key)) continue;
       if (f.scope == Scope::kPlant) return {};
       bool on_paths = !f.pairs.empty();
       for (const std::string& q : f.pairs) on_paths &= ends_.count(q) > 0;

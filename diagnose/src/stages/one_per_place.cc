@@ -32,7 +32,7 @@ bool one_per_place(std::vector<Finding>& fs) {
     for (size_t b = a + 1; b < fs.size(); ++b) {
       const Finding& g = fs[b];
       if (g.cause != c || g.scope != fs[a].scope || g.input != fs[a].input ||
-          g.output != fs[a].output || g.tf || !g.text_parameters.empty())
+          g.output != fs[a].output || !g.by_value())
         continue;
       std::vector<std::string> pa = fs[a].pairs, pb = g.pairs;
       std::sort(pa.begin(), pa.end());
@@ -70,9 +70,7 @@ bool moved_roots_folded(DiagnosisRun& r) {
       const bool resonance = g.cause == CauseKind::kMissingResonance,
                  lag = g.cause == CauseKind::kMissingLag && shift,
                  moved = g.cause == CauseKind::kPoleShift && shift;
-      if (b == a || g.tf || !g.text_parameters.empty() || !(resonance || lag || moved) ||
-          !same_place(f, g))
-        continue;
+      if (b == a || !g.by_value() || !(resonance || lag || moved) || !same_place(f, g)) continue;
       const Param root_key = resonance ? Param::kWnRadS : lag ? Param::kCornerRadS : Param::kToRadS;
       if (!g.parameters.count(root_key)) continue;
       const double root = g.parameters.at(root_key);

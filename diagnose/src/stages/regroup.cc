@@ -303,7 +303,7 @@ class ScopeMerge {
   // A finding narrower than the scope, inside it: a path's, or (for the plant) an output's or an
   // input's, found where the overlap on the others' pairs hid it.
   bool candidate(const Finding& f) const {
-    if (f.tf || !f.text_parameters.empty() || f.pairs.empty()) return false;
+    if (!f.by_value() || f.pairs.empty()) return false;
     const bool narrower =
         f.scope == Scope::kPath ||
         (scope_ == Scope::kPlant &&
@@ -465,8 +465,7 @@ bool sized_on_clear_pairs(DiagnosisRun& r) {
   for (size_t gi = 0; gi < r.findings.size(); ++gi) {
     std::vector<Finding>& fs = r.findings;
     const Finding& g = fs[gi];
-    if (g.scope == Scope::kPath || g.tf || !g.text_parameters.empty() || g.pairs.size() < 2)
-      continue;
+    if (g.scope == Scope::kPath || !g.by_value() || g.pairs.size() < 2) continue;
     std::vector<std::string> extra;
     size_t k_before = 0;
     for (const std::string& q : g.pairs) {

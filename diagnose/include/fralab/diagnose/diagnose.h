@@ -176,6 +176,11 @@ struct Finding {
   /// secondaries' at the same levels.
   std::optional<LevelDependence> level;
   std::vector<LevelDependence> level_secondary;
+
+  /// Whether the finding is its numeric parameters alone: no whole path (tf) and no text
+  /// parameter (a mode shape's form, a state model's entry, a coupled channel). Only such
+  /// findings of one cause add, group and fold by value.
+  bool by_value() const { return !tf && text_parameters.empty(); }
 };
 
 struct PairReport {  // per pair, for the report
