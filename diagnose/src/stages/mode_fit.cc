@@ -209,6 +209,12 @@ void apply_factor(DiagnosisRun& r, Moves& mv, const SharedMode& m, const MovedMo
   }
 }
 
+bool share_pairs(const SharedMode& a, const SharedMode& b) {
+  return std::any_of(a.pairs.begin(), a.pairs.end(), [&](size_t k) {
+    return std::find(b.pairs.begin(), b.pairs.end(), k) != b.pairs.end();
+  });
+}
+
 ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& now, size_t id,
                    const Crossed& crossed, std::optional<size_t> ignore) {
   const SharedMode& m = all[id];
@@ -217,10 +223,7 @@ ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& 
               std::log(m.root.zeta * kZetaSpan)};
   bool past = false;  // some neighbour bounds it on the other side
   for (const SharedMode& n : all) {
-    if (n.id == id || n.id == ignore || std::none_of(n.pairs.begin(), n.pairs.end(), [&](size_t k) {
-          return std::find(m.pairs.begin(), m.pairs.end(), k) != m.pairs.end();
-        }))
-      continue;
+    if (n.id == id || n.id == ignore || !share_pairs(m, n)) continue;
     const bool swapped = crossed.count({std::min(id, n.id), std::max(id, n.id)}) > 0;
     past |= swapped;
     const double gap = kApartZetas * std::min(m.root.zeta, now[n.id].zeta);

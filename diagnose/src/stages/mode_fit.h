@@ -61,6 +61,9 @@ struct ModeRange {
 
 using Crossed = std::set<std::pair<size_t, size_t>>;
 
+/// Whether modes a and b share a pair (each bounds the other's search: ModeRange).
+bool share_pairs(const SharedMode& a, const SharedMode& b);
+
 ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& now, size_t id,
                    const Crossed& crossed, std::optional<size_t> ignore);
 

@@ -166,13 +166,6 @@ struct Pass {
   Moves mv;
 };
 
-// Whether modes a and b share a pair.
-bool share_pairs(const SharedMode& a, const SharedMode& b) {
-  return std::any_of(a.pairs.begin(), a.pairs.end(), [&](size_t k) {
-    return std::find(b.pairs.begin(), b.pairs.end(), k) != b.pairs.end();
-  });
-}
-
 // The search for the moves: greedy, backfitted, the forms compared, neighbours taken in the
 // other order, the least useful dropped (moves()).
 class ModeSearch {
