@@ -59,12 +59,7 @@ bool named_at_resolution(const HiddenEffect& e, const Finding& f) {
 }
 
 std::vector<Finding> read_findings(const std::string& file) {
-  const Json j = json_load_file(file);
-  std::vector<Finding> v;
-  const Json& fs = j.at("findings");
-  for (size_t k = 0; k < fs.size(); ++k)
-    v.push_back(finding_from_json(fs[k], JsonWhere{file, "/findings/" + std::to_string(k)}));
-  return v;
+  return findings_from_json(json_load_file(file), file);
 }
 
 // Every fault the data-quality checks named in diagnosis.json (its runs' and the diagnosis' own

@@ -79,6 +79,16 @@ Finding finding_from_json(const Json& j, const JsonWhere& where) {
   return f;
 }
 
+std::vector<Finding> findings_from_json(const Json& diagnosis, const std::string& file) {
+  const JsonWhere root{file, ""};
+  json_require_object(diagnosis, root);
+  const Json& fs = json_array_member(diagnosis, root, "findings");
+  std::vector<Finding> v;
+  for (size_t k = 0; k < fs.size(); ++k)
+    v.push_back(finding_from_json(fs[k], root / "findings" / k));
+  return v;
+}
+
 namespace {
 // A finding's cause, scope, channels, parameters (text ones among them), explanation, errors,
 // pairs, intervals, and a missing path's tf.

@@ -32,5 +32,6 @@ void add_monitor_command(CLI::App& app);
 void add_import_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_envelope_command(CLI::App& app);
+void add_bound_command(CLI::App& app);
 
 }  // namespace fralab

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   fralab::add_import_command(app);
   fralab::add_export_command(app);
   fralab::add_envelope_command(app);
+  fralab::add_bound_command(app);
   try {
     app.parse(argc, argv);  // the chosen subcommand's callback runs here
   } catch (const CLI::ParseError& e) {

@@ -251,6 +251,8 @@ double model_error(const Model& m, const Model& sim, const std::vector<MeasuredP
 /// parameters, pairs, a missing path's tf, and the 1-sigma intervals when present, null an
 /// unbounded side); InputError naming `where` and the key.
 Finding finding_from_json(const Json& j, const JsonWhere& where);
+/// Every finding of a diagnosis.json read from `file` (its "findings", each as finding_from_json).
+std::vector<Finding> findings_from_json(const Json& diagnosis, const std::string& file);
 
 /// The simulation extended by the findings, each as its cause extends a model (the diagnosis'
 /// own extended model is extend_model(sim, d.findings)).
