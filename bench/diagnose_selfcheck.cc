@@ -29,6 +29,7 @@
 #include <sys/wait.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -209,6 +210,7 @@ class SelfCheck {
         total_.in_two_sigma, total_.with_interval, o_.excitation.c_str(), complete_, partial_,
         failed_);
     if (o_.plants == "state") print_state_summary();
+    if (!engine_s_.empty() || bound_failed_) print_bound_summary();
     return precision >= o_.min_precision && recall >= o_.min_recall;
   }
 
@@ -291,6 +293,38 @@ class SelfCheck {
     const std::string dj = dir + "/diagnosis/diagnosis.json";
     report(c, read_findings(dj), total_, failing_);
     if (o_.faults) score_recording_faults(c, dj, injected);
+    engine_time_against_bound(c, dir);
+  }
+
+  // The case's engine time against the best sine's for its findings (`fralab bound`).
+  void engine_time_against_bound(const RandomCase& c, const std::string& dir) {
+    const std::string json = dir + "/diagnosis/bound.json";
+    const std::string cmd = bin_ + " bound --simulation " + dir + "/simulation.json --diagnosis " +
+                            dir + "/diagnosis --json " + json + " > " + dir + "/bound.txt 2>&1";
+    if (std::system(cmd.c_str()) != 0) {
+      std::printf("%s: fralab bound failed (see %s/bound.txt)\n", c.name.c_str(), dir.c_str());
+      ++bound_failed_;
+      return;
+    }
+    const Json b = json_load_file(json);
+    engine_s_.push_back(b.at("campaign_s").get<double>());
+    if (b.at("status") != "ok") return;
+    ratios_.push_back(b.at("ratio").get<double>());
+    std::printf(
+        "    engine time %.0f s, the best sine's %.1f s for the same intervals (ratio %.3g)\n",
+        engine_s_.back(), b.at("bound_s").get<double>(), ratios_.back());
+  }
+
+  void print_bound_summary() const {
+    auto median = [](std::vector<double> v) {
+      if (v.empty()) return 0.0;
+      std::sort(v.begin(), v.end());
+      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    };
+    std::printf(
+        "engine time: median %.0f s a case; against the bound (`fralab bound`, %zu cases with "
+        "findings to bound): median ratio %.3g, %d cases without a bound\n",
+        median(engine_s_), ratios_.size(), median(ratios_), bound_failed_);
   }
 
   // The faults put into the recording against those diagnosis.json names, and the case's score
@@ -378,6 +412,8 @@ class SelfCheck {
   Score at_resolution_;      // state plants: a value inside its 2-sigma interval counted right
   int in_alternatives_ = 0;  // resolved, missed, and in a set the data fit as well
   int failing_ = 0, complete_ = 0, partial_ = 0, failed_ = 0;
+  std::vector<double> engine_s_, ratios_;  // lab cases: engine time; ratio to the bound
+  int bound_failed_ = 0;
 };
 
 }  // namespace

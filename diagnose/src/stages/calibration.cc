@@ -8,11 +8,12 @@
 // a carrier covers, then again with the pair of the largest residual left out while one is beyond
 // the tolerance (the fit with the fewest findings is the choice's); a pair whose residual is
 // beyond the cause's consistency tolerance keeps a path finding of that residual. The choice with
-// the fewest findings (then the smallest residual) replaces the findings when it has fewer than
-// they, or, for delays that were all paths', as many (the delay a sensor's or an actuator's paths
-// share is preferred to as many path delays), and when no pair's chi2 rises by more than one
-// parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0, carriers and residuals
-// alike. A carrier is named by the pairs it covers, as the scope stage names a group.
+// the fewest findings (then the smallest residual, then the smallest carriers) replaces the
+// findings when it has fewer than they, or, for delays that were all paths', as many (the delay a
+// sensor's or an actuator's paths share is preferred to as many path delays), and when no pair's
+// chi2 rises by more than one parameter's BIC penalty, ln 2N over its N points. A delay stays >= 0,
+// carriers and residuals alike. A carrier is named by the pairs it covers, as the scope stage names
+// a group.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -98,8 +99,7 @@ class Decomposition {
       // Every input and every output a carrier: one value could move from the ones to the others.
       if (c.inputs.size() == all_in.size() && c.outputs.size() == all_out.size()) continue;
       if (!fit(c)) continue;
-      if (!best || c.count < best->count || (c.count == best->count && c.ss < best->ss))
-        best = std::move(c);
+      if (!best || better(c, *best)) best = std::move(c);
     }
     return best;
   }
@@ -128,6 +128,21 @@ class Decomposition {
   const std::vector<std::string>& pairs() const { return pairs_; }
 
  private:
+  // Fewer findings, then a smaller residual; where the residuals are the same (carriers that
+  // explain every pair alike: with every input and output measured, a value moved from the
+  // inputs' carriers to the outputs' changes no path), the smaller carriers, sum of squares.
+  bool better(const Choice& c, const Choice& best) const {
+    if (c.count != best.count) return c.count < best.count;
+    if (std::abs(c.ss - best.ss) > 1e-6 * tol_ * tol_) return c.ss < best.ss;
+    auto size = [](const Choice& x) {
+      double v = 0;
+      for (const std::vector<double>* side : {&x.a, &x.b})
+        for (double y : *side) v += y * y;
+      return v;
+    };
+    return size(c) < size(best);
+  }
+
   // c's carriers fitted to the pairs they cover, T(i, o) ~ a_i + b_o: by least squares over
   // every covered pair, then again with the pair of the largest residual left out (for a delay
   // the largest positive one: a carrier is the part its paths share) while a residual is beyond

@@ -238,14 +238,29 @@ ModeRange range_of(const std::vector<SharedMode>& all, const std::vector<Root>& 
   return g;
 }
 
-// chi2 over the pairs of the modes `ms` (each once), their factors as they now are.
-double chi2_over(const DiagnosisRun& r, const Moves& mv, const std::vector<SharedMode>& ms) {
+namespace {
+
+// The pairs of the modes `ms`, each once.
+std::vector<size_t> pairs_of(const std::vector<SharedMode>& ms) {
   std::vector<size_t> pairs;
   for (const SharedMode& m : ms)
     for (size_t k : m.pairs)
       if (std::find(pairs.begin(), pairs.end(), k) == pairs.end()) pairs.push_back(k);
+  return pairs;
+}
+
+}  // namespace
+
+size_t points_over(const DiagnosisRun& r, const std::vector<SharedMode>& ms) {
+  size_t n = 0;
+  for (size_t k : pairs_of(ms)) n += r.pairs[k].w.size();
+  return n;
+}
+
+// chi2 over the pairs of the modes `ms` (each once), their factors as they now are.
+double chi2_over(const DiagnosisRun& r, const Moves& mv, const std::vector<SharedMode>& ms) {
   double c = 0;
-  for (size_t k : pairs) {
+  for (size_t k : pairs_of(ms)) {
     const PairFit& p = r.pairs[k];
     c += pair_log_chi2(p, [&](size_t q) { return p.sim[q] * mv.now(k, q); });
   }

@@ -104,6 +104,8 @@ double chi2_over(const DiagnosisRun& r, const Moves& mv, const std::vector<Share
 
 /// The points over the mode's pairs.
 size_t points_over(const DiagnosisRun& r, const SharedMode& m);
+/// The points over the pairs of the modes `ms`, each pair once (as chi2_over counts them).
+size_t points_over(const DiagnosisRun& r, const std::vector<SharedMode>& ms);
 
 /// The mode's move fitted within g, the other moves of mv in place: the factor's, or the one
 /// with the mode shape kept where its chi2 is lower (always, shape_only).

@@ -307,8 +307,7 @@ class ModeSearch {
       if (round + 1 >= kBackfitRounds && !(chi2_over(r_, mv_, both) < (1 - 1e-3) * c)) break;
     }
     const int k1 = params_of(first) + params_of(second);
-    size_t n = 0;
-    for (const SharedMode& m : both) n += points_over(r_, m);
+    const size_t n = points_over(r_, both);
     if (!(earned(c0, chi2_over(r_, mv_, both), n, std::max(0, k1 - k0)) > 0)) restore(was);
   }
 
