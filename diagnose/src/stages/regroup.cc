@@ -111,6 +111,16 @@ Model paths_extended_by(const DiagnosisRun& r, const std::vector<Finding>& fs) {
   return ext;
 }
 
+// The pairs `pairs` and every other pair of the findings fs[sized]: where a finding is sized, on
+// every pair it covers.
+std::vector<std::string> pairs_of(const std::vector<Finding>& fs, const std::vector<size_t>& sized,
+                                  std::vector<std::string> pairs) {
+  for (size_t x : sized)
+    for (const std::string& q : fs[x].pairs)
+      if (std::find(pairs.begin(), pairs.end(), q) == pairs.end()) pairs.push_back(q);
+  return pairs;
+}
+
 // Pair q diagnosed again, alone, against ext (the whole diagnosis on that pair): its findings on
 // q alone.
 std::vector<Finding> own_findings(const DiagnosisRun& r, const Model& ext, const std::string& q) {
@@ -126,11 +136,12 @@ std::vector<Finding> own_findings(const DiagnosisRun& r, const Model& ext, const
 // The findings `with` (a scope's finding last, over the pairs that found it and the pairs `rest`)
 // with the rest's own findings dropped (those on its pairs alone: a path's, or an output's when
 // the rest is that output's paths), the scope's finding sized on the pairs that found it together
-// with the other findings there (the members' mean carries one pair's own value, off by up to the
-// tolerance, and another finding on that pair what it took of the overlap, which the rest would
-// then want moved again), and each rest pair diagnosed again, alone, against the simulation
-// extended by all that (the whole diagnosis on that pair): the new findings, or nullopt when a
-// rest pair wants the scope's cause again, or wants it undone (the cause is not there).
+// with the other findings there, each of those on every pair it covers but the rest's (the members'
+// mean carries one pair's own value, off by up to the tolerance, and another finding on that pair
+// what it took of the overlap, which the rest would then want moved again), and each rest pair
+// diagnosed again, alone, against the simulation extended by all that (the whole diagnosis on that
+// pair): the new findings, or nullopt when a rest pair wants the scope's cause again, or wants it
+// undone (the cause is not there).
 std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
                                                     const std::vector<Finding>& with,
                                                     const std::vector<std::string>& rest) {
@@ -157,7 +168,13 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
         sized.push_back(x);
         break;
       }
-  refine(r, base, sized, fitted_pairs(r, found_it), 1);
+  // Each on every pair it covers but the rest's (their own findings are dropped), the scope's
+  // finding on the pairs that found it.
+  const std::vector<size_t> others(sized.begin() + 1, sized.end());
+  std::vector<std::string> fit_on;
+  for (const std::string& q : pairs_of(base, others, found_it))
+    if (!in_rest(q)) fit_on.push_back(q);
+  refine(r, base, sized, fitted_pairs(r, fit_on), 1);
   const Model ext = paths_extended_by(r, base);
   std::vector<Finding> out = base;
   for (const std::string& q : rest)
@@ -170,9 +187,10 @@ std::optional<std::vector<Finding>> rediagnose_rest(DiagnosisRun& r,
 
 // The scope's finding (with.back(), its pairs the scope's) sized over every pair of the scope at
 // once, each pair's other causes found again around it: the path findings on the scope's pairs are
-// dropped, the scope's finding is sized together with the findings that remain there, each scope
-// pair is diagnosed again, alone, against the simulation extended by them (its own of the last
-// round left out), and its findings of other causes join before the next sizing; rounds repeat
+// dropped, the scope's finding is sized together with the findings that remain there (each on
+// every pair it covers: an output's delay resized on an input's scope moves its other paths), each
+// scope pair is diagnosed again, alone, against the simulation extended by them (its own of the
+// last round left out), and its findings of other causes join before the next sizing; rounds repeat
 // until no pair's findings change (at most kScopeRounds). Where one member's own fit split an
 // overlap (a plant's pole moved and an output's gain, taken on one path as a smaller shift and no
 // gain), the members' mean is off and a rest pair wants the cause again at its own value; sized
@@ -190,7 +208,6 @@ std::optional<std::vector<Finding>> fit_over_scope(DiagnosisRun& r,
     if (!(with[x].scope == Scope::kPath && with[x].pairs.size() == 1 && in_scope(with[x].pairs[0])))
       kept.push_back(with[x]);
   Finding g = with.back();
-  const auto sp = fitted_pairs(r, scope_pairs);
   std::vector<Finding> found;  // the scope pairs' own findings of other causes, the last round's
   for (int round = 0; round < kScopeRounds; ++round) {
     std::vector<Finding> base = kept;
@@ -199,7 +216,7 @@ std::optional<std::vector<Finding>> fit_over_scope(DiagnosisRun& r,
     std::vector<size_t> sized;
     for (size_t x = 0; x < base.size(); ++x)
       if (std::any_of(base[x].pairs.begin(), base[x].pairs.end(), in_scope)) sized.push_back(x);
-    refine(r, base, sized, sp, 1);
+    refine(r, base, sized, fitted_pairs(r, pairs_of(base, sized, scope_pairs)), 1);
     g = base.back();
     kept.assign(base.begin(), base.begin() + std::ptrdiff_t(kept.size()));
     // Each pair diagnosed again without its own findings of the last round: they are found anew.
