@@ -54,6 +54,7 @@ bool same_w(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(a, b
 // another curve of the input's) and, per input, its multisine lines.
 struct Excitations {
   std::map<std::string, MultisineExcitation> ms;
+  std::map<std::string, double> peak;  // the multisine's peak (its points' `amplitude`)
   std::map<std::string, std::vector<double>> lines;  // every curve's multisine lines, ascending
   // The experiments a multisine's line at w took: the inputs whose lines include w.
   int experiments(double w) const {
@@ -72,7 +73,11 @@ Excitations excitations(const std::vector<MeasuredPair>& data) {
     for (const MeasuredPair& mp : data) {
       const PairId id = PairId::parse(mp.pair);
       if (id.actuator() != actuator || e.ms.count(id.input)) continue;
-      if (auto ms = multisine_excitation(mp.frd)) e.ms.emplace(id.input, std::move(*ms));
+      if (auto ms = multisine_excitation(mp.frd)) {
+        e.ms.emplace(id.input, std::move(*ms));
+        for (const FrdPoint& p : mp.frd.points)
+          if (p.valid && p.line_amplitude > 0) e.peak[id.input] = p.amplitude;
+      }
     }
   for (const MeasuredPair& mp : data) {
     std::vector<double>& ws = e.lines[PairId::parse(mp.pair).input];
@@ -91,6 +96,24 @@ std::string where(const MeasuredPair& mp, size_t i) {
          " rad/s)";
 }
 
+// The line of multisine `ms` at w, or ms.w.size().
+size_t line_at(const MultisineExcitation& ms, double w) {
+  size_t j = 0;
+  while (j < ms.w.size() && !same_w(ms.w[j], w)) ++j;
+  return j;
+}
+
+// The multisine of input x whose line a point without a line amplitude is: its frequency one of
+// that multisine's lines and its amplitude that multisine's peak (a one-input multisine's
+// position-relative pairs X:O, whose analyser sees the position, not the command); else null.
+const MultisineExcitation* line_of(const FrdPoint& p, const std::string& x, const Excitations& e) {
+  const auto it = e.ms.find(x);
+  if (it == e.ms.end() || !(p.amplitude > 0) || !same_w(e.peak.at(x), p.amplitude) ||
+      line_at(it->second, p.w) >= it->second.w.size())
+    return nullptr;
+  return &it->second;
+}
+
 // A point's command amplitude A on its line and the seconds T its estimate averages.
 std::pair<double, double> excitation_of(const MeasuredPair& mp, size_t i, const Excitations& e) {
   const FrdPoint& p = mp.frd.points[i];
@@ -98,20 +121,24 @@ std::pair<double, double> excitation_of(const MeasuredPair& mp, size_t i, const 
     throw InputError(where(mp, i) +
                      ": no n_cycles, so the seconds it was measured are unknown (the bound "
                      "needs curves as fralab's analyser writes them)");
-  if (!(p.line_amplitude > 0)) {
+  std::optional<MultisineExcitation> own;
+  double line_amplitude = p.line_amplitude;
+  if (line_amplitude > 0) {
+    own = multisine_excitation(mp.frd);
+    if (!own)
+      throw InputError(where(mp, i) +
+                       ": a multisine's line, but the curve's lines are no one period's harmonics");
+  } else if (const MultisineExcitation* ms = line_of(p, PairId::parse(mp.pair).input, e)) {
+    own = *ms;
+    line_amplitude = own->amplitude[line_at(*own, p.w)];
+  } else {
     if (!(p.amplitude > 0))
       throw InputError(where(mp, i) + ": no excitation amplitude (the bound needs it)");
     return {p.amplitude, p.n_cycles * 2 * std::numbers::pi / p.w};
   }
-  const std::optional<MultisineExcitation> own = multisine_excitation(mp.frd);
-  if (!own)
-    throw InputError(where(mp, i) +
-                     ": a multisine's line, but the curve's lines are no one period's harmonics");
-  size_t j = 0;
-  while (j < own->w.size() && !same_w(own->w[j], p.w)) ++j;
-  const double period_s = 2 * std::numbers::pi * own->k.at(j) / p.w;
+  const double period_s = 2 * std::numbers::pi * own->k.at(line_at(*own, p.w)) / p.w;
   const double T = period_s * p.n_cycles * e.experiments(p.w) * std::max(p.realisations, 1);
-  return {p.line_amplitude, T};
+  return {line_amplitude, T};
 }
 
 std::vector<NoisePair> noise_pairs(const Model& sim, const std::vector<MeasuredPair>& data,
@@ -152,12 +179,12 @@ std::vector<NoisePair> noise_pairs(const Model& sim, const std::vector<MeasuredP
 std::map<std::string, double> input_amplitudes(const std::vector<MeasuredPair>& data,
                                                const Excitations& e) {
   std::map<std::string, double> a;
-  for (const MeasuredPair& mp : data)
+  for (const MeasuredPair& mp : data) {
+    const std::string x = PairId::parse(mp.pair).input;
     for (const FrdPoint& p : mp.frd.points)
-      if (p.valid && !(p.line_amplitude > 0) && p.amplitude > 0) {
-        const std::string x = PairId::parse(mp.pair).input;
+      if (p.valid && !(p.line_amplitude > 0) && p.amplitude > 0 && !line_of(p, x, e))
         a[x] = std::max(a[x], p.amplitude);
-      }
+  }
   for (const auto& [x, ms] : e.ms) {
     double s = 0;
     for (double l : ms.amplitude) s += l * l;

@@ -132,6 +132,34 @@ TEST(EngineTimeBound, AMultisinesLineCountsEveryExperimentOfItsDesign) {
   EXPECT_NEAR(realisations.bound_s, 4 * M * period, kRel * 4 * M * period);
 }
 
+TEST(EngineTimeBound, AOneInputMultisinesPositionPairsAreItsLinesToo) {
+  // A one-input multisine's analyser sees the position, not the command, on X:O: its points carry
+  // no line amplitude, only the multisine's peak. They are the lines of the input's multisine
+  // (its actuator curve's): the bound is then M periods of 2 pi / w0, as for the lines themselves,
+  // not M cycles at each line's frequency.
+  const double a = 0.5, peak = 1.7, sigma = 0.01, gain_db = 1;
+  const int M = 3;
+  const std::complex<double> g = std::pow(10.0, gain_db / 20);
+  std::vector<FrdPoint> actuator, path;
+  for (double w : {1.0, 2.0}) {
+    FrdPoint u = point(w, 1.0, 1e-4);
+    u.line_amplitude = a;
+    u.amplitude = peak;
+    u.n_cycles = M;
+    actuator.push_back(u);
+    FrdPoint y = point(w, g, sigma);
+    y.amplitude = peak;
+    y.n_cycles = M;
+    path.push_back(y);
+  }
+  const EngineTimeBound b =
+      engine_time_bound(sim(), {finding(CauseKind::kGainMismatch, Param::kGainDb, gain_db)},
+                        {pair("u_X:X", actuator), pair("X:O", path)}, {}, 100.0);
+  ASSERT_EQ(b.status, EngineTimeBound::Status::kOk) << b.message;
+  const double expected = M * 2 * kPi;
+  EXPECT_NEAR(b.bound_s, expected, kRel * expected);
+}
+
 TEST(EngineTimeBound, FindingsWithoutAFittedParameterHaveNothingToBound) {
   Finding f = finding(CauseKind::kTimeDelay, Param::kDelayS, 0.01);
   f.intervals.clear();
