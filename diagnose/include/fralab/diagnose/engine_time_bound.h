@@ -19,7 +19,9 @@
 // T per point: a sine's n_cycles cycles at w; a multisine's n_cycles periods (the period whose
 // harmonics the lines are, as multisine_excitation takes it) times the experiments of its design
 // (the inputs whose lines share the point's frequency: the orthogonal design's n_u, a zippered
-// one's 1) times its random-phase realisations.
+// one's 1) times its random-phase realisations; a point without a line amplitude whose
+// frequency is one of its input's multisine's lines and whose amplitude is that multisine's peak
+// (a one-input multisine's X:O) is that line.
 #pragma once
 
 #include <map>
