@@ -355,11 +355,14 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   p.mag = std::abs(r);
   p.phase_deg = std::arg(r) * 180.0 / std::numbers::pi;
   const int K = std::max(2, std::min(opt_.max_blocks, st.n_cycles));
+  // Each block's phasors by least squares: a block that splits a cycle would leak the
+  // negative-frequency image into the filter's sums by an amount that turns with its starting
+  // phase, differently in the two channels, and their ratios would spread with no noise at all.
   std::vector<Complex> b1(K), b2(K);
   for (int k = 0; k < K; ++k) {
     size_t s = L * k / K, e = L * (k + 1) / K;
-    b1[k] = fourier_phasor(d1.data(), ref, s, e);
-    b2[k] = fourier_phasor(d2.data(), ref, s, e);
+    b1[k] = fitted_phasor(d1.data(), ref, s, e);
+    b2[k] = fitted_phasor(d2.data(), ref, s, e);
   }
   double se = 0, s11 = 0, s22 = 0;
   Complex s12 = 0;
@@ -369,7 +372,7 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
     s22 += std::norm(b2[k]);
     s12 += std::conj(b1[k]) * b2[k];
   }
-  p.sigma = std::sqrt(se / (double(K) * (K - 1))) / std::abs(p1);
+  p.sigma = positive_sigma(std::sqrt(se / (double(K) * (K - 1))) / std::abs(p1), p.mag);
   p.coherence = (s11 > 0 && s22 > 0) ? std::norm(s12) / (s11 * s22) : 0.0;
   for (int h : {2, 3}) {
     Reference rh = reference(h);
