@@ -580,6 +580,16 @@ struct LabCase {
   std::string json;
 };
 
+// The lab's measurement of the machine-shaped self-check's case `index` of `seed`: each of its
+// `hidden` effects found, and no other finding.
+void expect_every_effect_and_no_other(uint64_t seed, int index, int hidden) {
+  const auto& [c, d, json] = LabCase(seed, index);
+  const testing::Score s = testing::score(c, d.findings);
+  ASSERT_EQ(s.hidden, hidden);
+  EXPECT_EQ(s.found, hidden) << json;
+  EXPECT_EQ(s.true_findings, s.findings) << json;
+}
+
 // The machine-shaped self-check's case 3 of seed 37 as the lab measured it (tests/data/lab/
 // machine_s37_c3): -2.50 dB at the output Y0 and -1.78 dB at the input U0 of a two-input,
 // two-output plant, U0 -> Y0 carrying their sum. The three path gains split into the input's and
@@ -587,11 +597,7 @@ struct LabCase {
 // beyond one parameter's penalty, and the three stayed; sized on the data, the two are the
 // findings, each within the self-check's tolerance.
 TEST(Diagnose, AnInputsAndAnOutputsGainsSizedOnTheDataAreTwoFindings) {
-  const auto& [c, d, json] = LabCase(37, 3);
-  const testing::Score s = testing::score(c, d.findings);
-  ASSERT_EQ(s.hidden, 2);
-  EXPECT_EQ(s.found, 2) << json;
-  EXPECT_EQ(s.true_findings, s.findings) << json;
+  expect_every_effect_and_no_other(37, 3, 2);
 }
 
 // The machine-shaped self-check's case 27 of seed 40 as the lab measured it (tests/data/lab/
@@ -600,11 +606,7 @@ TEST(Diagnose, AnInputsAndAnOutputsGainsSizedOnTheDataAreTwoFindings) {
 // four sets of three gains fit the curves alike; the choice fell by rounding on U0 +5.79, Y0 -2.91
 // and Y1 -5.41 (three false, three missed). The set of the smallest gains is the hidden one.
 TEST(Diagnose, GainsTheCurvesCannotTellApartAreTheSmallestSet) {
-  const auto& [c, d, json] = LabCase(40, 27);
-  const testing::Score s = testing::score(c, d.findings);
-  ASSERT_EQ(s.hidden, 3);
-  EXPECT_EQ(s.found, 3) << json;
-  EXPECT_EQ(s.true_findings, s.findings) << json;
+  expect_every_effect_and_no_other(40, 27, 3);
 }
 
 // The machine-shaped self-check's case 22 of seed 41 as the lab measured it (tests/data/lab/
@@ -615,11 +617,7 @@ TEST(Diagnose, GainsTheCurvesCannotTellApartAreTheSmallestSet) {
 // false findings, the error 0.070 where the truth's is 0.040. Each finding is now sized on every
 // pair it covers.
 TEST(Diagnose, AnOutputsDelayResizedOnAnInputsScopeKeepsItsOtherPaths) {
-  const auto& [c, d, json] = LabCase(41, 22);
-  const testing::Score s = testing::score(c, d.findings);
-  ASSERT_EQ(s.hidden, 3);
-  EXPECT_EQ(s.found, 3) << json;
-  EXPECT_EQ(s.true_findings, s.findings) << json;
+  expect_every_effect_and_no_other(41, 22, 3);
 }
 
 // The modal self-check's case 5 of seed 17 as the lab measured it (tests/data/lab/modal_s17_c5,
