@@ -56,18 +56,24 @@ Complex fourier_phasor(const double* x, const Reference& ref, size_t begin, size
   return {g * ss, g * sc};  // A1 + j B1
 }
 
-Complex fitted_phasor(const double* x, const Reference& ref, size_t begin, size_t end) {
-  double sc, ss, cc = 0, s2 = 0, cs = 0;
-  fourier_sums(x + begin, ref.c.data() + begin, ref.s.data() + begin, end - begin, &sc, &ss);
+std::pair<Complex, Complex> fitted_phasors(const double* x1, const double* x2, const Reference& ref,
+                                           size_t begin, size_t end) {
+  double cc = 0, s2 = 0, cs = 0;
   for (size_t k = begin; k < end; ++k) {
     cc += ref.c[k] * ref.c[k];
     s2 += ref.s[k] * ref.s[k];
     cs += ref.c[k] * ref.s[k];
   }
-  // [s2 cs; cs cc] [A1; B1] = [ss; sc]
+  // [s2 cs; cs cc] [A1; B1] = [sum x s; sum x c]
   const double det = s2 * cc - cs * cs;
-  if (!(std::abs(det) > 1e-12 * (s2 * cc))) return fourier_phasor(x, ref, begin, end);
-  return {(ss * cc - sc * cs) / det, (sc * s2 - ss * cs) / det};
+  if (!(std::abs(det) > 1e-12 * (s2 * cc)))
+    return {fourier_phasor(x1, ref, begin, end), fourier_phasor(x2, ref, begin, end)};
+  auto fit = [&](const double* x) {
+    double sc, ss;
+    fourier_sums(x + begin, ref.c.data() + begin, ref.s.data() + begin, end - begin, &sc, &ss);
+    return Complex{(ss * cc - sc * cs) / det, (sc * s2 - ss * cs) / det};
+  };
+  return {fit(x1), fit(x2)};
 }
 
 }  // namespace fralab

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 
 #include "fralab/analyze/bla.h"
 #include "fralab/analyze/fourier_filter.h"
@@ -361,8 +362,7 @@ FrdPoint PairAnalyzer::compute(const Window& win) {
   std::vector<Complex> b1(K), b2(K);
   for (int k = 0; k < K; ++k) {
     size_t s = L * k / K, e = L * (k + 1) / K;
-    b1[k] = fitted_phasor(d1.data(), ref, s, e);
-    b2[k] = fitted_phasor(d2.data(), ref, s, e);
+    std::tie(b1[k], b2[k]) = fitted_phasors(d1.data(), d2.data(), ref, s, e);
   }
   double se = 0, s11 = 0, s22 = 0;
   Complex s12 = 0;

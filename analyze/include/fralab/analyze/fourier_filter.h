@@ -18,6 +18,7 @@
 
 #include <complex>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace fralab {
@@ -35,10 +36,12 @@ Reference make_reference(const double* phase, size_t n, int harmonic = 1);
 /// The phasor P = A1 + j B1 of x[0..n) against `ref` (n samples), normalised by 2/n.
 Complex fourier_phasor(const double* x, const Reference& ref, size_t begin, size_t end);
 
-/// The same phasor fitted by least squares, x ~ A1 sin(phi) + B1 cos(phi) over [begin, end):
-/// fourier_phasor's over whole cycles; over a span that splits a cycle (a block of a window), free
-/// of the negative-frequency image the plain sums leak there.
-Complex fitted_phasor(const double* x, const Reference& ref, size_t begin, size_t end);
+/// The same phasors of two channels x1, x2 fitted by least squares, x ~ A1 sin(phi) + B1 cos(phi)
+/// over [begin, end) (one normal matrix for both): fourier_phasor's over whole cycles; over a span
+/// that splits a cycle (a block of a window), free of the negative-frequency image the plain sums
+/// leak there.
+std::pair<Complex, Complex> fitted_phasors(const double* x1, const double* x2, const Reference& ref,
+                                           size_t begin, size_t end);
 
 /// Raw sums sum x c and sum x s over [begin, end): the two multiply-adds per sample.
 void fourier_sums(const double* x, const double* c, const double* s, size_t n, double* sum_c,
