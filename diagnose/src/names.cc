@@ -53,6 +53,13 @@ const char* to_string(CauseKind c) {
 
 const char* to_string(Scope s) { return enum_word(kScopeNames, s); }
 
+std::string finding_label(const Finding& f) {
+  std::string s = std::string(to_string(f.cause)) + " [" + to_string(f.scope);
+  for (const std::string* n : {&f.input, &f.output})
+    if (!n->empty()) s += " " + *n;
+  return s + "]";
+}
+
 CauseKind cause_from_string(const std::string& s) {
   for (const CauseUnit* unit : cause_units())
     if (s == unit->name()) return unit->kind();

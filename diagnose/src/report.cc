@@ -215,8 +215,7 @@ std::string diagnosis_summary(const Diagnosis& d, const std::string& dir) {
   if (d.validation_before >= 0)
     s << " (validation " << d.validation_before << " -> " << d.validation_after << ")";
   for (const auto& f : d.findings) {
-    s << "\n  " << to_string(f.cause) << " [" << to_string(f.scope)
-      << (f.input.empty() ? "" : " " + f.input) << (f.output.empty() ? "" : " " + f.output) << "]";
+    s << "\n  " << finding_label(f);
     for (const auto& [k, v] : f.parameters) s << " " << to_string(k) << "=" << v;
     for (const auto& [k, v] : f.text_parameters) s << " " << k << "=" << v;
   }

@@ -22,13 +22,6 @@ double engine_time_of(const std::string& dir) {
   return json_number_member(json_load_file(file), {file, ""}, "engine_time_s");
 }
 
-std::string describe(const Finding& f) {
-  std::string s = std::string(to_string(f.cause)) + " [" + to_string(f.scope);
-  for (const std::string* n : {&f.input, &f.output})
-    if (!n->empty()) s += " " + *n;
-  return s + "]";
-}
-
 std::string line(const char* format, auto... args) {
   char buf[320];
   std::snprintf(buf, sizeof buf, format, args...);
@@ -44,8 +37,9 @@ std::string table(const EngineTimeBound& b, const std::vector<Finding>& findings
             "best sine (input, rad/s)", "bound s", "ratio");
   for (const ParameterBound& p : b.parameters)
     t += line("  %-34s %-12s %12.6g %11.3g  %-8s %13.4g %10.3g %9.3g\n",
-              describe(findings[p.finding]).c_str(), to_string(p.parameter), p.value, p.sigma_data,
-              p.best_input.c_str(), p.best_w_rad_s, p.bound_s, b.campaign_s / p.bound_s);
+              finding_label(findings[p.finding]).c_str(), to_string(p.parameter), p.value,
+              p.sigma_data, p.best_input.c_str(), p.best_w_rad_s, p.bound_s,
+              b.campaign_s / p.bound_s);
   return t;
 }
 

@@ -183,6 +183,10 @@ struct Finding {
   bool by_value() const { return !tf && text_parameters.empty(); }
 };
 
+/// "cause [scope input output]" (the empty ones left out): a finding's kind and place as the
+/// terminal's lines name it.
+std::string finding_label(const Finding& f);
+
 struct PairReport {  // per pair, for the report
   std::string pair;
   std::vector<double> w;
