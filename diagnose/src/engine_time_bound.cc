@@ -69,21 +69,18 @@ struct Excitations {
 
 Excitations excitations(const std::vector<MeasuredPair>& data) {
   Excitations e;
+  e.ms = diag::input_multisines(data, [](const MeasuredPair& mp) { return &mp.frd; });
   for (bool actuator : {true, false})
     for (const MeasuredPair& mp : data) {
       const PairId id = PairId::parse(mp.pair);
-      if (id.actuator() != actuator || e.ms.count(id.input)) continue;
-      if (auto ms = multisine_excitation(mp.frd)) {
-        e.ms.emplace(id.input, std::move(*ms));
-        for (const FrdPoint& p : mp.frd.points)
-          if (p.valid && p.line_amplitude > 0) e.peak[id.input] = p.amplitude;
-      }
+      if (id.actuator() != actuator) continue;
+      std::vector<double>& ws = e.lines[id.input];
+      for (const FrdPoint& p : mp.frd.points)
+        if (p.valid && p.line_amplitude > 0) {
+          ws.push_back(p.w);
+          e.peak.emplace(id.input, p.amplitude);  // one peak an input: its multisine's
+        }
     }
-  for (const MeasuredPair& mp : data) {
-    std::vector<double>& ws = e.lines[PairId::parse(mp.pair).input];
-    for (const FrdPoint& p : mp.frd.points)
-      if (p.valid && p.line_amplitude > 0) ws.push_back(p.w);
-  }
   for (auto& [x, ws] : e.lines) {
     std::sort(ws.begin(), ws.end());
     ws.erase(std::unique(ws.begin(), ws.end(), same_w), ws.end());
@@ -114,22 +111,24 @@ const MultisineExcitation* line_of(const FrdPoint& p, const std::string& x, cons
   return &it->second;
 }
 
-// A point's command amplitude A on its line and the seconds T its estimate averages.
-std::pair<double, double> excitation_of(const MeasuredPair& mp, size_t i, const Excitations& e) {
+// A point's command amplitude A on its line and the seconds T its estimate averages; `own_curve`
+// the multisine of the point's curve (multisine_excitation of it).
+std::pair<double, double> excitation_of(const MeasuredPair& mp, size_t i,
+                                        const std::optional<MultisineExcitation>& own_curve,
+                                        const Excitations& e) {
   const FrdPoint& p = mp.frd.points[i];
   if (p.n_cycles <= 0)
     throw InputError(where(mp, i) +
                      ": no n_cycles, so the seconds it was measured are unknown (the bound "
                      "needs curves as fralab's analyser writes them)");
-  std::optional<MultisineExcitation> own;
+  const MultisineExcitation* own = nullptr;
   double line_amplitude = p.line_amplitude;
   if (line_amplitude > 0) {
-    own = multisine_excitation(mp.frd);
-    if (!own)
+    if (!own_curve)
       throw InputError(where(mp, i) +
                        ": a multisine's line, but the curve's lines are no one period's harmonics");
-  } else if (const MultisineExcitation* ms = line_of(p, PairId::parse(mp.pair).input, e)) {
-    own = *ms;
+    own = &*own_curve;
+  } else if ((own = line_of(p, PairId::parse(mp.pair).input, e))) {
     line_amplitude = own->amplitude[line_at(*own, p.w)];
   } else {
     if (!(p.amplitude > 0))
@@ -152,10 +151,11 @@ std::vector<NoisePair> noise_pairs(const Model& sim, const std::vector<MeasuredP
     if (sim.input_index(id.input) < 0) continue;
     if (id.path() && (sim.output_index(id.output) < 0 || !sim.path(id.output, id.input))) continue;
     NoisePair np{mp.pair, id.input, {}};
+    const std::optional<MultisineExcitation> own = multisine_excitation(mp.frd);
     for (size_t i = 0; i < mp.frd.points.size(); ++i) {
       const FrdPoint& p = mp.frd.points[i];
       if (!diag::usable(p, usable_opt)) continue;
-      const auto [A, T] = excitation_of(mp, i, e);
+      const auto [A, T] = excitation_of(mp, i, own, e);
       NoisePoint q;
       q.w = p.w;
       q.amplitude = p.amplitude;

@@ -4,12 +4,27 @@
 #include <cmath>
 
 #include "fralab/core/numerics.h"
+#include "fralab/core/pair_id.h"
 #include "fralab/core/text.h"
 
 namespace fralab::diag {
 
 bool usable(const FrdPoint& p, const DiagnoseOptions& o) {
   return p.valid && p.sigma > 0 && p.mag > 0 && p.sigma <= o.max_rel_sigma * p.mag;
+}
+
+std::map<std::string, MultisineExcitation> input_multisines(
+    const std::vector<MeasuredPair>& data,
+    const std::function<const Frd*(const MeasuredPair&)>& curve) {
+  std::map<std::string, MultisineExcitation> out;
+  for (bool actuator : {true, false})
+    for (const MeasuredPair& mp : data) {
+      const PairId id = PairId::parse(mp.pair);
+      if (id.actuator() != actuator || out.count(id.input)) continue;
+      if (const Frd* f = curve(mp))
+        if (auto ms = multisine_excitation(*f)) out.emplace(id.input, std::move(*ms));
+    }
+  return out;
 }
 
 void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o) {

@@ -43,6 +43,13 @@ struct Cause {
 /// (an actuator inside its backlash, or a response down in the noise, is not).
 bool usable(const FrdPoint& p, const DiagnoseOptions& o);
 
+/// Each input's multisine as the diagnosis takes it: from its actuator curve u_X:X, else from the
+/// first other curve of the input (in `data`'s order) that is a multisine's (multisine_excitation);
+/// `curve` picks each pair's measurement (its fitting one, its validation, a level's; null: none).
+std::map<std::string, MultisineExcitation> input_multisines(
+    const std::vector<MeasuredPair>& data,
+    const std::function<const Frd*(const MeasuredPair&)>& curve);
+
 /// Appends a usable measured point and the simulation's response `sim` there: sigma_eff =
 /// hypot(sigma, (sigma_floor + aliasing_floor (w h)^2) |G|), factor 1.
 void add_point(PairFit& p, const FrdPoint& pt, C sim, const DiagnoseOptions& o);

@@ -45,23 +45,17 @@ void add_points(const DiagnosisRun& r, PairFit& p, const Frd& curve,
 void prepare(DiagnosisRun& r) {
   const Model& sim = r.sim;
   const DiagnoseOptions& opt = r.opt;
-  // Inputs excited by a multisine, from their actuator curve (else another curve of theirs): the
-  // fitting data's and the validation's (another amplitude).
-  for (bool actuator : {true, false})
-    for (const auto& mp : r.data) {
-      const PairId id = PairId::parse(mp.pair);
-      if (id.actuator() != actuator) continue;
-      const std::string& in = id.input;  // the input the pair's excitation drives
-      if (!r.ms_fit.count(in))
-        if (auto ms = multisine_excitation(mp.frd)) r.ms_fit.emplace(in, std::move(*ms));
-      if (!r.ms_val.count(in))
-        if (auto ms = multisine_excitation(mp.validation)) r.ms_val.emplace(in, std::move(*ms));
-      if (r.ms_levels.size() < mp.levels.size()) r.ms_levels.resize(mp.levels.size());
-      for (size_t k = 0; k < mp.levels.size(); ++k)
-        if (!r.ms_levels[k].count(in))
-          if (auto ms = multisine_excitation(mp.levels[k].frd))
-            r.ms_levels[k].emplace(in, std::move(*ms));
-    }
+  // Inputs excited by a multisine: the fitting data's, the validation's (another amplitude) and
+  // each further level's.
+  r.ms_fit = input_multisines(r.data, [](const MeasuredPair& mp) { return &mp.frd; });
+  r.ms_val = input_multisines(r.data, [](const MeasuredPair& mp) { return &mp.validation; });
+  size_t levels = 0;
+  for (const auto& mp : r.data) levels = std::max(levels, mp.levels.size());
+  r.ms_levels.resize(levels);
+  for (size_t k = 0; k < levels; ++k)
+    r.ms_levels[k] = input_multisines(r.data, [k](const MeasuredPair& mp) {
+      return k < mp.levels.size() ? &mp.levels[k].frd : nullptr;
+    });
   // The pairs the simulation can speak to (and those it has no path for).
   for (const auto& mp : r.data) {
     const PairId id = PairId::parse(mp.pair);
